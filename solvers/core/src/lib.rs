@@ -1,0 +1,17 @@
+//! grainflow core: the vector type, the physical domain and its decomposition
+//! into subdomains, and the communicator every solver talks through.
+//!
+//! Nothing in grainflow assumes a single rank: particles and fields live on a
+//! [`Subdomain`] with ghost copies, and every global quantity (a sum, a
+//! maximum) goes through the [`Communicator`]. The serial build uses
+//! [`Communicator::serial`], a one-rank communicator.
+
+pub mod communicator;
+pub mod domain;
+
+pub use communicator::Communicator;
+pub use domain::{Dimension, Domain, Subdomain};
+
+/// Three-component vector of `f64`. 2D scenes live in the (x, y) plane with
+/// z = 0, rotations about z only.
+pub type Vec3 = nalgebra::Vector3<f64>;

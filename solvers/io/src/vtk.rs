@@ -1,0 +1,127 @@
+//! VTK XML PolyData (`.vtp`) particle files and the `.pvd` collection that
+//! lets ParaView open them as one time series.
+//!
+//! Arrays are written in binary (base64, little-endian, with a UInt32 byte
+//! count header), which ParaView reads directly; one vertex per particle.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The particle state written at one output time.
+pub struct ParticleFrame<'a> {
+    pub id: &'a [u64],
+    pub position: &'a [[f64; 3]],
+    pub velocity: &'a [[f64; 3]],
+    pub angular_velocity: &'a [[f64; 3]],
+    pub force: &'a [[f64; 3]],
+    pub radius: &'a [f64],
+    pub fixed: &'a [u8],
+}
+
+impl ParticleFrame<'_> {
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let n = self.radius.len();
+        let mut out = BufWriter::new(File::create(path)?);
+        writeln!(out, r#"<?xml version="1.0"?>"#)?;
+        writeln!(
+            out,
+            r#"<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
+        )?;
+        writeln!(out, "<PolyData>")?;
+        writeln!(
+            out,
+            r#"<Piece NumberOfPoints="{n}" NumberOfVerts="{n}" NumberOfLines="0" NumberOfStrips="0" NumberOfPolys="0">"#
+        )?;
+        writeln!(out, "<PointData Scalars=\"radius\" Vectors=\"velocity\">")?;
+        write_array(&mut out, "radius", "Float64", 1, &to_bytes_f64(self.radius))?;
+        write_array(&mut out, "id", "UInt64", 1, &self.id.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<_>>())?;
+        write_array(&mut out, "fixed", "UInt8", 1, self.fixed)?;
+        write_array(&mut out, "velocity", "Float64", 3, &to_bytes_f64(self.velocity.as_flattened()))?;
+        write_array(&mut out, "angular_velocity", "Float64", 3, &to_bytes_f64(self.angular_velocity.as_flattened()))?;
+        write_array(&mut out, "force", "Float64", 3, &to_bytes_f64(self.force.as_flattened()))?;
+        writeln!(out, "</PointData>")?;
+        writeln!(out, "<Points>")?;
+        write_array(&mut out, "position", "Float64", 3, &to_bytes_f64(self.position.as_flattened()))?;
+        writeln!(out, "</Points>")?;
+        writeln!(out, "<Verts>")?;
+        let connectivity: Vec<u8> = (0..n as i64).flat_map(|k| k.to_le_bytes()).collect();
+        let offsets: Vec<u8> = (1..=n as i64).flat_map(|k| k.to_le_bytes()).collect();
+        write_array(&mut out, "connectivity", "Int64", 1, &connectivity)?;
+        write_array(&mut out, "offsets", "Int64", 1, &offsets)?;
+        writeln!(out, "</Verts>")?;
+        writeln!(out, "</Piece>\n</PolyData>\n</VTKFile>")?;
+        out.flush()
+    }
+}
+
+fn to_bytes_f64(values: &[f64]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+fn write_array(out: &mut impl Write, name: &str, kind: &str, components: usize, bytes: &[u8]) -> std::io::Result<()> {
+    let mut block = Vec::with_capacity(bytes.len() + 4);
+    block.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+    block.extend_from_slice(bytes);
+    writeln!(
+        out,
+        r#"<DataArray type="{kind}" Name="{name}" NumberOfComponents="{components}" format="binary">"#
+    )?;
+    out.write_all(base64(&block).as_bytes())?;
+    writeln!(out, "\n</DataArray>")
+}
+
+/// Standard base64 with padding (RFC 4648).
+pub fn base64(bytes: &[u8]) -> String {
+    const TABLE: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut encoded = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        encoded.push(TABLE[(n >> 18) as usize & 63] as char);
+        encoded.push(TABLE[(n >> 12) as usize & 63] as char);
+        encoded.push(if chunk.len() > 1 { TABLE[(n >> 6) as usize & 63] as char } else { '=' });
+        encoded.push(if chunk.len() > 2 { TABLE[n as usize & 63] as char } else { '=' });
+    }
+    encoded
+}
+
+/// A `.pvd` collection: one dataset per output time, rewritten after each
+/// addition so that it is valid at any moment of the run.
+pub struct PvdIndex {
+    path: PathBuf,
+    entries: Vec<(f64, String)>,
+}
+
+impl PvdIndex {
+    pub fn new(path: PathBuf) -> Self {
+        PvdIndex { path, entries: Vec::new() }
+    }
+
+    pub fn add(&mut self, time: f64, file: &str) -> std::io::Result<()> {
+        self.entries.push((time, file.to_string()));
+        let mut out = BufWriter::new(File::create(&self.path)?);
+        writeln!(out, r#"<?xml version="1.0"?>"#)?;
+        writeln!(out, r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#)?;
+        writeln!(out, "<Collection>")?;
+        for (t, f) in &self.entries {
+            writeln!(out, r#"<DataSet timestep="{t:e}" group="" part="0" file="{f}"/>"#)?;
+        }
+        writeln!(out, "</Collection>\n</VTKFile>")?;
+        out.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::base64;
+
+    #[test]
+    fn base64_matches_rfc4648_vectors() {
+        assert_eq!(base64(b""), "");
+        assert_eq!(base64(b"f"), "Zg==");
+        assert_eq!(base64(b"fo"), "Zm8=");
+        assert_eq!(base64(b"foo"), "Zm9v");
+        assert_eq!(base64(b"foobar"), "Zm9vYmFy");
+    }
+}
