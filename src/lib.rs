@@ -1,1 +1,27 @@
+//! grainflow: resolved grains in fluids.
+//!
+//! This crate assembles scenes from case files and runs them; the physics
+//! lives in the solver crates (`grainflow-dem`, ...). A run goes
+//! case file → [`case::Case`] (typed, validated) → [`scene::build`] →
+//! [`simulation::run`] (time loop, [`output::Outputs`], [`analysis`]).
 
+pub mod analysis;
+pub mod case;
+pub mod check;
+pub mod output;
+pub mod scene;
+pub mod simulation;
+pub mod stability;
+
+/// Why a run did not complete.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The case cannot run as given (nothing was written).
+    #[error("{0}")]
+    Case(String),
+    /// The integration went wrong; outputs hold the last good state.
+    #[error("{0}")]
+    Unstable(String),
+    #[error("output: {0}")]
+    Io(std::io::Error),
+}

@@ -65,6 +65,8 @@ impl Ghosts {
             particles.position[ghost] = particles.position[source] + shift;
             particles.velocity[ghost] = particles.velocity[source];
             particles.angular_velocity[ghost] = particles.angular_velocity[source];
+            particles.force[ghost] = particles.force[source];
+            particles.torque[ghost] = particles.torque[source];
         }
     }
 }

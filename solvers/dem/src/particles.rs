@@ -19,7 +19,7 @@ pub struct Particles {
     pub inverse_mass: Vec<f64>,
     /// 1/I, zero for a glued particle.
     pub inverse_inertia: Vec<f64>,
-    /// Contact force and torque of the last force evaluation (owned only).
+    /// Total force and torque of the last evaluation (ghosts: their source's).
     pub force: Vec<Vec3>,
     pub torque: Vec<Vec3>,
 }
@@ -107,8 +107,8 @@ impl Particles {
         self.mass.push(self.mass[source]);
         self.inverse_mass.push(self.inverse_mass[source]);
         self.inverse_inertia.push(self.inverse_inertia[source]);
-        self.force.push(Vec3::zeros());
-        self.torque.push(Vec3::zeros());
+        self.force.push(self.force[source]);
+        self.torque.push(self.torque[source]);
     }
 
     /// Reorders the owned particles by `order` (new index k holds old

@@ -1,0 +1,358 @@
+//! Case-specific measurements, reported under `"metrics"` in `summary.json`
+//! and as CSV tables beside it.
+
+use crate::case::AnalysisSection;
+use grainflow_core::Vec3;
+use grainflow_dem::stress::particle_moments;
+use grainflow_dem::DemSystem;
+use serde_json::{json, Map, Value};
+use std::io::Write;
+use std::path::Path;
+
+pub enum Analysis {
+    None,
+    BinaryCollision(BinaryCollision),
+    Bouncing(Bouncing),
+    Silo { slab: f64, exclude_bottom: f64 },
+    ColumnCollapse(ColumnCollapse),
+}
+
+impl Analysis {
+    pub fn new(section: Option<&AnalysisSection>, system: &DemSystem) -> Self {
+        match section {
+            None => Analysis::None,
+            Some(AnalysisSection::BinaryCollision) => Analysis::BinaryCollision(BinaryCollision::start(system)),
+            Some(AnalysisSection::Bouncing) => Analysis::Bouncing(Bouncing::default()),
+            Some(AnalysisSection::Silo { slab, exclude_bottom }) => {
+                Analysis::Silo { slab: *slab, exclude_bottom: *exclude_bottom }
+            }
+            Some(AnalysisSection::ColumnCollapse) => Analysis::ColumnCollapse(ColumnCollapse::new(system)),
+        }
+    }
+
+    /// Called after every step.
+    pub fn after_step(&mut self, system: &DemSystem) {
+        match self {
+            Analysis::BinaryCollision(b) => b.after_step(system),
+            Analysis::Bouncing(b) => b.after_step(system),
+            Analysis::ColumnCollapse(c) => c.after_step(system),
+            _ => {}
+        }
+    }
+
+    /// Final metrics; tables are written into `out`.
+    pub fn finish(&self, system: &DemSystem, out: &Path) -> std::io::Result<Map<String, Value>> {
+        match self {
+            Analysis::None => Ok(Map::new()),
+            Analysis::BinaryCollision(b) => b.finish(system, out),
+            Analysis::Bouncing(b) => Ok(b.finish()),
+            Analysis::Silo { slab, exclude_bottom } => silo(system, *slab, *exclude_bottom, out),
+            Analysis::ColumnCollapse(c) => c.finish(system),
+        }
+    }
+}
+
+fn by_id(system: &DemSystem) -> Vec<usize> {
+    let p = &system.particles;
+    let mut index = vec![usize::MAX; p.n_owned];
+    for k in 0..p.n_owned {
+        index[p.id[k] as usize] = k;
+    }
+    index
+}
+
+/// Binary collisions (Izard et al. 2014, section 3.2; Foerster et al. 1994):
+/// Ψ = tangential velocity of the contact points over the normal relative
+/// velocity before impact, before (Ψ1) and after (Ψ2), each in the contact
+/// frame of its instant (first touch, separation). On the sliding branch
+/// Ψ2 = Ψ1 − (7/2) μ (1 + e_n).
+pub struct BinaryCollision {
+    /// Per pair: Ψ1 and the normal relative speed before impact.
+    before: Vec<(f64, f64)>,
+    /// Per pair: whether it is touching now, and (Ψ2, e) at separation.
+    touching: Vec<bool>,
+    after: Vec<Option<(f64, f64)>>,
+}
+
+impl BinaryCollision {
+    fn start(system: &DemSystem) -> Self {
+        let index = by_id(system);
+        let p = &system.particles;
+        let pairs = p.n_owned / 2;
+        let before = (0..pairs)
+            .map(|k| {
+                let (a, b) = (index[2 * k], index[2 * k + 1]);
+                let relative = p.velocity[a] - p.velocity[b];
+                (relative.y / relative.x, relative.x)
+            })
+            .collect();
+        BinaryCollision { before, touching: vec![false; pairs], after: vec![None; pairs] }
+    }
+
+    fn after_step(&mut self, system: &DemSystem) {
+        let index = by_id(system);
+        let p = &system.particles;
+        for k in 0..self.before.len() {
+            if self.after[k].is_some() {
+                continue;
+            }
+            let (a, b) = (index[2 * k], index[2 * k + 1]);
+            let branch = p.position[a] - p.position[b];
+            let touching = branch.norm() < p.radius[a] + p.radius[b];
+            if self.touching[k] && !touching {
+                // Separation: resolve the contact-point velocity in the
+                // current contact frame; the tangent keeps the sign of the
+                // impact's tangential direction (+y).
+                let normal = branch.normalize();
+                let contact_velocity = p.velocity[a] - p.velocity[b]
+                    - (p.radius[a] * p.angular_velocity[a] + p.radius[b] * p.angular_velocity[b])
+                        .cross(&normal);
+                let normal_speed = contact_velocity.dot(&normal);
+                let tangential = contact_velocity - normal_speed * normal;
+                let tangent = (Vec3::y() - Vec3::y().dot(&normal) * normal).normalize();
+                let (_, vn) = self.before[k];
+                self.after[k] = Some((tangential.dot(&tangent) / vn, normal_speed / vn));
+            }
+            self.touching[k] = touching;
+        }
+    }
+
+    fn finish(&self, system: &DemSystem, out: &Path) -> std::io::Result<Map<String, Value>> {
+        let friction = system.law.friction;
+        let mut file = std::fs::File::create(out.join("collisions.csv"))?;
+        writeln!(file, "psi1,psi2,restitution,sliding,psi2_sliding_theory")?;
+        let mut metrics = Map::new();
+        let rows: Vec<(f64, f64, f64)> = self
+            .before
+            .iter()
+            .zip(&self.after)
+            .filter_map(|(&(psi1, _), after)| after.map(|(psi2, e)| (psi1, psi2, e)))
+            .collect();
+        metrics.insert("collisions".into(), json!(rows.len()));
+        let Some(&(_, _, head_on)) = rows.first() else { return Ok(metrics) };
+        // A pair slides throughout when the Coulomb impulse cannot stop the
+        // slip: Ψ1 > (7/2) μ (1 + e_n), e_n measured on the head-on pair.
+        let offset_theory = 3.5 * friction * (1.0 + head_on);
+        let mut offsets = Vec::new();
+        for &(psi1, psi2, e) in &rows {
+            let sliding = psi1 > offset_theory;
+            if sliding {
+                offsets.push(psi1 - psi2);
+            }
+            writeln!(file, "{psi1:e},{psi2:e},{e:e},{},{:e}", sliding as u8, psi1 - offset_theory)?;
+        }
+        metrics.insert("restitution".into(), json!(head_on));
+        if !offsets.is_empty() {
+            metrics.insert("psi_sliding_offset".into(), json!(offsets.iter().sum::<f64>() / offsets.len() as f64));
+            metrics.insert("psi_sliding_offset_theory".into(), json!(offset_theory));
+            metrics.insert("sliding_pairs".into(), json!(offsets.len()));
+        }
+        Ok(metrics)
+    }
+}
+
+/// Impacts of particle 0 on the walls: normal speed when a wall contact
+/// opens and when it closes.
+#[derive(Default)]
+pub struct Bouncing {
+    in_contact: bool,
+    speed_in: f64,
+    normal: Vec3,
+    impacts: Vec<(f64, f64, f64)>,
+}
+
+impl Bouncing {
+    fn after_step(&mut self, system: &DemSystem) {
+        let Some(k) = system.index_of(0) else { return };
+        let p = &system.particles;
+        let touching = system.walls.iter().find(|w| {
+            w.is_present(system.time) && w.distance(&p.position[k]) < p.radius[k]
+        });
+        match (self.in_contact, touching) {
+            (false, Some(wall)) => {
+                self.in_contact = true;
+                self.normal = wall.normal;
+                self.speed_in = -p.velocity[k].dot(&wall.normal);
+            }
+            (true, None) => {
+                self.in_contact = false;
+                let speed_out = p.velocity[k].dot(&self.normal);
+                self.impacts.push((system.time, self.speed_in, speed_out));
+            }
+            _ => {}
+        }
+    }
+
+    fn finish(&self) -> Map<String, Value> {
+        let mut metrics = Map::new();
+        let e: Vec<f64> = self.impacts.iter().map(|&(_, vin, vout)| vout / vin).collect();
+        metrics.insert("impacts".into(), json!(self.impacts.len()));
+        metrics.insert("restitution_per_impact".into(), json!(e));
+        metrics.insert("energy_ratio_per_impact".into(), json!(e.iter().map(|x| x * x).collect::<Vec<_>>()));
+        if let Some(first) = e.first() {
+            metrics.insert("restitution".into(), json!(first));
+        }
+        metrics
+    }
+}
+
+/// Coarse-grained pressure in horizontal slabs along gravity and the Janssen
+/// fit p(z) = p∞ (1 − exp(−(h − z)/λ)), f_w K = S/(P λ) (Izard eq. 22).
+fn silo(system: &DemSystem, slab: f64, exclude_bottom: f64, out: &Path) -> std::io::Result<Map<String, Value>> {
+    let p = &system.particles;
+    let g = system.domain.gravity;
+    let up = -g.normalize();
+    let lower = system.domain.lower;
+    let extent = system.domain.extent();
+    // Cross-section S and perimeter P of the box normal to gravity.
+    let vertical = (0..3).max_by(|&a, &b| up[a].abs().total_cmp(&up[b].abs())).unwrap();
+    let horizontal: Vec<usize> = (0..3).filter(|&a| a != vertical).collect();
+    let (wa, wb) = (extent[horizontal[0]], extent[horizontal[1]]);
+    let section = wa * wb;
+    let perimeter = 2.0 * (wa + wb);
+
+    let moments = particle_moments(system);
+    let base = lower[vertical];
+    let mobile: Vec<usize> = (0..p.n_owned).filter(|&k| p.inverse_mass[k] > 0.0).collect();
+    let top = mobile.iter().map(|&k| p.position[k][vertical] + p.radius[k]).fold(f64::MIN, f64::max);
+    let slabs = ((top - base) / slab).ceil().max(1.0) as usize;
+    let mut pressure = vec![0.0; slabs];
+    let mut solid_volume = vec![0.0; slabs];
+    for &k in &mobile {
+        let s = (((p.position[k][vertical] - base) / slab).floor().max(0.0) as usize).min(slabs - 1);
+        // Granular pressure: −trace(σ)/3 with σ = (1/V) Σ f ⊗ (x_c − x_p).
+        pressure[s] += -moments[k].trace() / 3.0;
+        solid_volume[s] += 4.0 / 3.0 * std::f64::consts::PI * p.radius[k].powi(3);
+    }
+    let volume = section * slab;
+    let z: Vec<f64> = (0..slabs).map(|s| base + (s as f64 + 0.5) * slab).collect();
+    let pressure: Vec<f64> = pressure.iter().map(|x| x / volume).collect();
+    let fraction: Vec<f64> = solid_volume.iter().map(|v| v / volume).collect();
+
+    let mut file = std::fs::File::create(out.join("silo_profile.csv"))?;
+    writeln!(file, "z,pressure,solid_fraction")?;
+    for s in 0..slabs {
+        writeln!(file, "{:e},{:e},{:e}", z[s], pressure[s], fraction[s])?;
+    }
+    // Fit over full slabs between the bottom exclusion and one slab below the top.
+    let fit: Vec<usize> = (0..slabs)
+        .filter(|&s| z[s] - base >= exclude_bottom && z[s] + slab <= top - slab)
+        .collect();
+    let depth: Vec<f64> = fit.iter().map(|&s| top - z[s]).collect();
+    let measured: Vec<f64> = fit.iter().map(|&s| pressure[s]).collect();
+    let (saturation, length) = janssen_fit(&depth, &measured);
+    let mean_fraction = fit.iter().map(|&s| fraction[s]).sum::<f64>() / fit.len().max(1) as f64;
+    let mut metrics = Map::new();
+    metrics.insert("janssen_fwK".into(), json!(section / (perimeter * length)));
+    metrics.insert("janssen_length".into(), json!(length));
+    metrics.insert("saturation_pressure".into(), json!(saturation));
+    metrics.insert("column_height".into(), json!(top - base));
+    metrics.insert("solid_fraction".into(), json!(mean_fraction));
+    Ok(metrics)
+}
+
+/// Least squares of p = p∞ (1 − exp(−d/λ)) over depth d: p∞ is linear for a
+/// given λ; λ is found by golden-section search on the residual.
+pub fn janssen_fit(depth: &[f64], pressure: &[f64]) -> (f64, f64) {
+    let residual = |length: f64| {
+        let shape: Vec<f64> = depth.iter().map(|d| 1.0 - (-d / length).exp()).collect();
+        let saturation = shape.iter().zip(pressure).map(|(s, p)| s * p).sum::<f64>()
+            / shape.iter().map(|s| s * s).sum::<f64>();
+        let r = shape.iter().zip(pressure).map(|(s, p)| (saturation * s - p).powi(2)).sum::<f64>();
+        (r, saturation)
+    };
+    let max_depth = depth.iter().cloned().fold(0.0, f64::max);
+    let (mut a, mut b) = ((1e-4 * max_depth).ln(), (1e3 * max_depth).ln());
+    let ratio = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..200 {
+        let c = b - ratio * (b - a);
+        let d = a + ratio * (b - a);
+        if residual(c.exp()).0 < residual(d.exp()).0 {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let length = (0.5 * (a + b)).exp();
+    (residual(length).1, length)
+}
+
+/// Symmetric collapse of a column between the gate walls (Izard et al.
+/// 2014, section 3.4): H0 and R0 at release, R∞ at rest.
+pub struct ColumnCollapse {
+    release_time: f64,
+    centre: f64,
+    half_width: f64,
+    initial_height: Option<f64>,
+}
+
+impl ColumnCollapse {
+    fn new(system: &DemSystem) -> Self {
+        let gates: Vec<_> = system.walls.iter().filter(|w| w.remove_at.is_some()).collect();
+        let release_time = gates.iter().filter_map(|w| w.remove_at).fold(0.0, f64::max);
+        let xs: Vec<f64> = gates.iter().map(|w| w.point.x).collect();
+        let (lo, hi) = (xs.iter().cloned().fold(f64::MAX, f64::min), xs.iter().cloned().fold(f64::MIN, f64::max));
+        let (centre, half_width) = if gates.len() >= 2 {
+            (0.5 * (lo + hi), 0.5 * (hi - lo))
+        } else {
+            // One gate: the column stands against a fixed back wall at the
+            // domain's lower x.
+            (system.domain.lower.x, hi - system.domain.lower.x)
+        };
+        ColumnCollapse { release_time, centre, half_width, initial_height: None }
+    }
+
+    fn vertical(system: &DemSystem) -> usize {
+        let g = system.domain.gravity;
+        (0..3).max_by(|&a, &b| g[a].abs().total_cmp(&g[b].abs())).unwrap()
+    }
+
+    fn height(system: &DemSystem) -> f64 {
+        let p = &system.particles;
+        let v = Self::vertical(system);
+        let floor = system.domain.lower[v];
+        (0..p.n_owned)
+            .filter(|&k| p.inverse_mass[k] > 0.0)
+            .map(|k| p.position[k][v] + p.radius[k] - floor)
+            .fold(0.0, f64::max)
+    }
+
+    fn after_step(&mut self, system: &DemSystem) {
+        if self.initial_height.is_none() && system.time >= self.release_time {
+            self.initial_height = Some(Self::height(system));
+        }
+    }
+
+    /// Front of the deposit: the farthest grain still connected to the main
+    /// body (gaps between successive grains along x below two diameters).
+    fn front(&self, system: &DemSystem) -> f64 {
+        let p = &system.particles;
+        let mut distance: Vec<(f64, f64)> = (0..p.n_owned)
+            .filter(|&k| p.inverse_mass[k] > 0.0)
+            .map(|k| ((p.position[k].x - self.centre).abs() + p.radius[k], p.radius[k]))
+            .collect();
+        distance.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut front = 0.0;
+        for &(d, r) in &distance {
+            if d - front > 4.0 * r && front > 0.0 {
+                break;
+            }
+            front = d;
+        }
+        front
+    }
+
+    fn finish(&self, system: &DemSystem) -> std::io::Result<Map<String, Value>> {
+        let mut metrics = Map::new();
+        let h0 = self.initial_height.unwrap_or(f64::NAN);
+        let r0 = self.half_width;
+        let front = self.front(system);
+        metrics.insert("initial_height".into(), json!(h0));
+        metrics.insert("initial_half_width".into(), json!(r0));
+        metrics.insert("aspect_ratio".into(), json!(h0 / r0));
+        metrics.insert("final_front".into(), json!(front));
+        metrics.insert("final_height".into(), json!(Self::height(system)));
+        metrics.insert("runout".into(), json!((front - r0) / r0));
+        Ok(metrics)
+    }
+}

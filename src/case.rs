@@ -1,0 +1,549 @@
+//! Case files: TOML in SI units, read once into typed structs.
+//!
+//! Every table denies unknown keys; [`Case::validate`] checks ranges and
+//! consistency and names the key and what is allowed. Nothing below this
+//! module reads TOML.
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+#[derive(Debug, thiserror::Error)]
+pub enum CaseError {
+    #[error("cannot read case file {path}: {source}")]
+    Read { path: String, source: std::io::Error },
+    #[error("case file {path}: {message}")]
+    Parse { path: String, message: String },
+    #[error("--set {assignment}: {message}")]
+    Override { assignment: String, message: String },
+    #[error("{key} = {value}: {allowed}")]
+    Invalid { key: String, value: String, allowed: String },
+}
+
+fn invalid(key: &str, value: impl std::fmt::Display, allowed: &str) -> CaseError {
+    CaseError::Invalid { key: key.to_string(), value: value.to_string(), allowed: allowed.to_string() }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Case {
+    pub domain: DomainSection,
+    pub particles: ParticlesSection,
+    pub contact: ContactSection,
+    #[serde(default)]
+    pub walls: Vec<WallSection>,
+    pub time: TimeSection,
+    #[serde(default)]
+    pub output: OutputSection,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub analysis: Option<AnalysisSection>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSection {
+    /// 2 (discs in the x–y plane) or 3 (spheres).
+    pub dimension: u8,
+    /// Lower and upper corners [m], one value per dimension.
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    /// Periodicity per axis (default: none).
+    #[serde(default)]
+    pub periodic: Vec<bool>,
+    /// Gravity vector [m/s²] (default: none).
+    #[serde(default)]
+    pub gravity: Vec<f64>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticlesSection {
+    /// Grain density [kg/m³].
+    pub density: f64,
+    /// Mean radius [m].
+    pub radius: f64,
+    /// Relative half-width of the uniform radius distribution (0.1 = ±10 %).
+    #[serde(default)]
+    pub radius_spread: f64,
+    /// Seed of the random generator (placement, radii).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Ids of particles written to `tracked.csv`.
+    #[serde(default)]
+    pub tracked: Vec<u64>,
+    /// Generators, applied in order; ids follow the order of creation.
+    #[serde(default)]
+    pub block: Vec<BlockSection>,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum BlockSection {
+    /// Simple cubic (square) lattice filling a box.
+    Lattice {
+        lower: Vec<f64>,
+        upper: Vec<f64>,
+        /// Lattice spacing [m].
+        spacing: f64,
+        /// Random displacement as a fraction of each site's free room.
+        #[serde(default)]
+        jitter: f64,
+        #[serde(default)]
+        fixed: bool,
+        #[serde(default)]
+        velocity: Vec<f64>,
+    },
+    /// Random non-overlapping placement (a sedimentation starts from it).
+    Random {
+        lower: Vec<f64>,
+        upper: Vec<f64>,
+        count: usize,
+        #[serde(default)]
+        fixed: bool,
+        #[serde(default)]
+        velocity: Vec<f64>,
+    },
+    /// Particles given one by one.
+    Explicit {
+        positions: Vec<Vec<f64>>,
+        #[serde(default)]
+        velocities: Vec<Vec<f64>>,
+        #[serde(default)]
+        angular_velocities: Vec<Vec<f64>>,
+        #[serde(default)]
+        radii: Vec<f64>,
+        #[serde(default)]
+        fixed: bool,
+    },
+    /// Independent binary collisions, one pair per impact parameter
+    /// Ψ1 = v_t / v_n from 0 to `psi_max`: particle 2k moves towards the
+    /// resting particle 2k + 1 with normal speed `impact_speed`.
+    CollisionPairs {
+        count: usize,
+        impact_speed: f64,
+        psi_max: f64,
+        /// Initial gap between the surfaces of a pair [m].
+        #[serde(default)]
+        gap: f64,
+    },
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSection {
+    /// "soft" (DEM). Hard contact ("cocd", "nscd") is not built yet.
+    pub model: String,
+    /// Normal restitution e_n and contact time t_c [s] (eq. 17–18)...
+    #[serde(default)]
+    pub restitution: Option<f64>,
+    #[serde(default)]
+    pub contact_time: Option<f64>,
+    /// ... turned into k_n, γ_n by "exact" (restitution exactly e_n with the
+    /// no-attraction clamp) or "paper" (eq. 17–18 as printed).
+    #[serde(default = "default_calibration")]
+    pub calibration: String,
+    /// Or the same k_n [N/m] and γ_n [N s/m] for every pair.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// k_t / k_n.
+    #[serde(default = "default_tangential_ratio")]
+    pub tangential_ratio: f64,
+    /// Coulomb coefficient between particles.
+    pub friction: f64,
+    /// Coulomb coefficient with walls (default: `friction`).
+    #[serde(default)]
+    pub wall_friction: Option<f64>,
+    /// Verlet skin [m] (default: 0.1 mean diameter).
+    #[serde(default)]
+    pub skin: Option<f64>,
+}
+
+fn default_calibration() -> String {
+    "exact".into()
+}
+
+fn default_tangential_ratio() -> f64 {
+    0.2
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSection {
+    #[serde(default)]
+    pub name: Option<String>,
+    /// A point of the plane [m].
+    pub point: Vec<f64>,
+    /// Normal pointing towards the particles (normalised on reading).
+    pub normal: Vec<f64>,
+    /// Coulomb coefficient (default: `contact.wall_friction`).
+    #[serde(default)]
+    pub friction: Option<f64>,
+    /// Time [s] at which the wall is removed.
+    #[serde(default)]
+    pub remove_at: Option<f64>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSection {
+    /// Simulated end time [s].
+    pub end: f64,
+    /// Time step [s]; or ...
+    #[serde(default)]
+    pub dt: Option<f64>,
+    /// ... as a fraction of the binary contact time (default 0.02 = t_c/50).
+    #[serde(default)]
+    pub dt_over_contact_time: Option<f64>,
+    /// Stop early once every particle is slower than this [m/s] ...
+    #[serde(default)]
+    pub rest_speed: Option<f64>,
+    /// ... but not before this time [s] (default: after the last wall removal).
+    #[serde(default)]
+    pub rest_after: Option<f64>,
+    /// Largest overlap / radius before the run is declared unstable.
+    #[serde(default = "default_overlap_limit")]
+    pub overlap_limit: f64,
+}
+
+fn default_overlap_limit() -> f64 {
+    0.25
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSection {
+    /// Simulated time between two outputs (series row, particle file) [s].
+    #[serde(default)]
+    pub interval: Option<f64>,
+    /// Time between two rows of `tracked.csv` (default: `interval`).
+    #[serde(default)]
+    pub tracked_interval: Option<f64>,
+    /// Write particle files for ParaView.
+    #[serde(default = "default_true")]
+    pub particles: bool,
+}
+
+impl Default for OutputSection {
+    fn default() -> Self {
+        OutputSection { interval: None, tracked_interval: None, particles: true }
+    }
+}
+
+fn default_true() -> bool {
+    true
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum AnalysisSection {
+    /// Ψ2 against Ψ1 and the restitution of `collision_pairs`.
+    BinaryCollision,
+    /// Restitution and energy loss of each impact of particle 0 on the walls.
+    Bouncing,
+    /// Coarse-grained pressure profile along gravity and its Janssen fit.
+    Silo {
+        /// Height of the averaging slabs [m].
+        slab: f64,
+        /// Slabs closer than this to the floor are left out of the fit [m].
+        #[serde(default)]
+        exclude_bottom: f64,
+    },
+    /// Runout (R∞ − R0)/R0 and aspect ratio H0/R0 of a symmetric collapse
+    /// released by removing the walls named `gate`.
+    ColumnCollapse,
+}
+
+impl Case {
+    /// Reads a case file and applies `--set key=value` overrides.
+    pub fn load(path: &Path, overrides: &[String]) -> Result<Case, CaseError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| CaseError::Read { path: path.display().to_string(), source })?;
+        Self::from_text(&text, &path.display().to_string(), overrides)
+    }
+
+    pub fn from_text(text: &str, origin: &str, overrides: &[String]) -> Result<Case, CaseError> {
+        let mut document: toml::Table = toml::from_str(text)
+            .map_err(|e| CaseError::Parse { path: origin.to_string(), message: e.to_string() })?;
+        for assignment in overrides {
+            apply_override(&mut document, assignment)?;
+        }
+        let case: Case = Case::deserialize(toml::Value::Table(document)).map_err(|e| CaseError::Parse {
+            path: origin.to_string(),
+            message: e.to_string().trim().to_string(),
+        })?;
+        case.validate()?;
+        Ok(case)
+    }
+
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).expect("a case always serialises")
+    }
+
+    pub fn dimension(&self) -> usize {
+        self.domain.dimension as usize
+    }
+
+    /// Checks ranges and consistency; the error names the key and what is
+    /// allowed.
+    pub fn validate(&self) -> Result<(), CaseError> {
+        let d = &self.domain;
+        if d.dimension != 2 && d.dimension != 3 {
+            return Err(invalid("domain.dimension", d.dimension, "allowed: 2 or 3"));
+        }
+        let dim = self.dimension();
+        let need = format!("allowed: a list of {dim} numbers (one per axis)");
+        check_len("domain.lower", &d.lower, dim, &need)?;
+        check_len("domain.upper", &d.upper, dim, &need)?;
+        for axis in 0..dim {
+            if d.upper[axis] <= d.lower[axis] {
+                return Err(invalid("domain.upper", format!("{:?}", d.upper), "allowed: each bound above domain.lower"));
+            }
+        }
+        if !d.periodic.is_empty() && d.periodic.len() != dim {
+            return Err(invalid("domain.periodic", format!("{:?}", d.periodic), &format!("allowed: a list of {dim} booleans")));
+        }
+        if !d.gravity.is_empty() {
+            check_len("domain.gravity", &d.gravity, dim, &need)?;
+        }
+
+        let p = &self.particles;
+        positive("particles.density", p.density)?;
+        positive("particles.radius", p.radius)?;
+        if !(0.0..1.0).contains(&p.radius_spread) {
+            return Err(invalid("particles.radius_spread", p.radius_spread, "allowed: 0 ≤ radius_spread < 1"));
+        }
+        if p.block.is_empty() {
+            return Err(invalid("particles.block", "[]", "allowed: at least one [[particles.block]] generator"));
+        }
+        for (k, block) in p.block.iter().enumerate() {
+            let key = |name: &str| format!("particles.block[{k}].{name}");
+            match block {
+                BlockSection::Lattice { lower, upper, spacing, jitter, velocity, .. } => {
+                    check_len(&key("lower"), lower, dim, &need)?;
+                    check_len(&key("upper"), upper, dim, &need)?;
+                    if *spacing < 2.0 * p.radius * (1.0 + p.radius_spread) {
+                        return Err(invalid(&key("spacing"), spacing, "allowed: at least the largest diameter, 2 radius (1 + radius_spread)"));
+                    }
+                    if !(0.0..=1.0).contains(jitter) {
+                        return Err(invalid(&key("jitter"), jitter, "allowed: 0 ≤ jitter ≤ 1"));
+                    }
+                    if !velocity.is_empty() {
+                        check_len(&key("velocity"), velocity, dim, &need)?;
+                    }
+                }
+                BlockSection::Random { lower, upper, count, velocity, .. } => {
+                    check_len(&key("lower"), lower, dim, &need)?;
+                    check_len(&key("upper"), upper, dim, &need)?;
+                    if *count == 0 {
+                        return Err(invalid(&key("count"), count, "allowed: at least 1"));
+                    }
+                    if !velocity.is_empty() {
+                        check_len(&key("velocity"), velocity, dim, &need)?;
+                    }
+                }
+                BlockSection::Explicit { positions, velocities, angular_velocities, radii, .. } => {
+                    if positions.is_empty() {
+                        return Err(invalid(&key("positions"), "[]", "allowed: at least one position"));
+                    }
+                    for (name, list) in [("positions", positions), ("velocities", velocities)] {
+                        if !list.is_empty() && list.len() != positions.len() {
+                            return Err(invalid(&key(name), list.len(), "allowed: as many entries as positions"));
+                        }
+                        for v in list {
+                            check_len(&key(name), v, dim, &need)?;
+                        }
+                    }
+                    if !angular_velocities.is_empty() && angular_velocities.len() != positions.len() {
+                        return Err(invalid(&key("angular_velocities"), angular_velocities.len(), "allowed: as many entries as positions"));
+                    }
+                    for w in angular_velocities {
+                        check_len(&key("angular_velocities"), w, 3, "allowed: a list of 3 numbers (rad/s about x, y, z)")?;
+                    }
+                    if !radii.is_empty() && radii.len() != positions.len() {
+                        return Err(invalid(&key("radii"), radii.len(), "allowed: as many radii as positions"));
+                    }
+                    for r in radii {
+                        positive(&key("radii"), *r)?;
+                    }
+                }
+                BlockSection::CollisionPairs { count, impact_speed, psi_max, gap } => {
+                    if *count == 0 {
+                        return Err(invalid(&key("count"), count, "allowed: at least 1"));
+                    }
+                    positive(&key("impact_speed"), *impact_speed)?;
+                    if *psi_max < 0.0 {
+                        return Err(invalid(&key("psi_max"), psi_max, "allowed: psi_max ≥ 0"));
+                    }
+                    if *gap < 0.0 {
+                        return Err(invalid(&key("gap"), gap, "allowed: gap ≥ 0"));
+                    }
+                }
+            }
+        }
+        let c = &self.contact;
+        match c.model.as_str() {
+            "soft" => {}
+            "cocd" | "nscd" => {
+                return Err(invalid("contact.model", &c.model, "hard contact (cocd, nscd) is not available yet; allowed now: \"soft\""))
+            }
+            other => return Err(invalid("contact.model", other, "allowed: \"soft\", \"cocd\", \"nscd\"")),
+        }
+        match (c.restitution, c.contact_time, c.stiffness, c.damping) {
+            (Some(e), Some(tc), None, None) => {
+                if !(e > 0.0 && e <= 1.0) {
+                    return Err(invalid("contact.restitution", e, "allowed: 0 < restitution ≤ 1"));
+                }
+                positive("contact.contact_time", tc)?;
+            }
+            (None, None, Some(k), Some(g)) => {
+                positive("contact.stiffness", k)?;
+                if g < 0.0 {
+                    return Err(invalid("contact.damping", g, "allowed: damping ≥ 0"));
+                }
+            }
+            _ => {
+                return Err(invalid(
+                    "contact",
+                    "(restitution, contact_time, stiffness, damping)",
+                    "allowed: either restitution and contact_time, or stiffness and damping",
+                ))
+            }
+        }
+        if c.calibration != "exact" && c.calibration != "paper" {
+            return Err(invalid("contact.calibration", &c.calibration, "allowed: \"exact\" or \"paper\""));
+        }
+        if !(c.tangential_ratio >= 0.0) {
+            return Err(invalid("contact.tangential_ratio", c.tangential_ratio, "allowed: ≥ 0"));
+        }
+        if !(c.friction >= 0.0) {
+            return Err(invalid("contact.friction", c.friction, "allowed: ≥ 0"));
+        }
+        if let Some(f) = c.wall_friction {
+            if !(f >= 0.0) {
+                return Err(invalid("contact.wall_friction", f, "allowed: ≥ 0"));
+            }
+        }
+        if let Some(s) = c.skin {
+            positive("contact.skin", s)?;
+        }
+
+        for (k, w) in self.walls.iter().enumerate() {
+            let key = |name: &str| format!("walls[{k}].{name}");
+            check_len(&key("point"), &w.point, dim, &need)?;
+            check_len(&key("normal"), &w.normal, dim, &need)?;
+            if w.normal.iter().map(|x| x * x).sum::<f64>() == 0.0 {
+                return Err(invalid(&key("normal"), format!("{:?}", w.normal), "allowed: a non-zero vector"));
+            }
+            if let Some(f) = w.friction {
+                if !(f >= 0.0) {
+                    return Err(invalid(&key("friction"), f, "allowed: ≥ 0"));
+                }
+            }
+        }
+
+        let t = &self.time;
+        positive("time.end", t.end)?;
+        match (t.dt, t.dt_over_contact_time) {
+            (Some(_), Some(_)) => {
+                return Err(invalid("time.dt", "(dt, dt_over_contact_time)", "allowed: one of time.dt and time.dt_over_contact_time"))
+            }
+            (Some(dt), None) => positive("time.dt", dt)?,
+            (None, Some(f)) => positive("time.dt_over_contact_time", f)?,
+            (None, None) => {}
+        }
+        if let Some(v) = t.rest_speed {
+            positive("time.rest_speed", v)?;
+        }
+        positive("time.overlap_limit", t.overlap_limit)?;
+
+        if let Some(i) = self.output.interval {
+            positive("output.interval", i)?;
+        }
+        if let Some(i) = self.output.tracked_interval {
+            positive("output.tracked_interval", i)?;
+        }
+        if let Some(AnalysisSection::Silo { slab, .. }) = &self.analysis {
+            positive("analysis.slab", *slab)?;
+        }
+        if matches!(self.analysis, Some(AnalysisSection::ColumnCollapse))
+            && !self.walls.iter().any(|w| w.remove_at.is_some())
+        {
+            return Err(invalid("analysis.kind", "column_collapse", "needs walls with remove_at (the gates)"));
+        }
+        Ok(())
+    }
+}
+
+fn check_len(key: &str, values: &[f64], n: usize, allowed: &str) -> Result<(), CaseError> {
+    if values.len() != n || values.iter().any(|v| !v.is_finite()) {
+        return Err(invalid(key, format!("{values:?}"), allowed));
+    }
+    Ok(())
+}
+
+fn positive(key: &str, value: f64) -> Result<(), CaseError> {
+    if value > 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(key, value, "allowed: a positive number"))
+    }
+}
+
+/// Sets `a.b.c = value` in the document; the value is read as TOML (a
+/// number, boolean, array, ...) or else taken as a string.
+fn apply_override(document: &mut toml::Table, assignment: &str) -> Result<(), CaseError> {
+    let err = |message: &str| CaseError::Override { assignment: assignment.to_string(), message: message.to_string() };
+    let (key, raw) = assignment.split_once('=').ok_or_else(|| err("expected key=value, e.g. time.end=0.1"))?;
+    let key = key.trim();
+    let value: toml::Value = match toml::from_str::<toml::Table>(&format!("v = {}", raw.trim())) {
+        Ok(mut t) => t.remove("v").unwrap(),
+        Err(_) => toml::Value::String(raw.trim().to_string()),
+    };
+    let parts: Vec<&str> = key.split('.').collect();
+    if parts.iter().any(|p| p.is_empty()) {
+        return Err(err("empty key segment"));
+    }
+    // Each segment is `name` or `name[index]` (an entry of an array of tables).
+    let mut table = document;
+    for (depth, part) in parts.iter().enumerate() {
+        let (name, index) = match part.split_once('[') {
+            Some((name, rest)) => {
+                let index: usize = rest
+                    .strip_suffix(']')
+                    .and_then(|i| i.parse().ok())
+                    .ok_or_else(|| err(&format!("bad index in `{part}`")))?;
+                (name, Some(index))
+            }
+            None => (*part, None),
+        };
+        let last = depth + 1 == parts.len();
+        if last && index.is_none() {
+            table.insert(name.to_string(), value);
+            return Ok(());
+        }
+        let entry = table
+            .entry(name.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        let entry = match (entry, index) {
+            (toml::Value::Array(items), Some(i)) => items
+                .get_mut(i)
+                .ok_or_else(|| err(&format!("`{name}` has no entry {i}")))?,
+            (entry, None) => entry,
+            _ => return Err(err(&format!("`{name}` is not an array"))),
+        };
+        if last {
+            *entry = value;
+            return Ok(());
+        }
+        table = match entry {
+            toml::Value::Table(t) => t,
+            _ => return Err(err(&format!("`{part}` is not a table"))),
+        };
+    }
+    Ok(())
+}

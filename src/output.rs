@@ -1,0 +1,115 @@
+//! The output directory of a run (DESIGN.md, "Contracts every case follows"):
+//! `case.toml`, `log.txt`, `series.csv`, `tracked.csv`, `particles/*.vtp`
+//! with the ParaView index `particles.pvd`, and `summary.json`.
+
+use crate::case::Case;
+use grainflow_dem::DemSystem;
+use grainflow_io::{CsvSeries, ParticleFrame, PvdIndex};
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+pub struct Outputs {
+    dir: PathBuf,
+    log: File,
+    series: CsvSeries,
+    tracked: CsvSeries,
+    particles: Option<PvdIndex>,
+    frames: usize,
+}
+
+impl Outputs {
+    pub fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
+        std::fs::create_dir_all(dir)?;
+        std::fs::write(dir.join("case.toml"), case.to_toml())?;
+        let log = File::create(dir.join("log.txt"))?;
+        let series = CsvSeries::create(
+            &dir.join("series.csv"),
+            &[
+                "t",
+                "dt",
+                "step",
+                "kinetic_translational",
+                "kinetic_rotational",
+                "particle_contacts",
+                "wall_contacts",
+                "max_overlap_ratio",
+                "max_speed",
+                "neighbour_builds",
+            ],
+        )?;
+        let tracked = CsvSeries::create(
+            &dir.join("tracked.csv"),
+            &["t", "id", "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz"],
+        )?;
+        let particles = if case.output.particles {
+            std::fs::create_dir_all(dir.join("particles"))?;
+            Some(PvdIndex::new(dir.join("particles.pvd")))
+        } else {
+            None
+        };
+        Ok(Outputs { dir: dir.to_path_buf(), log, series, tracked, particles, frames: 0 })
+    }
+
+    /// A line in `log.txt`, prefixed with the wall-clock time of the run.
+    pub fn log(&mut self, line: &str) {
+        let _ = writeln!(self.log, "{line}");
+        let _ = self.log.flush();
+    }
+
+    /// A row of `series.csv` and, if enabled, a particle file.
+    pub fn write_frame(&mut self, system: &DemSystem, dt: f64) -> std::io::Result<()> {
+        let (translational, rotational) = system.particles.kinetic_energy();
+        let last = system.last;
+        self.series.row(&[
+            system.time,
+            dt,
+            system.steps as f64,
+            translational,
+            rotational,
+            last.particle_contacts as f64,
+            last.wall_contacts as f64,
+            last.max_overlap_ratio,
+            system.max_speed(),
+            system.neighbours.builds as f64,
+        ])?;
+        if let Some(index) = &mut self.particles {
+            let p = &system.particles;
+            let n = p.n_owned;
+            let as_arrays = |v: &[grainflow_core::Vec3]| v[..n].iter().map(|x| [x.x, x.y, x.z]).collect::<Vec<_>>();
+            let fixed: Vec<u8> = (0..n).map(|k| p.is_fixed(k) as u8).collect();
+            let name = format!("particles/particles_{:06}.vtp", self.frames);
+            ParticleFrame {
+                id: &p.id[..n],
+                position: &as_arrays(&p.position),
+                velocity: &as_arrays(&p.velocity),
+                angular_velocity: &as_arrays(&p.angular_velocity),
+                force: &as_arrays(&p.force),
+                radius: &p.radius[..n],
+                fixed: &fixed,
+            }
+            .write(&self.dir.join(&name))?;
+            index.add(system.time, &name)?;
+        }
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// Rows of `tracked.csv` for the tracked ids.
+    pub fn write_tracked(&mut self, system: &DemSystem, ids: &[u64]) -> std::io::Result<()> {
+        let p = &system.particles;
+        for &id in ids {
+            if let Some(k) = system.index_of(id) {
+                let (x, v, w) = (p.position[k], p.velocity[k], p.angular_velocity[k]);
+                self.tracked
+                    .row(&[system.time, id as f64, x.x, x.y, x.z, v.x, v.y, v.z, w.x, w.y, w.z])?;
+            }
+        }
+        Ok(())
+    }
+
+    pub fn write_summary(&self, summary: &serde_json::Value) -> std::io::Result<()> {
+        let text = serde_json::to_string_pretty(summary).expect("json");
+        std::fs::write(self.dir.join("summary.json"), text + "\n")
+    }
+}

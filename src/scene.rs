@@ -1,0 +1,190 @@
+//! Scene assembly: turns a validated [`Case`] into a [`DemSystem`].
+
+use crate::case::{BlockSection, Case};
+use grainflow_core::{Dimension, Domain, Vec3};
+use grainflow_dem::generate::{self, Material, RadiusDistribution};
+use grainflow_dem::particles::NewParticle;
+use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness, PlaneWall};
+use rand::SeedableRng;
+use rand_pcg::Pcg64;
+
+/// A 2- or 3-component list as a vector (z = 0 in 2D; empty = zero).
+pub fn vector(values: &[f64]) -> Vec3 {
+    let mut v = Vec3::zeros();
+    for (axis, value) in values.iter().enumerate().take(3) {
+        v[axis] = *value;
+    }
+    v
+}
+
+pub fn domain(case: &Case) -> Domain {
+    let d = &case.domain;
+    let dimension = if d.dimension == 2 { Dimension::Two } else { Dimension::Three };
+    let mut periodic = [false; 3];
+    for (axis, &flag) in d.periodic.iter().enumerate() {
+        periodic[axis] = flag;
+    }
+    let mut lower = vector(&d.lower);
+    let mut upper = vector(&d.upper);
+    if dimension == Dimension::Two {
+        lower.z = 0.0;
+        upper.z = 0.0;
+    }
+    Domain { dimension, lower, upper, periodic, gravity: vector(&d.gravity) }
+}
+
+pub fn contact_law(case: &Case) -> ContactLaw {
+    let c = &case.contact;
+    let normal = match (c.restitution, c.contact_time, c.stiffness, c.damping) {
+        (Some(e), Some(tc), _, _) => {
+            let calibration =
+                if c.calibration == "paper" { NormalCalibration::Paper } else { NormalCalibration::Exact };
+            NormalStiffness::from_restitution(e, tc, calibration)
+        }
+        (_, _, Some(k), Some(g)) => NormalStiffness::Fixed { stiffness: k, damping: g },
+        _ => unreachable!("validated"),
+    };
+    ContactLaw { normal, tangential_ratio: c.tangential_ratio, friction: c.friction }
+}
+
+pub fn walls(case: &Case) -> Vec<PlaneWall> {
+    let default_friction = case.contact.wall_friction.unwrap_or(case.contact.friction);
+    case.walls
+        .iter()
+        .enumerate()
+        .map(|(k, w)| PlaneWall {
+            name: w.name.clone().unwrap_or_else(|| format!("wall{k}")),
+            point: vector(&w.point),
+            normal: vector(&w.normal).normalize(),
+            friction: w.friction.unwrap_or(default_friction),
+            remove_at: w.remove_at,
+        })
+        .collect()
+}
+
+/// The particles of every generator block, in order.
+pub fn particles(case: &Case) -> Result<Vec<NewParticle>, String> {
+    let p = &case.particles;
+    let dimension = domain(case).dimension;
+    let mut rng = Pcg64::seed_from_u64(p.seed);
+    let radii = RadiusDistribution { mean: p.radius, spread: p.radius_spread };
+    let mut all: Vec<NewParticle> = Vec::new();
+    for (k, block) in p.block.iter().enumerate() {
+        let made = match block {
+            BlockSection::Lattice { lower, upper, spacing, jitter, fixed, velocity } => {
+                let material = Material { density: p.density, fixed: *fixed, velocity: vector(velocity) };
+                generate::lattice(dimension, vector(lower), vector(upper), *spacing, radii, *jitter, &material, &mut rng)
+            }
+            BlockSection::Random { lower, upper, count, fixed, velocity } => {
+                let material = Material { density: p.density, fixed: *fixed, velocity: vector(velocity) };
+                generate::random(dimension, vector(lower), vector(upper), *count, radii, &material, &all, &mut rng)
+                    .map_err(|e| format!("particles.block[{k}] (random): {e}"))?
+            }
+            BlockSection::Explicit { positions, velocities, angular_velocities, radii: given, fixed } => positions
+                .iter()
+                .enumerate()
+                .map(|(n, x)| NewParticle {
+                    position: vector(x),
+                    velocity: velocities.get(n).map(|v| vector(v)).unwrap_or_else(Vec3::zeros),
+                    angular_velocity: angular_velocities.get(n).map(|w| vector(w)).unwrap_or_else(Vec3::zeros),
+                    radius: given.get(n).copied().unwrap_or(p.radius),
+                    density: p.density,
+                    fixed: *fixed,
+                })
+                .collect(),
+            BlockSection::CollisionPairs { count, impact_speed, psi_max, gap } => {
+                collision_pairs(dimension, *count, *impact_speed, *psi_max, *gap, p.radius, p.density)
+            }
+        };
+        if made.is_empty() {
+            return Err(format!("particles.block[{k}] creates no particle: enlarge its region"));
+        }
+        all.extend(made);
+    }
+    Ok(all)
+}
+
+/// Pair k: particle 2k moving with (v_n, Ψ1 v_n) towards particle 2k + 1 at
+/// rest, placed so that the centres line up along x at first touch (a
+/// head-on normal with tangential slip Ψ1 v_n); pairs 10 r (+ the drift)
+/// apart along y (3D: z) so that they never meet.
+fn collision_pairs(
+    dimension: Dimension,
+    count: usize,
+    impact_speed: f64,
+    psi_max: f64,
+    gap: f64,
+    radius: f64,
+    density: f64,
+) -> Vec<NewParticle> {
+    let mut out = Vec::with_capacity(2 * count);
+    for k in 0..count {
+        let psi = if count > 1 { psi_max * k as f64 / (count - 1) as f64 } else { 0.0 };
+        let mut centre = Vec3::zeros();
+        let separation_axis = if dimension == Dimension::Two { 1 } else { 2 };
+        centre[separation_axis] = (10.0 * radius + psi_max * gap) * k as f64;
+        let half = radius + 0.5 * gap;
+        let approach_drift = psi * gap;
+        out.push(NewParticle {
+            position: centre - Vec3::x() * half - Vec3::y() * approach_drift,
+            velocity: Vec3::new(impact_speed, psi * impact_speed, 0.0),
+            angular_velocity: Vec3::zeros(),
+            radius,
+            density,
+            fixed: false,
+        });
+        out.push(NewParticle {
+            position: centre + Vec3::x() * half,
+            velocity: Vec3::zeros(),
+            angular_velocity: Vec3::zeros(),
+            radius,
+            density,
+            fixed: false,
+        });
+    }
+    out
+}
+
+/// Default Verlet skin: a tenth of the mean diameter.
+pub fn skin(case: &Case) -> f64 {
+    case.contact.skin.unwrap_or(0.2 * case.particles.radius)
+}
+
+/// The scene's DEM system, with its particles placed.
+pub fn build(case: &Case) -> Result<DemSystem, String> {
+    let domain = domain(case);
+    let placed = particles(case)?;
+    check_inside(&domain, &placed)?;
+    let mut system = DemSystem::new(domain, contact_law(case), walls(case), skin(case));
+    system.add_particles(&placed);
+    Ok(system)
+}
+
+fn check_inside(domain: &Domain, placed: &[NewParticle]) -> Result<(), String> {
+    let dim = domain.dimension.count();
+    for (k, p) in placed.iter().enumerate() {
+        for axis in 0..dim {
+            if p.position[axis] < domain.lower[axis] || p.position[axis] > domain.upper[axis] {
+                return Err(format!(
+                    "particle {k} at {:?} lies outside the domain [{:?}, {:?}]: enlarge domain.lower/upper",
+                    p.position.as_slice(),
+                    &domain.lower.as_slice()[..dim],
+                    &domain.upper.as_slice()[..dim]
+                ));
+            }
+        }
+    }
+    // A periodic axis must hold at least two interaction ranges, so that a
+    // pair has a single image.
+    let r_max = placed.iter().map(|p| p.radius).fold(0.0, f64::max);
+    let extent = domain.extent();
+    for axis in 0..dim {
+        if domain.periodic[axis] && extent[axis] < 2.0 * (2.0 * r_max) * 1.2 {
+            return Err(format!(
+                "domain.periodic: axis {axis} is {:.3e} m long, less than 2.4 largest diameters; enlarge it",
+                extent[axis]
+            ));
+        }
+    }
+    Ok(())
+}

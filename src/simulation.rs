@@ -1,0 +1,259 @@
+//! The run: builds the scene, advances it, writes the outputs on schedule
+//! and stops with a diagnosis when the integration goes wrong.
+
+use crate::analysis::Analysis;
+use crate::case::Case;
+use crate::output::Outputs;
+use crate::stability::{self, TimeStepVerdict};
+use crate::{scene, RunError};
+use grainflow_dem::DemSystem;
+use serde_json::{json, Map, Value};
+use std::io::IsTerminal;
+use std::path::Path;
+use std::time::Instant;
+
+/// Result of a finished run, as written to `summary.json`.
+#[derive(Debug)]
+pub struct Summary {
+    pub json: Value,
+    pub metrics: Map<String, Value>,
+}
+
+/// The time step of a case and the scene's shortest contact time.
+pub fn time_step(case: &Case, system: &DemSystem) -> (f64, f64) {
+    let p = &system.particles;
+    let lightest = (0..p.n_owned)
+        .filter(|&k| !p.is_fixed(k))
+        .map(|k| p.mass[k])
+        .fold(f64::MAX, f64::min);
+    let lightest = if lightest == f64::MAX { p.mass.iter().cloned().fold(f64::MAX, f64::min) } else { lightest };
+    let contact_time = stability::shortest_contact_time(&system.law, lightest);
+    let dt = match (case.time.dt, case.time.dt_over_contact_time) {
+        (Some(dt), _) => dt,
+        (None, Some(f)) => f * contact_time,
+        (None, None) => 0.02 * contact_time,
+    };
+    (dt, contact_time)
+}
+
+/// Refuses a time step past the stability limit (before anything is
+/// written); returns a warning past the accuracy limit.
+pub fn check_time_step(dt: f64, contact_time: f64) -> Result<Option<String>, RunError> {
+    let ratio = dt / contact_time;
+    match stability::verdict(ratio) {
+        TimeStepVerdict::Unstable => Err(RunError::Case(format!(
+            "time step dt = {dt:.3e} s is {ratio:.3} t_c (t_c = {contact_time:.3e} s): past the stability limit \
+             dt/t_c ≤ {} of the explicit contact integration; allowed: time.dt ≤ {:.3e} s, \
+             time.dt_over_contact_time ≤ {} (default 0.02)",
+            stability::STABLE_DT_OVER_TC,
+            stability::STABLE_DT_OVER_TC * contact_time,
+            stability::STABLE_DT_OVER_TC
+        ))),
+        TimeStepVerdict::Inaccurate => Ok(Some(format!(
+            "warning: dt = {ratio:.3} t_c exceeds {}: restitution errors above 1 % (use dt ≤ {:.3e} s)",
+            stability::ACCURATE_DT_OVER_TC,
+            stability::ACCURATE_DT_OVER_TC * contact_time
+        ))),
+        TimeStepVerdict::Accurate => Ok(None),
+    }
+}
+
+/// Runs a validated case into `out`. Nothing is written if the scene cannot
+/// be built or its time step is refused.
+pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
+    let started = Instant::now();
+    let mut system = scene::build(case).map_err(RunError::Case)?;
+    let (dt, contact_time) = time_step(case, &system);
+    let warning = check_time_step(dt, contact_time)?;
+
+    let mut outputs = Outputs::create(out, case).map_err(RunError::Io)?;
+    outputs.log(&format!(
+        "grainflow {}: {} particles ({} glued), {}D soft-sphere DEM, dry scene (no fluid grid)",
+        env!("CARGO_PKG_VERSION"),
+        system.particles.n_owned,
+        (0..system.particles.n_owned).filter(|&k| system.particles.is_fixed(k)).count(),
+        system.domain.dimension.count()
+    ));
+    outputs.log(&format!("dt = {dt:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s)", dt / contact_time));
+    if let Some(w) = &warning {
+        outputs.log(w);
+        eprintln!("{w}");
+    }
+
+    let end = case.time.end;
+    let interval = case.output.interval.unwrap_or(end / 100.0);
+    let tracked_interval = case.output.tracked_interval.unwrap_or(interval);
+    let last_removal = system.walls.iter().filter_map(|w| w.remove_at).fold(0.0, f64::max);
+    let rest_after = case.time.rest_after.unwrap_or(last_removal);
+    let mut analysis = Analysis::new(case.analysis.as_ref(), &system);
+
+    let progress = Progress::new(show_progress && std::io::stderr().is_terminal(), end);
+    let mut next_output = 0.0;
+    let mut next_tracked = 0.0;
+    let mut stop_reason = "end time reached".to_string();
+    let mut failure: Option<String> = None;
+    let total_steps = (end / dt).ceil() as u64;
+    let mut logged_decile = 0;
+    let mut wall_state: Vec<bool> = system.walls.iter().map(|w| w.is_present(0.0)).collect();
+
+    outputs.write_frame(&system, dt).map_err(RunError::Io)?;
+    outputs.write_tracked(&system, &case.particles.tracked).map_err(RunError::Io)?;
+    next_output += interval;
+    next_tracked += tracked_interval;
+
+    while system.time < end - 0.5 * dt {
+        let diagnostics = system.step(dt);
+        analysis.after_step(&system);
+
+        if diagnostics.non_finite {
+            failure = Some(format!(
+                "unstable at t = {:.6e} s (step {}): a position or velocity is not finite; \
+                 reduce time.dt (now {:.3} t_c)",
+                system.time,
+                system.steps,
+                dt / contact_time
+            ));
+        } else if diagnostics.max_overlap_ratio > case.time.overlap_limit {
+            failure = Some(format!(
+                "unstable at t = {:.6e} s (step {}): overlap reached {:.3} of a radius, beyond \
+                 time.overlap_limit = {}; the contacts are too soft for the load or the time step \
+                 is too large (dt = {:.3} t_c)",
+                system.time,
+                system.steps,
+                diagnostics.max_overlap_ratio,
+                case.time.overlap_limit,
+                dt / contact_time
+            ));
+        }
+        if failure.is_some() {
+            break;
+        }
+        for (k, wall) in system.walls.iter().enumerate() {
+            let present = wall.is_present(system.time);
+            if present != wall_state[k] {
+                wall_state[k] = present;
+                outputs.log(&format!("t = {:.6e} s: wall {} removed", system.time, wall.name));
+            }
+        }
+
+        if system.time >= next_tracked - 0.5 * dt {
+            outputs.write_tracked(&system, &case.particles.tracked).map_err(RunError::Io)?;
+            next_tracked += tracked_interval;
+        }
+        let at_rest = case
+            .time
+            .rest_speed
+            .is_some_and(|v| system.time >= rest_after && system.max_speed() < v);
+        if system.time >= next_output - 0.5 * dt || at_rest {
+            outputs.write_frame(&system, dt).map_err(RunError::Io)?;
+            next_output += interval;
+        }
+        if at_rest {
+            stop_reason = format!("at rest: every particle slower than {} m/s", case.time.rest_speed.unwrap());
+            break;
+        }
+        progress.update(system.time, system.steps, total_steps);
+        let decile = (10.0 * system.time / end) as u32;
+        if !progress.is_visible() && decile > logged_decile {
+            logged_decile = decile;
+            let elapsed = started.elapsed().as_secs_f64();
+            let eta = elapsed * (end - system.time) / system.time;
+            outputs.log(&format!(
+                "step {} t = {:.4e} s ({}%), {:.1} s elapsed, ETA {:.1} s",
+                system.steps,
+                system.time,
+                10 * decile,
+                elapsed,
+                eta
+            ));
+        }
+    }
+    progress.finish();
+
+    let wall_seconds = started.elapsed().as_secs_f64();
+    let mut metrics = Map::new();
+    if failure.is_none() {
+        metrics = analysis.finish(&system, out).map_err(RunError::Io)?;
+    }
+    let particle_steps = system.particles.n_owned as f64 * system.steps as f64;
+    let json = json!({
+        "case": case.analysis.as_ref().map(|_| "analysed").unwrap_or("plain"),
+        "status": if failure.is_some() { "unstable" } else { "ok" },
+        "stop_reason": failure.clone().unwrap_or(stop_reason.clone()),
+        "particles": system.particles.n_owned,
+        "dimension": system.domain.dimension.count(),
+        "steps": system.steps,
+        "dt": dt,
+        "contact_time": contact_time,
+        "simulated_time": system.time,
+        "wall_seconds": wall_seconds,
+        "particle_steps_per_second": particle_steps / wall_seconds,
+        "neighbour_builds": system.neighbours.builds,
+        "threads": rayon::current_num_threads(),
+        "peak_memory_bytes": peak_memory_bytes(),
+        "metrics": metrics,
+    });
+    outputs.write_summary(&json).map_err(RunError::Io)?;
+    if let Some(message) = failure {
+        outputs.log(&message);
+        outputs.log("the outputs hold the last good state before the failure");
+        return Err(RunError::Unstable(message));
+    }
+    outputs.log(&format!(
+        "done: {stop_reason}; {} steps in {wall_seconds:.2} s ({:.3e} particle-steps/s)",
+        system.steps,
+        particle_steps / wall_seconds
+    ));
+    Ok(Summary { json, metrics })
+}
+
+/// Peak resident memory of this process (Linux), if known.
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// A progress bar with ETA on a terminal; nothing otherwise (plain log lines
+/// are written instead).
+struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+}
+
+impl Progress {
+    fn new(visible: bool, end: f64) -> Self {
+        let bar = visible.then(|| {
+            let bar = indicatif::ProgressBar::new(1000);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{elapsed_precise} [{bar:40}] {percent:>3}% {msg} ETA {eta}",
+                )
+                .unwrap()
+                .progress_chars("=> "),
+            );
+            bar.set_message(format!("t = 0 / {end:.3e} s"));
+            bar
+        });
+        Progress { bar }
+    }
+
+    fn is_visible(&self) -> bool {
+        self.bar.is_some()
+    }
+
+    fn update(&self, time: f64, step: u64, total: u64) {
+        if let Some(bar) = &self.bar {
+            if step % 200 == 0 {
+                bar.set_position((1000.0 * step as f64 / total as f64) as u64);
+                bar.set_message(format!("step {step} t = {time:.4e} s"));
+            }
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}
