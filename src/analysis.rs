@@ -151,33 +151,60 @@ impl BinaryCollision {
     }
 }
 
-/// Impacts of particle 0 on the walls: normal speed when a wall contact
-/// opens and when it closes.
+/// Impacts of particle 0 on the walls. The mechanical energy
+/// E = ½ m v² + ½ I ω² + m g·(height of the lowest point above the wall) is
+/// constant in free flight (velocity Verlet is exact for a parabola), so the
+/// energy kept by an impact is E after / E before, and e = √ of it.
 #[derive(Default)]
 pub struct Bouncing {
     in_contact: bool,
-    speed_in: f64,
-    normal: Vec3,
+    energy_before: f64,
+    free_energy: f64,
+    wall: usize,
     impacts: Vec<(f64, f64, f64)>,
 }
 
 impl Bouncing {
+    fn energy(system: &DemSystem, k: usize, wall: usize) -> f64 {
+        let p = &system.particles;
+        let w = &system.walls[wall];
+        let height = w.distance(&p.position[k]) - p.radius[k];
+        let g_normal = -system.domain.gravity.dot(&w.normal);
+        0.5 * p.mass[k] * p.velocity[k].norm_squared()
+            + 0.5 * p.angular_velocity[k].norm_squared() / p.inverse_inertia[k]
+            + p.mass[k] * g_normal * height
+    }
+
     fn after_step(&mut self, system: &DemSystem) {
         let Some(k) = system.index_of(0) else { return };
         let p = &system.particles;
-        let touching = system.walls.iter().find(|w| {
+        let touching = system.walls.iter().position(|w| {
             w.is_present(system.time) && w.distance(&p.position[k]) < p.radius[k]
         });
         match (self.in_contact, touching) {
             (false, Some(wall)) => {
                 self.in_contact = true;
-                self.normal = wall.normal;
-                self.speed_in = -p.velocity[k].dot(&wall.normal);
+                self.wall = wall;
+                self.energy_before = self.free_energy;
             }
             (true, None) => {
                 self.in_contact = false;
-                let speed_out = p.velocity[k].dot(&self.normal);
-                self.impacts.push((system.time, self.speed_in, speed_out));
+                let energy_after = Self::energy(system, k, self.wall);
+                self.impacts.push((system.time, self.energy_before, energy_after));
+                self.free_energy = energy_after;
+            }
+            (false, None) => {
+                // Free flight: remember the energy against the nearest wall.
+                if let Some(wall) = (0..system.walls.len())
+                    .filter(|&w| system.walls[w].is_present(system.time))
+                    .min_by(|&a, &b| {
+                        let da = system.walls[a].distance(&p.position[k]);
+                        let db = system.walls[b].distance(&p.position[k]);
+                        da.total_cmp(&db)
+                    })
+                {
+                    self.free_energy = Self::energy(system, k, wall);
+                }
             }
             _ => {}
         }
@@ -185,12 +212,13 @@ impl Bouncing {
 
     fn finish(&self) -> Map<String, Value> {
         let mut metrics = Map::new();
-        let e: Vec<f64> = self.impacts.iter().map(|&(_, vin, vout)| vout / vin).collect();
+        let ratio: Vec<f64> = self.impacts.iter().map(|&(_, before, after)| after / before).collect();
         metrics.insert("impacts".into(), json!(self.impacts.len()));
-        metrics.insert("restitution_per_impact".into(), json!(e));
-        metrics.insert("energy_ratio_per_impact".into(), json!(e.iter().map(|x| x * x).collect::<Vec<_>>()));
-        if let Some(first) = e.first() {
-            metrics.insert("restitution".into(), json!(first));
+        metrics.insert("impact_times".into(), json!(self.impacts.iter().map(|i| i.0).collect::<Vec<_>>()));
+        metrics.insert("energy_ratio_per_impact".into(), json!(ratio));
+        metrics.insert("restitution_per_impact".into(), json!(ratio.iter().map(|r| r.sqrt()).collect::<Vec<_>>()));
+        if let Some(first) = ratio.first() {
+            metrics.insert("restitution".into(), json!(first.sqrt()));
         }
         metrics
     }

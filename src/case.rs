@@ -199,7 +199,7 @@ pub struct TimeSection {
     /// ... as a fraction of the binary contact time (default 0.02 = t_c/50).
     #[serde(default)]
     pub dt_over_contact_time: Option<f64>,
-    /// Stop early once every particle is slower than this [m/s] ...
+    /// Stop early once the rms speed of the grains is below this [m/s] ...
     #[serde(default)]
     pub rest_speed: Option<f64>,
     /// ... but not before this time [s] (default: after the last wall removal).

@@ -117,7 +117,7 @@ pub struct NeighbourList {
     pub offsets: Vec<u32>,
     pub pair_of: Vec<u32>,
     /// Owned positions at the last build.
-    reference_position: Vec<Vec3>,
+    pub reference_position: Vec<Vec3>,
     bins: CellBins,
     /// Number of builds so far.
     pub builds: u64,
@@ -134,19 +134,6 @@ impl NeighbourList {
 
     pub fn is_empty(&self) -> bool {
         self.first.is_empty()
-    }
-
-    /// Whether an owned particle moved by more than half the skin since the
-    /// last build (so two could now touch without being listed).
-    pub fn needs_rebuild(&self, particles: &Particles) -> bool {
-        if self.reference_position.len() != particles.n_owned {
-            return true;
-        }
-        let limit_sq = (0.5 * self.skin).powi(2);
-        particles.position[..particles.n_owned]
-            .par_iter()
-            .zip(&self.reference_position)
-            .any(|(x, x0)| (x - x0).norm_squared() > limit_sq)
     }
 
     /// The tangential displacement of every open contact, keyed by the ids of

@@ -16,6 +16,11 @@ use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
 use rayon::prelude::*;
 
+/// Smallest amount of work handed to one thread: below it the loops run on
+/// the calling thread, so small scenes pay no synchronisation.
+const PARTICLES_PER_TASK: usize = 256;
+const PAIRS_PER_TASK: usize = 1024;
+
 /// Per-step measures used to detect a run going wrong.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct StepDiagnostics {
@@ -151,27 +156,52 @@ impl DemSystem {
 
     /// Advances the particles by one step of size `dt`.
     pub fn step(&mut self, dt: f64) -> StepDiagnostics {
-        self.kick(0.5 * dt);
-        self.drift(dt);
+        let moved_beyond_skin = self.kick_and_drift(dt);
         self.time += dt;
-        if self.neighbours.needs_rebuild(&self.particles) {
+        if moved_beyond_skin {
             self.rebuild();
         } else {
             self.ghosts.refresh(&mut self.particles);
         }
-        let diagnostics = self.compute_forces(dt);
-        self.kick(0.5 * dt);
+        let mut diagnostics = self.compute_forces(dt);
+        diagnostics.non_finite = self.kick(0.5 * dt);
         self.steps += 1;
-        let mut diagnostics = diagnostics;
-        diagnostics.non_finite = self.particles.position[..self.particles.n_owned]
-            .par_iter()
-            .zip(&self.particles.velocity[..self.particles.n_owned])
-            .any(|(x, v)| !(x.iter().all(|c| c.is_finite()) && v.iter().all(|c| c.is_finite())));
         self.last = diagnostics;
         diagnostics
     }
 
-    fn kick(&mut self, half_dt: f64) {
+    /// Half kick and drift; returns whether a particle moved more than half
+    /// the skin since the last neighbour build.
+    fn kick_and_drift(&mut self, dt: f64) -> bool {
+        let n = self.particles.n_owned;
+        let half_dt = 0.5 * dt;
+        let limit_sq = (0.5 * self.neighbours.skin).powi(2);
+        let reference = &self.neighbours.reference_position;
+        if reference.len() != n {
+            return true;
+        }
+        let p = &mut self.particles;
+        p.position[..n]
+            .par_iter_mut()
+            .zip(p.velocity[..n].par_iter_mut())
+            .zip(p.angular_velocity[..n].par_iter_mut())
+            .zip(p.force[..n].par_iter())
+            .zip(p.torque[..n].par_iter())
+            .zip(p.inverse_mass[..n].par_iter())
+            .zip(p.inverse_inertia[..n].par_iter())
+            .zip(reference.par_iter())
+            .with_min_len(PARTICLES_PER_TASK)
+            .map(|(((((((x, v), w), f), t), &inv_m), &inv_i), x0)| {
+                *v += half_dt * inv_m * f;
+                *w += half_dt * inv_i * t;
+                *x += dt * *v;
+                (*x - x0).norm_squared() > limit_sq
+            })
+            .reduce(|| false, |a, b| a || b)
+    }
+
+    /// Half kick; returns whether a position or velocity is not finite.
+    fn kick(&mut self, half_dt: f64) -> bool {
         let n = self.particles.n_owned;
         let p = &mut self.particles;
         p.velocity[..n]
@@ -181,19 +211,14 @@ impl DemSystem {
             .zip(p.torque[..n].par_iter())
             .zip(p.inverse_mass[..n].par_iter())
             .zip(p.inverse_inertia[..n].par_iter())
-            .for_each(|(((((v, w), f), t), &inv_m), &inv_i)| {
+            .zip(p.position[..n].par_iter())
+            .with_min_len(PARTICLES_PER_TASK)
+            .map(|((((((v, w), f), t), &inv_m), &inv_i), x)| {
                 *v += half_dt * inv_m * f;
                 *w += half_dt * inv_i * t;
-            });
-    }
-
-    fn drift(&mut self, dt: f64) {
-        let n = self.particles.n_owned;
-        let p = &mut self.particles;
-        p.position[..n]
-            .par_iter_mut()
-            .zip(p.velocity[..n].par_iter())
-            .for_each(|(x, v)| *x += dt * v);
+                !(x.iter().chain(v.iter()).all(|c| c.is_finite()))
+            })
+            .reduce(|| false, |a, b| a || b)
     }
 
     /// Contact forces and gravity on every owned particle; `dt` advances the
@@ -215,6 +240,7 @@ impl DemSystem {
             .zip(self.neighbours.history.par_iter_mut())
             .zip(self.pair_force.par_iter_mut())
             .zip(self.pair_torque.par_iter_mut())
+            .with_min_len(PAIRS_PER_TASK)
             .map(|((((&i, &j), history), force), torque)| {
                 let (i, j) = (i as usize, j as usize);
                 let branch = p.position[i] - p.position[j];
@@ -270,6 +296,7 @@ impl DemSystem {
             .zip(torque[..n_owned].par_iter_mut())
             .zip(wall_history.par_chunks_mut(wall_stride))
             .enumerate()
+            .with_min_len(PARTICLES_PER_TASK)
             .map(|(k, ((f, t), histories))| {
                 let mut total_force = Vec3::zeros();
                 let mut total_torque = Vec3::zeros();
