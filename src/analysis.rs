@@ -21,12 +21,20 @@ impl Analysis {
     pub fn new(section: Option<&AnalysisSection>, system: &DemSystem) -> Self {
         match section {
             None => Analysis::None,
-            Some(AnalysisSection::BinaryCollision) => Analysis::BinaryCollision(BinaryCollision::start(system)),
-            Some(AnalysisSection::Bouncing) => Analysis::Bouncing(Bouncing::default()),
-            Some(AnalysisSection::Silo { slab, exclude_bottom }) => {
-                Analysis::Silo { slab: *slab, exclude_bottom: *exclude_bottom }
+            Some(AnalysisSection::BinaryCollision) => {
+                Analysis::BinaryCollision(BinaryCollision::start(system))
             }
-            Some(AnalysisSection::ColumnCollapse) => Analysis::ColumnCollapse(ColumnCollapse::new(system)),
+            Some(AnalysisSection::Bouncing) => Analysis::Bouncing(Bouncing::default()),
+            Some(AnalysisSection::Silo {
+                slab,
+                exclude_bottom,
+            }) => Analysis::Silo {
+                slab: *slab,
+                exclude_bottom: *exclude_bottom,
+            },
+            Some(AnalysisSection::ColumnCollapse) => {
+                Analysis::ColumnCollapse(ColumnCollapse::new(system))
+            }
         }
     }
 
@@ -46,7 +54,10 @@ impl Analysis {
             Analysis::None => Ok(Map::new()),
             Analysis::BinaryCollision(b) => b.finish(system, out),
             Analysis::Bouncing(b) => Ok(b.finish()),
-            Analysis::Silo { slab, exclude_bottom } => silo(system, *slab, *exclude_bottom, out),
+            Analysis::Silo {
+                slab,
+                exclude_bottom,
+            } => silo(system, *slab, *exclude_bottom, out),
             Analysis::ColumnCollapse(c) => c.finish(system),
         }
     }
@@ -86,7 +97,11 @@ impl BinaryCollision {
                 (relative.y / relative.x, relative.x)
             })
             .collect();
-        BinaryCollision { before, touching: vec![false; pairs], after: vec![None; pairs] }
+        BinaryCollision {
+            before,
+            touching: vec![false; pairs],
+            after: vec![None; pairs],
+        }
     }
 
     fn after_step(&mut self, system: &DemSystem) {
@@ -104,7 +119,8 @@ impl BinaryCollision {
                 // current contact frame; the tangent keeps the sign of the
                 // impact's tangential direction (+y).
                 let normal = branch.normalize();
-                let contact_velocity = p.velocity[a] - p.velocity[b]
+                let contact_velocity = p.velocity[a]
+                    - p.velocity[b]
                     - (p.radius[a] * p.angular_velocity[a] + p.radius[b] * p.angular_velocity[b])
                         .cross(&normal);
                 let normal_speed = contact_velocity.dot(&normal);
@@ -129,7 +145,9 @@ impl BinaryCollision {
             .filter_map(|(&(psi1, _), after)| after.map(|(psi2, e)| (psi1, psi2, e)))
             .collect();
         metrics.insert("collisions".into(), json!(rows.len()));
-        let Some(&(_, _, head_on)) = rows.first() else { return Ok(metrics) };
+        let Some(&(_, _, head_on)) = rows.first() else {
+            return Ok(metrics);
+        };
         // A pair slides throughout when the Coulomb impulse cannot stop the
         // slip: Ψ1 > (7/2) μ (1 + e_n), e_n measured on the head-on pair.
         let offset_theory = 3.5 * friction * (1.0 + head_on);
@@ -139,11 +157,19 @@ impl BinaryCollision {
             if sliding {
                 offsets.push(psi1 - psi2);
             }
-            writeln!(file, "{psi1:e},{psi2:e},{e:e},{},{:e}", sliding as u8, psi1 - offset_theory)?;
+            writeln!(
+                file,
+                "{psi1:e},{psi2:e},{e:e},{},{:e}",
+                sliding as u8,
+                psi1 - offset_theory
+            )?;
         }
         metrics.insert("restitution".into(), json!(head_on));
         if !offsets.is_empty() {
-            metrics.insert("psi_sliding_offset".into(), json!(offsets.iter().sum::<f64>() / offsets.len() as f64));
+            metrics.insert(
+                "psi_sliding_offset".into(),
+                json!(offsets.iter().sum::<f64>() / offsets.len() as f64),
+            );
             metrics.insert("psi_sliding_offset_theory".into(), json!(offset_theory));
             metrics.insert("sliding_pairs".into(), json!(offsets.len()));
         }
@@ -178,9 +204,10 @@ impl Bouncing {
     fn after_step(&mut self, system: &DemSystem) {
         let Some(k) = system.index_of(0) else { return };
         let p = &system.particles;
-        let touching = system.walls.iter().position(|w| {
-            w.is_present(system.time) && w.distance(&p.position[k]) < p.radius[k]
-        });
+        let touching = system
+            .walls
+            .iter()
+            .position(|w| w.is_present(system.time) && w.distance(&p.position[k]) < p.radius[k]);
         match (self.in_contact, touching) {
             (false, Some(wall)) => {
                 self.in_contact = true;
@@ -190,7 +217,8 @@ impl Bouncing {
             (true, None) => {
                 self.in_contact = false;
                 let energy_after = Self::energy(system, k, self.wall);
-                self.impacts.push((system.time, self.energy_before, energy_after));
+                self.impacts
+                    .push((system.time, self.energy_before, energy_after));
                 self.free_energy = energy_after;
             }
             (false, None) => {
@@ -212,11 +240,21 @@ impl Bouncing {
 
     fn finish(&self) -> Map<String, Value> {
         let mut metrics = Map::new();
-        let ratio: Vec<f64> = self.impacts.iter().map(|&(_, before, after)| after / before).collect();
+        let ratio: Vec<f64> = self
+            .impacts
+            .iter()
+            .map(|&(_, before, after)| after / before)
+            .collect();
         metrics.insert("impacts".into(), json!(self.impacts.len()));
-        metrics.insert("impact_times".into(), json!(self.impacts.iter().map(|i| i.0).collect::<Vec<_>>()));
+        metrics.insert(
+            "impact_times".into(),
+            json!(self.impacts.iter().map(|i| i.0).collect::<Vec<_>>()),
+        );
         metrics.insert("energy_ratio_per_impact".into(), json!(ratio));
-        metrics.insert("restitution_per_impact".into(), json!(ratio.iter().map(|r| r.sqrt()).collect::<Vec<_>>()));
+        metrics.insert(
+            "restitution_per_impact".into(),
+            json!(ratio.iter().map(|r| r.sqrt()).collect::<Vec<_>>()),
+        );
         if let Some(first) = ratio.first() {
             metrics.insert("restitution".into(), json!(first.sqrt()));
         }
@@ -226,14 +264,21 @@ impl Bouncing {
 
 /// Coarse-grained pressure in horizontal slabs along gravity and the Janssen
 /// fit p(z) = p∞ (1 − exp(−(h − z)/λ)), f_w K = S/(P λ) (Izard eq. 22).
-fn silo(system: &DemSystem, slab: f64, exclude_bottom: f64, out: &Path) -> std::io::Result<Map<String, Value>> {
+fn silo(
+    system: &DemSystem,
+    slab: f64,
+    exclude_bottom: f64,
+    out: &Path,
+) -> std::io::Result<Map<String, Value>> {
     let p = &system.particles;
     let g = system.domain.gravity;
     let up = -g.normalize();
     let lower = system.domain.lower;
     let extent = system.domain.extent();
     // Cross-section S and perimeter P of the box normal to gravity.
-    let vertical = (0..3).max_by(|&a, &b| up[a].abs().total_cmp(&up[b].abs())).unwrap();
+    let vertical = (0..3)
+        .max_by(|&a, &b| up[a].abs().total_cmp(&up[b].abs()))
+        .unwrap();
     let horizontal: Vec<usize> = (0..3).filter(|&a| a != vertical).collect();
     let (wa, wb) = (extent[horizontal[0]], extent[horizontal[1]]);
     let section = wa * wb;
@@ -241,26 +286,54 @@ fn silo(system: &DemSystem, slab: f64, exclude_bottom: f64, out: &Path) -> std::
 
     let moments = particle_moments(system);
     let base = lower[vertical];
-    let mobile: Vec<usize> = (0..p.n_owned).filter(|&k| p.inverse_mass[k] > 0.0).collect();
-    let top = mobile.iter().map(|&k| p.position[k][vertical] + p.radius[k]).fold(f64::MIN, f64::max);
-    let slabs = ((top - base) / slab).ceil().max(1.0) as usize;
+    let mobile: Vec<usize> = (0..p.n_owned)
+        .filter(|&k| p.inverse_mass[k] > 0.0)
+        .collect();
+    let highest = mobile
+        .iter()
+        .map(|&k| p.position[k][vertical] + p.radius[k])
+        .fold(f64::MIN, f64::max);
+    let slabs = ((highest - base) / slab).ceil().max(1.0) as usize;
     let mut pressure = vec![0.0; slabs];
+    let mut vertical_stress = vec![0.0; slabs];
+    let mut horizontal_stress = vec![0.0; slabs];
     let mut solid_volume = vec![0.0; slabs];
     for &k in &mobile {
-        let s = (((p.position[k][vertical] - base) / slab).floor().max(0.0) as usize).min(slabs - 1);
-        // Granular pressure: −trace(σ)/3 with σ = (1/V) Σ f ⊗ (x_c − x_p).
-        pressure[s] += -moments[k].trace() / 3.0;
+        let s =
+            (((p.position[k][vertical] - base) / slab).floor().max(0.0) as usize).min(slabs - 1);
+        // Granular pressure: −trace(σ)/3 with σ = (1/V) Σ f ⊗ (x_c − x_p)
+        // (compression positive).
+        let m = &moments[k];
+        pressure[s] += -m.trace() / 3.0;
+        vertical_stress[s] += -m[(vertical, vertical)];
+        horizontal_stress[s] +=
+            -0.5 * (m[(horizontal[0], horizontal[0])] + m[(horizontal[1], horizontal[1])]);
         solid_volume[s] += 4.0 / 3.0 * std::f64::consts::PI * p.radius[k].powi(3);
     }
     let volume = section * slab;
     let z: Vec<f64> = (0..slabs).map(|s| base + (s as f64 + 0.5) * slab).collect();
     let pressure: Vec<f64> = pressure.iter().map(|x| x / volume).collect();
+    let vertical_stress: Vec<f64> = vertical_stress.iter().map(|x| x / volume).collect();
+    let horizontal_stress: Vec<f64> = horizontal_stress.iter().map(|x| x / volume).collect();
     let fraction: Vec<f64> = solid_volume.iter().map(|v| v / volume).collect();
+    // Free surface h: the column's solid volume spread at the bulk (median)
+    // solid fraction, so that a stray grain on top does not count.
+    let mut sorted = fraction.clone();
+    sorted.sort_by(|a, b| a.total_cmp(b));
+    let bulk_fraction = sorted[sorted.len() / 2];
+    let top = base + solid_volume.iter().sum::<f64>() / (section * bulk_fraction);
 
     let mut file = std::fs::File::create(out.join("silo_profile.csv"))?;
-    writeln!(file, "z,pressure,solid_fraction")?;
+    writeln!(
+        file,
+        "z,pressure,vertical_stress,horizontal_stress,solid_fraction"
+    )?;
     for s in 0..slabs {
-        writeln!(file, "{:e},{:e},{:e}", z[s], pressure[s], fraction[s])?;
+        writeln!(
+            file,
+            "{:e},{:e},{:e},{:e},{:e}",
+            z[s], pressure[s], vertical_stress[s], horizontal_stress[s], fraction[s]
+        )?;
     }
     // Fit over full slabs between the bottom exclusion and one slab below the top.
     let fit: Vec<usize> = (0..slabs)
@@ -269,8 +342,15 @@ fn silo(system: &DemSystem, slab: f64, exclude_bottom: f64, out: &Path) -> std::
     let depth: Vec<f64> = fit.iter().map(|&s| top - z[s]).collect();
     let measured: Vec<f64> = fit.iter().map(|&s| pressure[s]).collect();
     let (saturation, length) = janssen_fit(&depth, &measured);
-    let mean_fraction = fit.iter().map(|&s| fraction[s]).sum::<f64>() / fit.len().max(1) as f64;
+    let mean_fraction = bulk_fraction;
+    // Janssen's redirection K = σ_h/σ_v, averaged over the fitted slabs.
+    let redirection = fit
+        .iter()
+        .map(|&s| horizontal_stress[s] / vertical_stress[s])
+        .sum::<f64>()
+        / fit.len().max(1) as f64;
     let mut metrics = Map::new();
+    metrics.insert("janssen_K".into(), json!(redirection));
     metrics.insert("janssen_fwK".into(), json!(section / (perimeter * length)));
     metrics.insert("janssen_length".into(), json!(length));
     metrics.insert("saturation_pressure".into(), json!(saturation));
@@ -286,7 +366,11 @@ pub fn janssen_fit(depth: &[f64], pressure: &[f64]) -> (f64, f64) {
         let shape: Vec<f64> = depth.iter().map(|d| 1.0 - (-d / length).exp()).collect();
         let saturation = shape.iter().zip(pressure).map(|(s, p)| s * p).sum::<f64>()
             / shape.iter().map(|s| s * s).sum::<f64>();
-        let r = shape.iter().zip(pressure).map(|(s, p)| (saturation * s - p).powi(2)).sum::<f64>();
+        let r = shape
+            .iter()
+            .zip(pressure)
+            .map(|(s, p)| (saturation * s - p).powi(2))
+            .sum::<f64>();
         (r, saturation)
     };
     let max_depth = depth.iter().cloned().fold(0.0, f64::max);
@@ -316,10 +400,17 @@ pub struct ColumnCollapse {
 
 impl ColumnCollapse {
     fn new(system: &DemSystem) -> Self {
-        let gates: Vec<_> = system.walls.iter().filter(|w| w.remove_at.is_some()).collect();
+        let gates: Vec<_> = system
+            .walls
+            .iter()
+            .filter(|w| w.remove_at.is_some())
+            .collect();
         let release_time = gates.iter().filter_map(|w| w.remove_at).fold(0.0, f64::max);
         let xs: Vec<f64> = gates.iter().map(|w| w.point.x).collect();
-        let (lo, hi) = (xs.iter().cloned().fold(f64::MAX, f64::min), xs.iter().cloned().fold(f64::MIN, f64::max));
+        let (lo, hi) = (
+            xs.iter().cloned().fold(f64::MAX, f64::min),
+            xs.iter().cloned().fold(f64::MIN, f64::max),
+        );
         let (centre, half_width) = if gates.len() >= 2 {
             (0.5 * (lo + hi), 0.5 * (hi - lo))
         } else {
@@ -327,12 +418,19 @@ impl ColumnCollapse {
             // domain's lower x.
             (system.domain.lower.x, hi - system.domain.lower.x)
         };
-        ColumnCollapse { release_time, centre, half_width, initial_height: None }
+        ColumnCollapse {
+            release_time,
+            centre,
+            half_width,
+            initial_height: None,
+        }
     }
 
     fn vertical(system: &DemSystem) -> usize {
         let g = system.domain.gravity;
-        (0..3).max_by(|&a, &b| g[a].abs().total_cmp(&g[b].abs())).unwrap()
+        (0..3)
+            .max_by(|&a, &b| g[a].abs().total_cmp(&g[b].abs()))
+            .unwrap()
     }
 
     fn height(system: &DemSystem) -> f64 {
@@ -357,7 +455,12 @@ impl ColumnCollapse {
         let p = &system.particles;
         let mut distance: Vec<(f64, f64)> = (0..p.n_owned)
             .filter(|&k| p.inverse_mass[k] > 0.0)
-            .map(|k| ((p.position[k].x - self.centre).abs() + p.radius[k], p.radius[k]))
+            .map(|k| {
+                (
+                    (p.position[k].x - self.centre).abs() + p.radius[k],
+                    p.radius[k],
+                )
+            })
             .collect();
         distance.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut front = 0.0;

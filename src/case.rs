@@ -10,17 +10,28 @@ use std::path::Path;
 #[derive(Debug, thiserror::Error)]
 pub enum CaseError {
     #[error("cannot read case file {path}: {source}")]
-    Read { path: String, source: std::io::Error },
+    Read {
+        path: String,
+        source: std::io::Error,
+    },
     #[error("case file {path}: {message}")]
     Parse { path: String, message: String },
     #[error("--set {assignment}: {message}")]
     Override { assignment: String, message: String },
     #[error("{key} = {value}: {allowed}")]
-    Invalid { key: String, value: String, allowed: String },
+    Invalid {
+        key: String,
+        value: String,
+        allowed: String,
+    },
 }
 
 fn invalid(key: &str, value: impl std::fmt::Display, allowed: &str) -> CaseError {
-    CaseError::Invalid { key: key.to_string(), value: value.to_string(), allowed: allowed.to_string() }
+    CaseError::Invalid {
+        key: key.to_string(),
+        value: value.to_string(),
+        allowed: allowed.to_string(),
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -88,6 +99,11 @@ pub enum BlockSection {
         upper: Vec<f64>,
         /// Lattice spacing [m].
         spacing: f64,
+        /// Spacing between layers along the last axis (y in 2D, z in 3D)
+        /// [m]; default `spacing`. Sparse layers rain down one after the
+        /// other, like a poured fill.
+        #[serde(default)]
+        layer_spacing: Option<f64>,
         /// Random displacement as a fraction of each site's free room.
         #[serde(default)]
         jitter: f64,
@@ -155,6 +171,9 @@ pub struct ContactSection {
     pub tangential_ratio: f64,
     /// Coulomb coefficient between particles.
     pub friction: f64,
+    /// Rolling resistance μ_r (torque μ_r R* F_n against rolling; 0: none).
+    #[serde(default)]
+    pub rolling_friction: f64,
     /// Coulomb coefficient with walls (default: `friction`).
     #[serde(default)]
     pub wall_friction: Option<f64>,
@@ -199,7 +218,8 @@ pub struct TimeSection {
     /// ... as a fraction of the binary contact time (default 0.02 = t_c/50).
     #[serde(default)]
     pub dt_over_contact_time: Option<f64>,
-    /// Stop early once the rms speed of the grains is below this [m/s] ...
+    /// Stop early once the rms speed of the grains in contact with other
+    /// grains is below this [m/s] ...
     #[serde(default)]
     pub rest_speed: Option<f64>,
     /// ... but not before this time [s] (default: after the last wall removal).
@@ -230,7 +250,11 @@ pub struct OutputSection {
 
 impl Default for OutputSection {
     fn default() -> Self {
-        OutputSection { interval: None, tracked_interval: None, particles: true }
+        OutputSection {
+            interval: None,
+            tracked_interval: None,
+            particles: true,
+        }
     }
 }
 
@@ -261,21 +285,26 @@ pub enum AnalysisSection {
 impl Case {
     /// Reads a case file and applies `--set key=value` overrides.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Case, CaseError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| CaseError::Read { path: path.display().to_string(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| CaseError::Read {
+            path: path.display().to_string(),
+            source,
+        })?;
         Self::from_text(&text, &path.display().to_string(), overrides)
     }
 
     pub fn from_text(text: &str, origin: &str, overrides: &[String]) -> Result<Case, CaseError> {
-        let mut document: toml::Table = toml::from_str(text)
-            .map_err(|e| CaseError::Parse { path: origin.to_string(), message: e.to_string() })?;
+        let mut document: toml::Table = toml::from_str(text).map_err(|e| CaseError::Parse {
+            path: origin.to_string(),
+            message: e.to_string(),
+        })?;
         for assignment in overrides {
             apply_override(&mut document, assignment)?;
         }
-        let case: Case = Case::deserialize(toml::Value::Table(document)).map_err(|e| CaseError::Parse {
-            path: origin.to_string(),
-            message: e.to_string().trim().to_string(),
-        })?;
+        let case: Case =
+            Case::deserialize(toml::Value::Table(document)).map_err(|e| CaseError::Parse {
+                path: origin.to_string(),
+                message: e.to_string().trim().to_string(),
+            })?;
         case.validate()?;
         Ok(case)
     }
@@ -301,11 +330,19 @@ impl Case {
         check_len("domain.upper", &d.upper, dim, &need)?;
         for axis in 0..dim {
             if d.upper[axis] <= d.lower[axis] {
-                return Err(invalid("domain.upper", format!("{:?}", d.upper), "allowed: each bound above domain.lower"));
+                return Err(invalid(
+                    "domain.upper",
+                    format!("{:?}", d.upper),
+                    "allowed: each bound above domain.lower",
+                ));
             }
         }
         if !d.periodic.is_empty() && d.periodic.len() != dim {
-            return Err(invalid("domain.periodic", format!("{:?}", d.periodic), &format!("allowed: a list of {dim} booleans")));
+            return Err(invalid(
+                "domain.periodic",
+                format!("{:?}", d.periodic),
+                &format!("allowed: a list of {dim} booleans"),
+            ));
         }
         if !d.gravity.is_empty() {
             check_len("domain.gravity", &d.gravity, dim, &need)?;
@@ -315,19 +352,48 @@ impl Case {
         positive("particles.density", p.density)?;
         positive("particles.radius", p.radius)?;
         if !(0.0..1.0).contains(&p.radius_spread) {
-            return Err(invalid("particles.radius_spread", p.radius_spread, "allowed: 0 ≤ radius_spread < 1"));
+            return Err(invalid(
+                "particles.radius_spread",
+                p.radius_spread,
+                "allowed: 0 ≤ radius_spread < 1",
+            ));
         }
         if p.block.is_empty() {
-            return Err(invalid("particles.block", "[]", "allowed: at least one [[particles.block]] generator"));
+            return Err(invalid(
+                "particles.block",
+                "[]",
+                "allowed: at least one [[particles.block]] generator",
+            ));
         }
         for (k, block) in p.block.iter().enumerate() {
             let key = |name: &str| format!("particles.block[{k}].{name}");
             match block {
-                BlockSection::Lattice { lower, upper, spacing, jitter, velocity, .. } => {
+                BlockSection::Lattice {
+                    lower,
+                    upper,
+                    spacing,
+                    layer_spacing,
+                    jitter,
+                    velocity,
+                    ..
+                } => {
+                    if let Some(layer) = layer_spacing {
+                        if *layer < *spacing {
+                            return Err(invalid(
+                                &key("layer_spacing"),
+                                layer,
+                                "allowed: at least `spacing`",
+                            ));
+                        }
+                    }
                     check_len(&key("lower"), lower, dim, &need)?;
                     check_len(&key("upper"), upper, dim, &need)?;
-                    if *spacing < 2.0 * p.radius * (1.0 + p.radius_spread) {
-                        return Err(invalid(&key("spacing"), spacing, "allowed: at least the largest diameter, 2 radius (1 + radius_spread)"));
+                    if *spacing < 2.0 * p.radius * (1.0 + p.radius_spread) * (1.0 - 1e-12) {
+                        return Err(invalid(
+                            &key("spacing"),
+                            spacing,
+                            "allowed: at least the largest diameter, 2 radius (1 + radius_spread)",
+                        ));
                     }
                     if !(0.0..=1.0).contains(jitter) {
                         return Err(invalid(&key("jitter"), jitter, "allowed: 0 ≤ jitter ≤ 1"));
@@ -336,7 +402,13 @@ impl Case {
                         check_len(&key("velocity"), velocity, dim, &need)?;
                     }
                 }
-                BlockSection::Random { lower, upper, count, velocity, .. } => {
+                BlockSection::Random {
+                    lower,
+                    upper,
+                    count,
+                    velocity,
+                    ..
+                } => {
                     check_len(&key("lower"), lower, dim, &need)?;
                     check_len(&key("upper"), upper, dim, &need)?;
                     if *count == 0 {
@@ -346,32 +418,65 @@ impl Case {
                         check_len(&key("velocity"), velocity, dim, &need)?;
                     }
                 }
-                BlockSection::Explicit { positions, velocities, angular_velocities, radii, .. } => {
+                BlockSection::Explicit {
+                    positions,
+                    velocities,
+                    angular_velocities,
+                    radii,
+                    ..
+                } => {
                     if positions.is_empty() {
-                        return Err(invalid(&key("positions"), "[]", "allowed: at least one position"));
+                        return Err(invalid(
+                            &key("positions"),
+                            "[]",
+                            "allowed: at least one position",
+                        ));
                     }
                     for (name, list) in [("positions", positions), ("velocities", velocities)] {
                         if !list.is_empty() && list.len() != positions.len() {
-                            return Err(invalid(&key(name), list.len(), "allowed: as many entries as positions"));
+                            return Err(invalid(
+                                &key(name),
+                                list.len(),
+                                "allowed: as many entries as positions",
+                            ));
                         }
                         for v in list {
                             check_len(&key(name), v, dim, &need)?;
                         }
                     }
-                    if !angular_velocities.is_empty() && angular_velocities.len() != positions.len() {
-                        return Err(invalid(&key("angular_velocities"), angular_velocities.len(), "allowed: as many entries as positions"));
+                    if !angular_velocities.is_empty() && angular_velocities.len() != positions.len()
+                    {
+                        return Err(invalid(
+                            &key("angular_velocities"),
+                            angular_velocities.len(),
+                            "allowed: as many entries as positions",
+                        ));
                     }
                     for w in angular_velocities {
-                        check_len(&key("angular_velocities"), w, 3, "allowed: a list of 3 numbers (rad/s about x, y, z)")?;
+                        check_len(
+                            &key("angular_velocities"),
+                            w,
+                            3,
+                            "allowed: a list of 3 numbers (rad/s about x, y, z)",
+                        )?;
                     }
                     if !radii.is_empty() && radii.len() != positions.len() {
-                        return Err(invalid(&key("radii"), radii.len(), "allowed: as many radii as positions"));
+                        return Err(invalid(
+                            &key("radii"),
+                            radii.len(),
+                            "allowed: as many radii as positions",
+                        ));
                     }
                     for r in radii {
                         positive(&key("radii"), *r)?;
                     }
                 }
-                BlockSection::CollisionPairs { count, impact_speed, psi_max, gap } => {
+                BlockSection::CollisionPairs {
+                    count,
+                    impact_speed,
+                    psi_max,
+                    gap,
+                } => {
                     if *count == 0 {
                         return Err(invalid(&key("count"), count, "allowed: at least 1"));
                     }
@@ -389,14 +494,38 @@ impl Case {
         match c.model.as_str() {
             "soft" => {}
             "cocd" | "nscd" => {
-                return Err(invalid("contact.model", &c.model, "hard contact (cocd, nscd) is not available yet; allowed now: \"soft\""))
+                return Err(invalid(
+                    "contact.model",
+                    &c.model,
+                    "hard contact (cocd, nscd) is not available yet; allowed now: \"soft\"",
+                ))
             }
-            other => return Err(invalid("contact.model", other, "allowed: \"soft\", \"cocd\", \"nscd\"")),
+            other => {
+                return Err(invalid(
+                    "contact.model",
+                    other,
+                    "allowed: \"soft\", \"cocd\", \"nscd\"",
+                ))
+            }
         }
         match (c.restitution, c.contact_time, c.stiffness, c.damping) {
             (Some(e), Some(tc), None, None) => {
                 if !(e > 0.0 && e <= 1.0) {
-                    return Err(invalid("contact.restitution", e, "allowed: 0 < restitution ≤ 1"));
+                    return Err(invalid(
+                        "contact.restitution",
+                        e,
+                        "allowed: 0 < restitution ≤ 1",
+                    ));
+                }
+                if c.calibration == "exact"
+                    && e <= grainflow_dem::contact_law::MIN_EXACT_RESTITUTION
+                {
+                    return Err(invalid(
+                        "contact.restitution",
+                        e,
+                        "with calibration = \"exact\" allowed: restitution > e^-2 = 0.1353 (no \
+                         force-clamped contact reaches a lower one in t_c); use calibration = \"paper\"",
+                    ));
                 }
                 positive("contact.contact_time", tc)?;
             }
@@ -415,13 +544,28 @@ impl Case {
             }
         }
         if c.calibration != "exact" && c.calibration != "paper" {
-            return Err(invalid("contact.calibration", &c.calibration, "allowed: \"exact\" or \"paper\""));
+            return Err(invalid(
+                "contact.calibration",
+                &c.calibration,
+                "allowed: \"exact\" or \"paper\"",
+            ));
         }
         if !(c.tangential_ratio >= 0.0) {
-            return Err(invalid("contact.tangential_ratio", c.tangential_ratio, "allowed: ≥ 0"));
+            return Err(invalid(
+                "contact.tangential_ratio",
+                c.tangential_ratio,
+                "allowed: ≥ 0",
+            ));
         }
         if !(c.friction >= 0.0) {
             return Err(invalid("contact.friction", c.friction, "allowed: ≥ 0"));
+        }
+        if !(c.rolling_friction >= 0.0) {
+            return Err(invalid(
+                "contact.rolling_friction",
+                c.rolling_friction,
+                "allowed: ≥ 0",
+            ));
         }
         if let Some(f) = c.wall_friction {
             if !(f >= 0.0) {
@@ -437,7 +581,11 @@ impl Case {
             check_len(&key("point"), &w.point, dim, &need)?;
             check_len(&key("normal"), &w.normal, dim, &need)?;
             if w.normal.iter().map(|x| x * x).sum::<f64>() == 0.0 {
-                return Err(invalid(&key("normal"), format!("{:?}", w.normal), "allowed: a non-zero vector"));
+                return Err(invalid(
+                    &key("normal"),
+                    format!("{:?}", w.normal),
+                    "allowed: a non-zero vector",
+                ));
             }
             if let Some(f) = w.friction {
                 if !(f >= 0.0) {
@@ -450,7 +598,11 @@ impl Case {
         positive("time.end", t.end)?;
         match (t.dt, t.dt_over_contact_time) {
             (Some(_), Some(_)) => {
-                return Err(invalid("time.dt", "(dt, dt_over_contact_time)", "allowed: one of time.dt and time.dt_over_contact_time"))
+                return Err(invalid(
+                    "time.dt",
+                    "(dt, dt_over_contact_time)",
+                    "allowed: one of time.dt and time.dt_over_contact_time",
+                ))
             }
             (Some(dt), None) => positive("time.dt", dt)?,
             (None, Some(f)) => positive("time.dt_over_contact_time", f)?,
@@ -473,7 +625,11 @@ impl Case {
         if matches!(self.analysis, Some(AnalysisSection::ColumnCollapse))
             && !self.walls.iter().any(|w| w.remove_at.is_some())
         {
-            return Err(invalid("analysis.kind", "column_collapse", "needs walls with remove_at (the gates)"));
+            return Err(invalid(
+                "analysis.kind",
+                "column_collapse",
+                "needs walls with remove_at (the gates)",
+            ));
         }
         Ok(())
     }
@@ -497,8 +653,13 @@ fn positive(key: &str, value: f64) -> Result<(), CaseError> {
 /// Sets `a.b.c = value` in the document; the value is read as TOML (a
 /// number, boolean, array, ...) or else taken as a string.
 fn apply_override(document: &mut toml::Table, assignment: &str) -> Result<(), CaseError> {
-    let err = |message: &str| CaseError::Override { assignment: assignment.to_string(), message: message.to_string() };
-    let (key, raw) = assignment.split_once('=').ok_or_else(|| err("expected key=value, e.g. time.end=0.1"))?;
+    let err = |message: &str| CaseError::Override {
+        assignment: assignment.to_string(),
+        message: message.to_string(),
+    };
+    let (key, raw) = assignment
+        .split_once('=')
+        .ok_or_else(|| err("expected key=value, e.g. time.end=0.1"))?;
     let key = key.trim();
     let value: toml::Value = match toml::from_str::<toml::Table>(&format!("v = {}", raw.trim())) {
         Ok(mut t) => t.remove("v").unwrap(),

@@ -7,7 +7,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "grainflow", version, about = "Resolved grains in fluids: soft-sphere DEM, immersed boundaries, hard contact")]
+#[command(
+    name = "grainflow",
+    version,
+    about = "Resolved grains in fluids: soft-sphere DEM, immersed boundaries, hard contact"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -39,9 +43,17 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Run { case, out, overrides, threads } => {
+        Command::Run {
+            case,
+            out,
+            overrides,
+            threads,
+        } => {
             if let Some(n) = threads {
-                rayon::ThreadPoolBuilder::new().num_threads(n).build_global().expect("thread pool");
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build_global()
+                    .expect("thread pool");
             }
             let loaded = match Case::load(&case, &overrides) {
                 Ok(c) => c,
@@ -51,7 +63,8 @@ fn main() -> ExitCode {
                 }
             };
             let out = out.unwrap_or_else(|| {
-                PathBuf::from("out").join(case.file_stem().map(|s| s.to_owned()).unwrap_or_default())
+                PathBuf::from("out")
+                    .join(case.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
             match simulation::run(&loaded, &out, true) {
                 Ok(summary) => {
@@ -63,7 +76,10 @@ fn main() -> ExitCode {
                     ExitCode::from(2)
                 }
                 Err(RunError::Unstable(message)) => {
-                    eprintln!("error: {message}\nthe outputs in {} hold the last good state", out.display());
+                    eprintln!(
+                        "error: {message}\nthe outputs in {} hold the last good state",
+                        out.display()
+                    );
                     ExitCode::from(3)
                 }
                 Err(RunError::Io(e)) => {

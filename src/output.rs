@@ -48,7 +48,14 @@ impl Outputs {
         } else {
             None
         };
-        Ok(Outputs { dir: dir.to_path_buf(), log, series, tracked, particles, frames: 0 })
+        Ok(Outputs {
+            dir: dir.to_path_buf(),
+            log,
+            series,
+            tracked,
+            particles,
+            frames: 0,
+        })
     }
 
     /// A line in `log.txt`, prefixed with the wall-clock time of the run.
@@ -76,7 +83,9 @@ impl Outputs {
         if let Some(index) = &mut self.particles {
             let p = &system.particles;
             let n = p.n_owned;
-            let as_arrays = |v: &[grainflow_core::Vec3]| v[..n].iter().map(|x| [x.x, x.y, x.z]).collect::<Vec<_>>();
+            let as_arrays = |v: &[grainflow_core::Vec3]| {
+                v[..n].iter().map(|x| [x.x, x.y, x.z]).collect::<Vec<_>>()
+            };
             let fixed: Vec<u8> = (0..n).map(|k| p.is_fixed(k) as u8).collect();
             let name = format!("particles/particles_{:06}.vtp", self.frames);
             ParticleFrame {
@@ -101,8 +110,19 @@ impl Outputs {
         for &id in ids {
             if let Some(k) = system.index_of(id) {
                 let (x, v, w) = (p.position[k], p.velocity[k], p.angular_velocity[k]);
-                self.tracked
-                    .row(&[system.time, id as f64, x.x, x.y, x.z, v.x, v.y, v.z, w.x, w.y, w.z])?;
+                self.tracked.row(&[
+                    system.time,
+                    id as f64,
+                    x.x,
+                    x.y,
+                    x.z,
+                    v.x,
+                    v.y,
+                    v.z,
+                    w.x,
+                    w.y,
+                    w.z,
+                ])?;
             }
         }
         Ok(())

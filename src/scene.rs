@@ -19,7 +19,11 @@ pub fn vector(values: &[f64]) -> Vec3 {
 
 pub fn domain(case: &Case) -> Domain {
     let d = &case.domain;
-    let dimension = if d.dimension == 2 { Dimension::Two } else { Dimension::Three };
+    let dimension = if d.dimension == 2 {
+        Dimension::Two
+    } else {
+        Dimension::Three
+    };
     let mut periodic = [false; 3];
     for (axis, &flag) in d.periodic.iter().enumerate() {
         periodic[axis] = flag;
@@ -30,21 +34,38 @@ pub fn domain(case: &Case) -> Domain {
         lower.z = 0.0;
         upper.z = 0.0;
     }
-    Domain { dimension, lower, upper, periodic, gravity: vector(&d.gravity) }
+    Domain {
+        dimension,
+        lower,
+        upper,
+        periodic,
+        gravity: vector(&d.gravity),
+    }
 }
 
 pub fn contact_law(case: &Case) -> ContactLaw {
     let c = &case.contact;
     let normal = match (c.restitution, c.contact_time, c.stiffness, c.damping) {
         (Some(e), Some(tc), _, _) => {
-            let calibration =
-                if c.calibration == "paper" { NormalCalibration::Paper } else { NormalCalibration::Exact };
+            let calibration = if c.calibration == "paper" {
+                NormalCalibration::Paper
+            } else {
+                NormalCalibration::Exact
+            };
             NormalStiffness::from_restitution(e, tc, calibration)
         }
-        (_, _, Some(k), Some(g)) => NormalStiffness::Fixed { stiffness: k, damping: g },
+        (_, _, Some(k), Some(g)) => NormalStiffness::Fixed {
+            stiffness: k,
+            damping: g,
+        },
         _ => unreachable!("validated"),
     };
-    ContactLaw { normal, tangential_ratio: c.tangential_ratio, friction: c.friction }
+    ContactLaw {
+        normal,
+        tangential_ratio: c.tangential_ratio,
+        friction: c.friction,
+        rolling_friction: c.rolling_friction,
+    }
 }
 
 pub fn walls(case: &Case) -> Vec<PlaneWall> {
@@ -67,37 +88,108 @@ pub fn particles(case: &Case) -> Result<Vec<NewParticle>, String> {
     let p = &case.particles;
     let dimension = domain(case).dimension;
     let mut rng = Pcg64::seed_from_u64(p.seed);
-    let radii = RadiusDistribution { mean: p.radius, spread: p.radius_spread };
+    let radii = RadiusDistribution {
+        mean: p.radius,
+        spread: p.radius_spread,
+    };
     let mut all: Vec<NewParticle> = Vec::new();
     for (k, block) in p.block.iter().enumerate() {
         let made = match block {
-            BlockSection::Lattice { lower, upper, spacing, jitter, fixed, velocity } => {
-                let material = Material { density: p.density, fixed: *fixed, velocity: vector(velocity) };
-                generate::lattice(dimension, vector(lower), vector(upper), *spacing, radii, *jitter, &material, &mut rng)
+            BlockSection::Lattice {
+                lower,
+                upper,
+                spacing,
+                layer_spacing,
+                jitter,
+                fixed,
+                velocity,
+            } => {
+                let material = Material {
+                    density: p.density,
+                    fixed: *fixed,
+                    velocity: vector(velocity),
+                };
+                let last = dimension.count() - 1;
+                let mut step = Vec3::repeat(*spacing);
+                step[last] = layer_spacing.unwrap_or(*spacing);
+                generate::lattice(
+                    dimension,
+                    vector(lower),
+                    vector(upper),
+                    step,
+                    radii,
+                    *jitter,
+                    &material,
+                    &mut rng,
+                )
             }
-            BlockSection::Random { lower, upper, count, fixed, velocity } => {
-                let material = Material { density: p.density, fixed: *fixed, velocity: vector(velocity) };
-                generate::random(dimension, vector(lower), vector(upper), *count, radii, &material, &all, &mut rng)
-                    .map_err(|e| format!("particles.block[{k}] (random): {e}"))?
+            BlockSection::Random {
+                lower,
+                upper,
+                count,
+                fixed,
+                velocity,
+            } => {
+                let material = Material {
+                    density: p.density,
+                    fixed: *fixed,
+                    velocity: vector(velocity),
+                };
+                generate::random(
+                    dimension,
+                    vector(lower),
+                    vector(upper),
+                    *count,
+                    radii,
+                    &material,
+                    &all,
+                    &mut rng,
+                )
+                .map_err(|e| format!("particles.block[{k}] (random): {e}"))?
             }
-            BlockSection::Explicit { positions, velocities, angular_velocities, radii: given, fixed } => positions
+            BlockSection::Explicit {
+                positions,
+                velocities,
+                angular_velocities,
+                radii: given,
+                fixed,
+            } => positions
                 .iter()
                 .enumerate()
                 .map(|(n, x)| NewParticle {
                     position: vector(x),
-                    velocity: velocities.get(n).map(|v| vector(v)).unwrap_or_else(Vec3::zeros),
-                    angular_velocity: angular_velocities.get(n).map(|w| vector(w)).unwrap_or_else(Vec3::zeros),
+                    velocity: velocities
+                        .get(n)
+                        .map(|v| vector(v))
+                        .unwrap_or_else(Vec3::zeros),
+                    angular_velocity: angular_velocities
+                        .get(n)
+                        .map(|w| vector(w))
+                        .unwrap_or_else(Vec3::zeros),
                     radius: given.get(n).copied().unwrap_or(p.radius),
                     density: p.density,
                     fixed: *fixed,
                 })
                 .collect(),
-            BlockSection::CollisionPairs { count, impact_speed, psi_max, gap } => {
-                collision_pairs(dimension, *count, *impact_speed, *psi_max, *gap, p.radius, p.density)
-            }
+            BlockSection::CollisionPairs {
+                count,
+                impact_speed,
+                psi_max,
+                gap,
+            } => collision_pairs(
+                dimension,
+                *count,
+                *impact_speed,
+                *psi_max,
+                *gap,
+                p.radius,
+                p.density,
+            ),
         };
         if made.is_empty() {
-            return Err(format!("particles.block[{k}] creates no particle: enlarge its region"));
+            return Err(format!(
+                "particles.block[{k}] creates no particle: enlarge its region"
+            ));
         }
         all.extend(made);
     }
@@ -119,7 +211,11 @@ fn collision_pairs(
 ) -> Vec<NewParticle> {
     let mut out = Vec::with_capacity(2 * count);
     for k in 0..count {
-        let psi = if count > 1 { psi_max * k as f64 / (count - 1) as f64 } else { 0.0 };
+        let psi = if count > 1 {
+            psi_max * k as f64 / (count - 1) as f64
+        } else {
+            0.0
+        };
         let mut centre = Vec3::zeros();
         let separation_axis = if dimension == Dimension::Two { 1 } else { 2 };
         centre[separation_axis] = (10.0 * radius + psi_max * gap) * k as f64;

@@ -26,7 +26,11 @@ pub fn time_step(case: &Case, system: &DemSystem) -> (f64, f64) {
         .filter(|&k| !p.is_fixed(k))
         .map(|k| p.mass[k])
         .fold(f64::MAX, f64::min);
-    let lightest = if lightest == f64::MAX { p.mass.iter().cloned().fold(f64::MAX, f64::min) } else { lightest };
+    let lightest = if lightest == f64::MAX {
+        p.mass.iter().cloned().fold(f64::MAX, f64::min)
+    } else {
+        lightest
+    };
     let contact_time = stability::shortest_contact_time(&system.law, lightest);
     let dt = match (case.time.dt, case.time.dt_over_contact_time) {
         (Some(dt), _) => dt,
@@ -85,10 +89,15 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
         "grainflow {}: {} particles ({} glued), {}D soft-sphere DEM, dry scene (no fluid grid)",
         env!("CARGO_PKG_VERSION"),
         system.particles.n_owned,
-        (0..system.particles.n_owned).filter(|&k| system.particles.is_fixed(k)).count(),
+        (0..system.particles.n_owned)
+            .filter(|&k| system.particles.is_fixed(k))
+            .count(),
         system.domain.dimension.count()
     ));
-    outputs.log(&format!("dt = {dt:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s)", dt / contact_time));
+    outputs.log(&format!(
+        "dt = {dt:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s)",
+        dt / contact_time
+    ));
     if let Some(w) = &warning {
         outputs.log(w);
         eprintln!("{w}");
@@ -97,9 +106,14 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     let end = case.time.end;
     let interval = case.output.interval.unwrap_or(end / 100.0);
     let tracked_interval = case.output.tracked_interval.unwrap_or(interval);
-    let last_removal = system.walls.iter().filter_map(|w| w.remove_at).fold(0.0, f64::max);
+    let last_removal = system
+        .walls
+        .iter()
+        .filter_map(|w| w.remove_at)
+        .fold(0.0, f64::max);
     let rest_after = case.time.rest_after.unwrap_or(last_removal);
     let mut analysis = Analysis::new(case.analysis.as_ref(), &system);
+    let mut moving = false;
 
     let progress = Progress::new(show_progress && std::io::stderr().is_terminal(), end);
     let mut next_output = 0.0;
@@ -111,7 +125,9 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     let mut wall_state: Vec<bool> = system.walls.iter().map(|w| w.is_present(0.0)).collect();
 
     outputs.write_frame(&system, dt).map_err(RunError::Io)?;
-    outputs.write_tracked(&system, &case.particles.tracked).map_err(RunError::Io)?;
+    outputs
+        .write_tracked(&system, &case.particles.tracked)
+        .map_err(RunError::Io)?;
     next_output += interval;
     next_tracked += tracked_interval;
 
@@ -146,24 +162,38 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
             let present = wall.is_present(system.time);
             if present != wall_state[k] {
                 wall_state[k] = present;
-                outputs.log(&format!("t = {:.6e} s: wall {} removed", system.time, wall.name));
+                outputs.log(&format!(
+                    "t = {:.6e} s: wall {} removed",
+                    system.time, wall.name
+                ));
             }
         }
 
         if system.time >= next_tracked - 0.5 * dt {
-            outputs.write_tracked(&system, &case.particles.tracked).map_err(RunError::Io)?;
+            outputs
+                .write_tracked(&system, &case.particles.tracked)
+                .map_err(RunError::Io)?;
             next_tracked += tracked_interval;
         }
-        let at_rest = case
-            .time
-            .rest_speed
-            .is_some_and(|v| system.time >= rest_after && rms_speed(&system) < v);
+        // At rest: after rest_after, once the grains have moved faster than
+        // the rest speed and then slowed below it.
+        let at_rest = match case.time.rest_speed {
+            Some(v) if system.time >= rest_after => {
+                let speed = rms_speed(&system);
+                moving |= speed > v;
+                moving && speed < v
+            }
+            _ => false,
+        };
         if system.time >= next_output - 0.5 * dt || at_rest {
             outputs.write_frame(&system, dt).map_err(RunError::Io)?;
             next_output += interval;
         }
         if at_rest {
-            stop_reason = format!("at rest: rms particle speed below {} m/s", case.time.rest_speed.unwrap());
+            stop_reason = format!(
+                "at rest: rms particle speed below {} m/s",
+                case.time.rest_speed.unwrap()
+            );
             break;
         }
         progress.update(system.time, system.steps, total_steps);
@@ -221,14 +251,36 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     Ok(Summary { json, metrics })
 }
 
-/// Root-mean-square speed of the mobile particles, √(2 E_k / M): a lone
-/// grain rolling away does not keep a settled deposit from being at rest.
+/// Root-mean-square speed of the mobile grains that touch another grain,
+/// √(2 E_k / M) over them: grains that roll away alone (a disc on a floor
+/// rolls forever without rolling resistance) do not keep a deposit from
+/// being at rest. Without any grain contact, all mobile grains count.
 pub fn rms_speed(system: &DemSystem) -> f64 {
     let p = &system.particles;
-    let (translational, _) = p.kinetic_energy();
-    let mass: f64 = (0..p.n_owned).filter(|&k| !p.is_fixed(k)).map(|k| p.mass[k]).sum();
+    let n = p.n_owned;
+    let mut touching = vec![false; n];
+    for (k, (&i, &j)) in system
+        .neighbours
+        .first
+        .iter()
+        .zip(&system.neighbours.second)
+        .enumerate()
+    {
+        if system.pair_force[k] != grainflow_core::Vec3::zeros() {
+            touching[i as usize] = true;
+            if (j as usize) < n {
+                touching[j as usize] = true;
+            }
+        }
+    }
+    let any = touching.iter().any(|&t| t);
+    let (mut energy, mut mass) = (0.0, 0.0);
+    for k in (0..n).filter(|&k| !p.is_fixed(k) && (touching[k] || !any)) {
+        energy += p.mass[k] * p.velocity[k].norm_squared();
+        mass += p.mass[k];
+    }
     let c = &system.communicator;
-    (2.0 * c.sum(translational) / c.sum(mass).max(f64::MIN_POSITIVE)).sqrt()
+    (c.sum(energy) / c.sum(mass).max(f64::MIN_POSITIVE)).sqrt()
 }
 
 /// Peak resident memory of this process (Linux), if known.

@@ -11,8 +11,8 @@
 
 use grainflow_dem::ContactLaw;
 
-pub const ACCURATE_DT_OVER_TC: f64 = 0.1;
-pub const STABLE_DT_OVER_TC: f64 = 0.25;
+pub const ACCURATE_DT_OVER_TC: f64 = 0.05;
+pub const STABLE_DT_OVER_TC: f64 = 0.3;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TimeStepVerdict {
@@ -26,7 +26,8 @@ pub enum TimeStepVerdict {
 /// Smallest binary contact time of the scene: the contact of the lightest
 /// pair, m* = m_min/2 (or m_min against a wall, whichever is shorter).
 pub fn shortest_contact_time(law: &ContactLaw, lightest_mass: f64) -> f64 {
-    law.contact_time(0.5 * lightest_mass).min(law.contact_time(lightest_mass))
+    law.contact_time(0.5 * lightest_mass)
+        .min(law.contact_time(lightest_mass))
 }
 
 pub fn verdict(dt_over_tc: f64) -> TimeStepVerdict {

@@ -45,7 +45,11 @@ pub enum NormalStiffness {
 }
 
 impl NormalStiffness {
-    pub fn from_restitution(restitution: f64, contact_time: f64, calibration: NormalCalibration) -> Self {
+    pub fn from_restitution(
+        restitution: f64,
+        contact_time: f64,
+        calibration: NormalCalibration,
+    ) -> Self {
         let beta = -restitution.ln() / contact_time;
         let omega = match calibration {
             NormalCalibration::Paper => std::f64::consts::PI / contact_time,
@@ -68,26 +72,38 @@ impl NormalStiffness {
                 stiffness_per_mass,
                 damping_per_mass,
                 ..
-            } => (effective_mass * stiffness_per_mass, effective_mass * damping_per_mass),
+            } => (
+                effective_mass * stiffness_per_mass,
+                effective_mass * damping_per_mass,
+            ),
             NormalStiffness::Fixed { stiffness, damping } => (stiffness, damping),
         }
     }
 }
 
+/// Smallest restitution the `Exact` calibration can reach: with
+/// b = −ln(e_n) ≥ 2 no underdamped contact has both the restitution e_n
+/// and the duration t_c (x + 2 arctan(b/x) > π for every x = ω t_c > 0).
+pub const MIN_EXACT_RESTITUTION: f64 = 0.135_335_283_236_612_7; // e^{-2}
+
 /// Damped angular frequency ω of the linear oscillator whose force-clamped
-/// contact lasts `contact_time`: ω t_c = π − 2 arctan(β/ω) (Newton on ω).
+/// contact lasts `contact_time`: x = ω t_c solves x + 2 arctan(b/x) = π with
+/// b = β t_c < 2. The left side falls below π past x = 0 and returns to it
+/// at the root, which lies in [√(b(2 − b)), π] (bisection).
 fn clamped_contact_frequency(beta: f64, contact_time: f64) -> f64 {
-    let mut omega = std::f64::consts::PI / contact_time;
-    for _ in 0..100 {
-        let residual = omega * contact_time - std::f64::consts::PI + 2.0 * (beta / omega).atan();
-        let derivative = contact_time - 2.0 * beta / (omega * omega + beta * beta);
-        let step = residual / derivative;
-        omega -= step;
-        if step.abs() < 1e-15 * omega {
-            break;
+    let b = beta * contact_time;
+    assert!(b < 2.0, "restitution below e^-2 has no exact calibration");
+    let residual = |x: f64| x + 2.0 * (b / x).atan() - std::f64::consts::PI;
+    let (mut low, mut high) = ((b * (2.0 - b)).sqrt(), std::f64::consts::PI);
+    for _ in 0..200 {
+        let mid = 0.5 * (low + high);
+        if residual(mid) < 0.0 {
+            low = mid;
+        } else {
+            high = mid;
         }
     }
-    omega
+    0.5 * (low + high) / contact_time
 }
 
 /// Restitution of a force-clamped linear spring–dashpot contact with damping
@@ -106,6 +122,9 @@ pub struct ContactLaw {
     pub tangential_ratio: f64,
     /// Coulomb coefficient between particles.
     pub friction: f64,
+    /// Rolling resistance μ_r (0: none, as in the paper): a torque of
+    /// magnitude μ_r R* F_n opposing the relative rolling, R* = r_i r_j/(r_i + r_j).
+    pub rolling_friction: f64,
 }
 
 /// Force on particle i of a contact, and the updated tangential history.
@@ -115,6 +134,7 @@ pub struct ContactForce {
     pub force: Vec3,
     /// Tangential force on i (for torques: τ_i = −r_i n × F_t).
     pub tangential: Vec3,
+    pub normal_force: f64,
     pub history: Vec3,
 }
 
@@ -156,13 +176,43 @@ impl ContactLaw {
         if magnitude_sq > limit * limit {
             // Eq. 16: sliding; the spring is reset to the Coulomb force.
             tangential *= limit / magnitude_sq.sqrt();
-            displacement = if k_t > 0.0 { -tangential / k_t } else { Vec3::zeros() };
+            displacement = if k_t > 0.0 {
+                -tangential / k_t
+            } else {
+                Vec3::zeros()
+            };
         }
         ContactForce {
             force: normal_force * normal + tangential,
             tangential,
+            normal_force,
             history: displacement,
         }
+    }
+
+    /// Rolling-resistance torque on i (the partner receives its opposite):
+    /// constant magnitude μ_r R* F_n against the rolling part of ω_i − ω_j,
+    /// capped so that it cannot reverse the rolling within one step
+    /// (|T| ≤ I* |ω_roll| / Δt, I* = I_i I_j/(I_i + I_j)): a grain at rest
+    /// stays at rest instead of chattering.
+    #[inline(always)]
+    pub fn rolling_torque(
+        &self,
+        normal: Vec3,
+        relative_spin: Vec3,
+        normal_force: f64,
+        effective_radius: f64,
+        effective_inertia: f64,
+        dt: f64,
+    ) -> Vec3 {
+        let rolling = relative_spin - relative_spin.dot(&normal) * normal;
+        let speed = rolling.norm();
+        if speed == 0.0 || dt == 0.0 {
+            return Vec3::zeros();
+        }
+        let magnitude = (self.rolling_friction * effective_radius * normal_force)
+            .min(effective_inertia * speed / dt);
+        -magnitude / speed * rolling
     }
 
     /// Natural period of the stiffest contact a particle of mass `mass` can
@@ -192,9 +242,14 @@ mod tests {
 
     #[test]
     fn exact_calibration_gives_the_requested_restitution() {
-        for e in [0.1, 0.3, 0.5, 0.87, 0.97] {
+        for e in [0.14, 0.2, 0.3, 0.5, 0.87, 0.97, 1.0] {
             let law = NormalStiffness::from_restitution(e, 1e-4, NormalCalibration::Exact);
-            if let NormalStiffness::FromRestitution { stiffness_per_mass, damping_per_mass, .. } = law {
+            if let NormalStiffness::FromRestitution {
+                stiffness_per_mass,
+                damping_per_mass,
+                ..
+            } = law
+            {
                 let measured = clamped_restitution(stiffness_per_mass, damping_per_mass);
                 assert!((measured - e).abs() < 1e-12, "e = {e}: {measured}");
             }
@@ -203,11 +258,17 @@ mod tests {
 
     #[test]
     fn paper_calibration_overshoots_the_restitution_by_the_clamp() {
-        // e_n = 0.5: β/ω = 0.2206, e = 0.5 exp(0.2206 · 2 arctan 0.2206) = 0.5487.
+        // e_n = 0.5: β/ω = ln 2/π = 0.22064, the clamped contact lasts
+        // (π − 2 arctan 0.22064)/ω and e = exp(−0.22064 · 2.70714) = 0.55028.
         let law = NormalStiffness::from_restitution(0.5, 1e-4, NormalCalibration::Paper);
-        if let NormalStiffness::FromRestitution { stiffness_per_mass, damping_per_mass, .. } = law {
+        if let NormalStiffness::FromRestitution {
+            stiffness_per_mass,
+            damping_per_mass,
+            ..
+        } = law
+        {
             let measured = clamped_restitution(stiffness_per_mass, damping_per_mass);
-            assert!((measured - 0.5487).abs() < 5e-4, "{measured}");
+            assert!((measured - 0.55028).abs() < 1e-5, "{measured}");
         }
     }
 }

@@ -48,14 +48,14 @@ fn particle(position: Vec3, radius: f64, material: &Material) -> NewParticle {
     }
 }
 
-/// Particles on a simple cubic (square in 2D) lattice of spacing `spacing`
+/// Particles on a rectangular lattice of spacing `spacing` (per axis)
 /// filling `[lower, upper]`, each displaced at random by up to `jitter`
 /// times the free room of its site.
 pub fn lattice(
     dimension: Dimension,
     lower: Vec3,
     upper: Vec3,
-    spacing: f64,
+    spacing: Vec3,
     radii: RadiusDistribution,
     jitter: f64,
     material: &Material,
@@ -63,16 +63,19 @@ pub fn lattice(
 ) -> Vec<NewParticle> {
     let mut counts = [1usize; 3];
     for axis in 0..dimension.count() {
-        counts[axis] = (((upper[axis] - lower[axis]) / spacing) + 1e-9).floor().max(0.0) as usize;
+        counts[axis] = (((upper[axis] - lower[axis]) / spacing[axis]) + 1e-9)
+            .floor()
+            .max(0.0) as usize;
     }
     let mut out = Vec::with_capacity(counts.iter().product());
     for k in 0..counts[2] {
         for j in 0..counts[1] {
             for i in 0..counts[0] {
                 let radius = radii.sample(rng);
-                let room = (0.5 * spacing - radius).max(0.0) * jitter;
-                let mut x = lower + Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * spacing;
+                let site = Vec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5);
+                let mut x = lower + site.component_mul(&spacing);
                 for axis in 0..dimension.count() {
+                    let room = (0.5 * spacing[axis] - radius).max(0.0) * jitter;
                     x[axis] += room * (2.0 * rng.gen::<f64>() - 1.0);
                 }
                 if dimension == Dimension::Two {
@@ -99,17 +102,27 @@ pub fn random(
     existing: &[NewParticle],
     rng: &mut Pcg64,
 ) -> Result<Vec<NewParticle>, String> {
-    let r_max = radii.max().max(existing.iter().map(|p| p.radius).fold(0.0, f64::max));
+    let r_max = radii
+        .max()
+        .max(existing.iter().map(|p| p.radius).fold(0.0, f64::max));
     let mut grid_upper = upper;
     let mut grid_lower = lower;
     if dimension == Dimension::Two {
         grid_lower.z = 0.0;
         grid_upper.z = 0.0;
     }
-    let grid = CellGrid::new(dimension, grid_lower, grid_upper, 2.0 * r_max, 4 * (count + existing.len()) + 4096);
+    let grid = CellGrid::new(
+        dimension,
+        grid_lower,
+        grid_upper,
+        2.0 * r_max,
+        4 * (count + existing.len()) + 4096,
+    );
     let mut cells: Vec<Vec<usize>> = vec![Vec::new(); grid.len()];
     let mut placed: Vec<NewParticle> = Vec::with_capacity(count);
-    let inside = |x: &Vec3| (0..dimension.count()).all(|a| x[a] >= lower[a] - r_max && x[a] <= upper[a] + r_max);
+    let inside = |x: &Vec3| {
+        (0..dimension.count()).all(|a| x[a] >= lower[a] - r_max && x[a] <= upper[a] + r_max)
+    };
     let mut all: Vec<(Vec3, f64)> = Vec::new();
     for p in existing.iter().filter(|p| inside(&p.position)) {
         let c = grid.index(grid.coordinates(&p.position));
@@ -126,7 +139,9 @@ pub fn random(
                 let lo = lower[axis] + radius;
                 let hi = upper[axis] - radius;
                 if hi < lo {
-                    return Err(format!("the region is narrower than a particle along axis {axis}"));
+                    return Err(format!(
+                        "the region is narrower than a particle along axis {axis}"
+                    ));
                 }
                 x[axis] = lo + (hi - lo) * rng.gen::<f64>();
             }

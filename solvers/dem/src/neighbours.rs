@@ -27,7 +27,13 @@ pub struct CellGrid {
 impl CellGrid {
     /// Cells of side ≥ `cutoff` over `[lower, upper]`, coarsened if needed so
     /// that there are at most `max_cells`.
-    pub fn new(dimension: Dimension, lower: Vec3, upper: Vec3, cutoff: f64, max_cells: usize) -> Self {
+    pub fn new(
+        dimension: Dimension,
+        lower: Vec3,
+        upper: Vec3,
+        cutoff: f64,
+        max_cells: usize,
+    ) -> Self {
         let extent = upper - lower;
         let mut size = cutoff;
         loop {
@@ -40,7 +46,11 @@ impl CellGrid {
                 for axis in 0..3 {
                     cell_size[axis] = extent[axis].max(f64::MIN_POSITIVE) / counts[axis] as f64;
                 }
-                return CellGrid { lower, cell_size, counts };
+                return CellGrid {
+                    lower,
+                    cell_size,
+                    counts,
+                };
             }
             size *= 1.25;
         }
@@ -83,7 +93,8 @@ impl CellBins {
     pub fn fill(&mut self, grid: &CellGrid, positions: &[Vec3]) {
         let cells = grid.len();
         self.cell_of.clear();
-        self.cell_of.extend(positions.iter().map(|x| grid.index(grid.coordinates(x))));
+        self.cell_of
+            .extend(positions.iter().map(|x| grid.index(grid.coordinates(x))));
         self.start.clear();
         self.start.resize(cells + 1, 0);
         for &c in &self.cell_of {
@@ -125,7 +136,10 @@ pub struct NeighbourList {
 
 impl NeighbourList {
     pub fn new(skin: f64) -> Self {
-        NeighbourList { skin, ..Default::default() }
+        NeighbourList {
+            skin,
+            ..Default::default()
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -172,7 +186,11 @@ impl NeighbourList {
                     let id_i = particles.id[i];
                     let fixed_i = particles.inverse_mass[i] == 0.0;
                     let c = grid.coordinates(&xi);
-                    let z_range = if two_d { 0..=0 } else { c[2].saturating_sub(1)..=(c[2] + 1).min(grid.counts[2] - 1) };
+                    let z_range = if two_d {
+                        0..=0
+                    } else {
+                        c[2].saturating_sub(1)..=(c[2] + 1).min(grid.counts[2] - 1)
+                    };
                     for cz in z_range {
                         for cy in c[1].saturating_sub(1)..=(c[1] + 1).min(grid.counts[1] - 1) {
                             for cx in c[0].saturating_sub(1)..=(c[0] + 1).min(grid.counts[0] - 1) {
@@ -245,7 +263,8 @@ impl NeighbourList {
         }
 
         self.reference_position.clear();
-        self.reference_position.extend_from_slice(&particles.position[..n_owned]);
+        self.reference_position
+            .extend_from_slice(&particles.position[..n_owned]);
         self.builds += 1;
     }
 }

@@ -65,16 +65,28 @@ impl Particles {
 
     /// Appends an owned particle (no ghosts may exist yet).
     pub fn push(&mut self, dimension: Dimension, id: u64, new: &NewParticle) {
-        assert_eq!(self.n_owned, self.len(), "owned particles are added before ghosts");
+        assert_eq!(
+            self.n_owned,
+            self.len(),
+            "owned particles are added before ghosts"
+        );
         let (mass, inertia) = mass_and_inertia(dimension, new.radius, new.density);
         self.id.push(id);
         self.position.push(new.position);
-        self.velocity.push(if new.fixed { Vec3::zeros() } else { new.velocity });
-        self.angular_velocity
-            .push(if new.fixed { Vec3::zeros() } else { new.angular_velocity });
+        self.velocity.push(if new.fixed {
+            Vec3::zeros()
+        } else {
+            new.velocity
+        });
+        self.angular_velocity.push(if new.fixed {
+            Vec3::zeros()
+        } else {
+            new.angular_velocity
+        });
         self.radius.push(new.radius);
         self.mass.push(mass);
-        self.inverse_mass.push(if new.fixed { 0.0 } else { 1.0 / mass });
+        self.inverse_mass
+            .push(if new.fixed { 0.0 } else { 1.0 / mass });
         self.inverse_inertia
             .push(if new.fixed { 0.0 } else { 1.0 / inertia });
         self.force.push(Vec3::zeros());
@@ -133,7 +145,10 @@ impl Particles {
 
     /// Largest radius among owned particles (0 when empty).
     pub fn max_radius(&self) -> f64 {
-        self.radius[..self.n_owned].iter().cloned().fold(0.0, f64::max)
+        self.radius[..self.n_owned]
+            .iter()
+            .cloned()
+            .fold(0.0, f64::max)
     }
 
     /// Translational and rotational kinetic energy of the owned particles.
@@ -145,8 +160,7 @@ impl Particles {
                 continue;
             }
             translational += 0.5 * self.mass[k] * self.velocity[k].norm_squared();
-            rotational +=
-                0.5 * self.angular_velocity[k].norm_squared() / self.inverse_inertia[k];
+            rotational += 0.5 * self.angular_velocity[k].norm_squared() / self.inverse_inertia[k];
         }
         (translational, rotational)
     }

@@ -15,7 +15,13 @@ pub fn particle_moments(system: &DemSystem) -> Vec<Matrix3<f64>> {
     let p = &system.particles;
     let n = p.n_owned;
     let mut moments = vec![Matrix3::zeros(); n];
-    for (k, (&i, &j)) in system.neighbours.first.iter().zip(&system.neighbours.second).enumerate() {
+    for (k, (&i, &j)) in system
+        .neighbours
+        .first
+        .iter()
+        .zip(&system.neighbours.second)
+        .enumerate()
+    {
         let (i, j) = (i as usize, j as usize);
         let force = system.pair_force[k];
         if force.norm_squared() == 0.0 {
@@ -41,7 +47,11 @@ pub fn particle_moments(system: &DemSystem) -> Vec<Matrix3<f64>> {
             }
             // The wall force is recovered from the stored history through the
             // same law, without advancing it.
-            let w = system.walls.iter().position(|x| std::ptr::eq(x, wall)).unwrap();
+            let w = system
+                .walls
+                .iter()
+                .position(|x| std::ptr::eq(x, wall))
+                .unwrap();
             let history = system.wall_history[k * system.wall_stride() + w];
             let relative_velocity =
                 p.velocity[k] - (p.radius[k] * p.angular_velocity[k]).cross(&wall.normal);

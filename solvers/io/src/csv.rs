@@ -15,7 +15,10 @@ impl CsvSeries {
         let mut writer = BufWriter::new(File::create(path)?);
         writeln!(writer, "{}", header.join(","))?;
         writer.flush()?;
-        Ok(CsvSeries { writer, columns: header.len() })
+        Ok(CsvSeries {
+            writer,
+            columns: header.len(),
+        })
     }
 
     /// Writes one row of numbers (17 significant digits, round-trip exact).

@@ -35,14 +35,48 @@ impl ParticleFrame<'_> {
         )?;
         writeln!(out, "<PointData Scalars=\"radius\" Vectors=\"velocity\">")?;
         write_array(&mut out, "radius", "Float64", 1, &to_bytes_f64(self.radius))?;
-        write_array(&mut out, "id", "UInt64", 1, &self.id.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<_>>())?;
+        write_array(
+            &mut out,
+            "id",
+            "UInt64",
+            1,
+            &self
+                .id
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect::<Vec<_>>(),
+        )?;
         write_array(&mut out, "fixed", "UInt8", 1, self.fixed)?;
-        write_array(&mut out, "velocity", "Float64", 3, &to_bytes_f64(self.velocity.as_flattened()))?;
-        write_array(&mut out, "angular_velocity", "Float64", 3, &to_bytes_f64(self.angular_velocity.as_flattened()))?;
-        write_array(&mut out, "force", "Float64", 3, &to_bytes_f64(self.force.as_flattened()))?;
+        write_array(
+            &mut out,
+            "velocity",
+            "Float64",
+            3,
+            &to_bytes_f64(self.velocity.as_flattened()),
+        )?;
+        write_array(
+            &mut out,
+            "angular_velocity",
+            "Float64",
+            3,
+            &to_bytes_f64(self.angular_velocity.as_flattened()),
+        )?;
+        write_array(
+            &mut out,
+            "force",
+            "Float64",
+            3,
+            &to_bytes_f64(self.force.as_flattened()),
+        )?;
         writeln!(out, "</PointData>")?;
         writeln!(out, "<Points>")?;
-        write_array(&mut out, "position", "Float64", 3, &to_bytes_f64(self.position.as_flattened()))?;
+        write_array(
+            &mut out,
+            "position",
+            "Float64",
+            3,
+            &to_bytes_f64(self.position.as_flattened()),
+        )?;
         writeln!(out, "</Points>")?;
         writeln!(out, "<Verts>")?;
         let connectivity: Vec<u8> = (0..n as i64).flat_map(|k| k.to_le_bytes()).collect();
@@ -59,7 +93,13 @@ fn to_bytes_f64(values: &[f64]) -> Vec<u8> {
     values.iter().flat_map(|v| v.to_le_bytes()).collect()
 }
 
-fn write_array(out: &mut impl Write, name: &str, kind: &str, components: usize, bytes: &[u8]) -> std::io::Result<()> {
+fn write_array(
+    out: &mut impl Write,
+    name: &str,
+    kind: &str,
+    components: usize,
+    bytes: &[u8],
+) -> std::io::Result<()> {
     let mut block = Vec::with_capacity(bytes.len() + 4);
     block.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
     block.extend_from_slice(bytes);
@@ -76,12 +116,24 @@ pub fn base64(bytes: &[u8]) -> String {
     const TABLE: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     let mut encoded = String::with_capacity(bytes.len().div_ceil(3) * 4);
     for chunk in bytes.chunks(3) {
-        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
         let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
         encoded.push(TABLE[(n >> 18) as usize & 63] as char);
         encoded.push(TABLE[(n >> 12) as usize & 63] as char);
-        encoded.push(if chunk.len() > 1 { TABLE[(n >> 6) as usize & 63] as char } else { '=' });
-        encoded.push(if chunk.len() > 2 { TABLE[n as usize & 63] as char } else { '=' });
+        encoded.push(if chunk.len() > 1 {
+            TABLE[(n >> 6) as usize & 63] as char
+        } else {
+            '='
+        });
+        encoded.push(if chunk.len() > 2 {
+            TABLE[n as usize & 63] as char
+        } else {
+            '='
+        });
     }
     encoded
 }
@@ -95,17 +147,26 @@ pub struct PvdIndex {
 
 impl PvdIndex {
     pub fn new(path: PathBuf) -> Self {
-        PvdIndex { path, entries: Vec::new() }
+        PvdIndex {
+            path,
+            entries: Vec::new(),
+        }
     }
 
     pub fn add(&mut self, time: f64, file: &str) -> std::io::Result<()> {
         self.entries.push((time, file.to_string()));
         let mut out = BufWriter::new(File::create(&self.path)?);
         writeln!(out, r#"<?xml version="1.0"?>"#)?;
-        writeln!(out, r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#)?;
+        writeln!(
+            out,
+            r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#
+        )?;
         writeln!(out, "<Collection>")?;
         for (t, f) in &self.entries {
-            writeln!(out, r#"<DataSet timestep="{t:e}" group="" part="0" file="{f}"/>"#)?;
+            writeln!(
+                out,
+                r#"<DataSet timestep="{t:e}" group="" part="0" file="{f}"/>"#
+            )?;
         }
         writeln!(out, "</Collection>\n</VTKFile>")?;
         out.flush()

@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+"""Writes cases/silo.toml (the paper's silo) and cases/silo_small.toml (its
+reduced version for the tests). Both: a square shaft of width W lined with
+glued grains centred on the side walls, filled from a loose jittered lattice
+that settles under gravity. Run from the repository root."""
+
+HEADER_FULL = """# The silo of Izard et al. 2014, section 3.3: about 56,000 grains
+# (rho = 1317 kg/m3, R = 5 mm +- 10 %, mu = 0.25, e_n = 0.3, t_c = 1e-4 s) in a
+# 0.1 x 0.1 m shaft lined with glued grains, a column about 5 m high. The
+# grains start on a loose jittered lattice and settle; at rest the
+# coarse-grained pressure is fitted with Janssen's law (eq. 22), to compare
+# with the paper's f_w K = 0.30 +- 0.06. A validation run (docs/validation.md),
+# not part of the tests. Written by scripts/make_silo_cases.py.
+"""
+
+HEADER_SMALL = """# A reduced silo for the tests (the full one is cases/silo.toml): the grains
+# of Izard et al. 2014, section 3.3 (rho = 1317 kg/m3, R = 5 mm +- 10 %,
+# mu = 0.25, e_n = 0.3, t_c = 1e-4 s) in the same 0.1 x 0.1 m shaft lined
+# with glued grains (a narrower shaft jams), a column of about 0.8 m instead
+# of 5 m. The grains start on a loose lattice
+# and settle; at rest the coarse-grained pressure along the shaft is fitted
+# with Janssen's law (eq. 22). Metrics: janssen_fwK, saturation_pressure,
+# solid_fraction. Written by scripts/make_silo_cases.py.
+"""
+
+
+def silo(width, fill_top, end, seed, exclude_bottom, slab):
+    top = fill_top + 0.05
+    r = 0.0055  # half the liner spacing: liner grains are centred on the walls
+    liners = [
+        ([-r, 0.0, 0.0], [r, width, top]),
+        ([width - r, 0.0, 0.0], [width + r, width, top]),
+        ([r, -r, 0.0], [width - r, r, top]),
+        ([r, width - r, 0.0], [width - r, width + r, top]),
+    ]
+    text = f"""
+[domain]
+dimension = 3
+lower = [0.0, 0.0, 0.0]
+upper = [{width}, {width}, {top}]
+gravity = [0.0, 0.0, -9.81]
+
+[particles]
+density = 1317.0
+radius = 5.0e-3
+radius_spread = 0.1
+seed = {seed}
+"""
+    text += "\n# Glued grains centred on the four side walls (the rough walls of the paper).\n"
+    for lo, hi in liners:
+        text += f"""[[particles.block]]
+kind = "lattice"
+lower = {lo}
+upper = {hi}
+spacing = 0.011
+fixed = true
+
+"""
+    text += f"""# The grains: a loose jittered lattice that settles under gravity.
+[[particles.block]]
+kind = "lattice"
+lower = [{r}, {r}, 0.0]
+upper = [{width - r}, {width - r}, {fill_top}]
+spacing = 0.0112
+jitter = 0.5
+
+[contact]
+model = "soft"
+restitution = 0.3
+contact_time = 1.0e-4
+friction = 0.25
+"""
+    for name, point, normal in [
+        ("floor", [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        ("x_low", [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+        ("x_high", [width, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+        ("y_low", [0.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ("y_high", [0.0, width, 0.0], [0.0, -1.0, 0.0]),
+    ]:
+        text += f"""
+[[walls]]
+name = "{name}"
+point = {point}
+normal = {normal}
+"""
+    text += f"""
+[time]
+end = {end}
+dt_over_contact_time = 0.05
+rest_speed = 1.0e-3
+
+[output]
+interval = 0.05
+
+[analysis]
+kind = "silo"
+slab = {slab}
+exclude_bottom = {exclude_bottom}
+"""
+    return text
+
+
+open("cases/silo.toml", "w").write(HEADER_FULL + silo(0.1, 8.2, 6.0, 5, 0.7, 0.05))
+open("cases/silo_small.toml", "w").write(HEADER_SMALL + silo(0.1, 1.4, 2.0, 3, 0.2, 0.02))

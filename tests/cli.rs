@@ -1,0 +1,199 @@
+//! The command-line contract (DESIGN.md): `run` writes the output files, a
+//! bad case file gets an error naming the key and what is allowed, exit code
+//! non-zero, and no output directory.
+
+use std::path::Path;
+use std::process::Command;
+
+fn grainflow() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_grainflow"))
+}
+
+fn case(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("cases")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// Runs `grainflow run` on a case with overrides into a fresh directory;
+/// returns (exit code, stderr, whether the output directory exists).
+fn run_with(overrides: &[&str]) -> (i32, String, bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut command = grainflow();
+    command.args([
+        "run",
+        &case("bouncing_dry.toml"),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    for o in overrides {
+        command.args(["--set", o]);
+    }
+    let result = command.output().unwrap();
+    (
+        result.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&result.stderr).into_owned(),
+        out.exists(),
+    )
+}
+
+#[test]
+fn a_run_writes_every_output_of_the_contract() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bounce");
+    let status = grainflow()
+        .args([
+            "run",
+            &case("bouncing_dry.toml"),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args(["--set", "time.end=0.2", "--set", "output.particles=true"])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    for file in [
+        "case.toml",
+        "log.txt",
+        "series.csv",
+        "tracked.csv",
+        "summary.json",
+        "particles.pvd",
+    ] {
+        assert!(out.join(file).is_file(), "{file} missing");
+    }
+    // The resolved case carries the override.
+    let resolved = std::fs::read_to_string(out.join("case.toml")).unwrap();
+    assert!(resolved.contains("end = 0.2"), "{resolved}");
+    // Every particle file named by the ParaView index exists.
+    let index = std::fs::read_to_string(out.join("particles.pvd")).unwrap();
+    let files: Vec<&str> = index
+        .split("file=\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap())
+        .collect();
+    assert_eq!(
+        files.len(),
+        21,
+        "one frame per output interval (0.01 s over 0.2 s) plus t = 0"
+    );
+    for f in files {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    // tracked.csv has the contract's header and rows for particle 0.
+    let tracked = std::fs::read_to_string(out.join("tracked.csv")).unwrap();
+    assert!(tracked.starts_with("t,id,x,y,z,vx,vy,vz,wx,wy,wz\n"));
+    assert!(tracked.lines().count() > 100);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "wall_seconds",
+        "steps",
+        "particle_steps_per_second",
+        "metrics",
+    ] {
+        assert!(summary.get(key).is_some(), "summary.json lacks {key}");
+    }
+}
+
+#[test]
+fn an_unknown_key_is_named_and_nothing_is_written() {
+    let (code, stderr, written) = run_with(&["contact.stifness=3"]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("stifness"), "{stderr}");
+    assert!(!written);
+}
+
+#[test]
+fn a_wrong_type_is_named_and_nothing_is_written() {
+    let (code, stderr, written) = run_with(&["particles.density=\"heavy\""]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("density") || stderr.contains("invalid type"),
+        "{stderr}"
+    );
+    assert!(!written);
+}
+
+#[test]
+fn out_of_range_values_name_the_key_and_the_allowed_range() {
+    for (assignment, key, allowed) in [
+        (
+            "contact.restitution=1.5",
+            "contact.restitution",
+            "0 < restitution ≤ 1",
+        ),
+        ("domain.dimension=4", "domain.dimension", "2 or 3"),
+        ("contact.model=\"rigid\"", "contact.model", "\"soft\""),
+        ("particles.radius=-1.0", "particles.radius", "positive"),
+        ("time.dt=1.0", "time step", "stability limit"),
+    ] {
+        let (code, stderr, written) = run_with(&[assignment]);
+        assert_eq!(code, 2, "{assignment}: {stderr}");
+        assert!(
+            stderr.contains(key) && stderr.contains(allowed),
+            "{assignment}: {stderr}"
+        );
+        assert!(!written, "{assignment} wrote an output directory");
+    }
+}
+
+#[test]
+fn inconsistent_contact_parameters_are_refused() {
+    let (code, stderr, _) = run_with(&["contact.stiffness=1.0e5"]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("either restitution and contact_time, or stiffness and damping"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn check_reports_the_models_and_the_time_step_limits() {
+    let output = grainflow()
+        .args(["check", &case("silo_small.toml")])
+        .output()
+        .unwrap();
+    assert!(output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    for expected in [
+        "soft-sphere DEM",
+        "no fluid grid",
+        "glued",
+        "t_c = 1.0000e-4",
+        "stable dt <=",
+    ] {
+        assert!(
+            text.contains(expected),
+            "check output lacks {expected:?}:\n{text}"
+        );
+    }
+}
+
+#[test]
+fn check_warns_between_the_accuracy_and_the_stability_limit() {
+    let output = grainflow()
+        .args([
+            "check",
+            &case("bouncing_dry.toml"),
+            "--set",
+            "time.dt_over_contact_time=0.2",
+        ])
+        .output()
+        .unwrap();
+    assert!(output.status.success());
+    assert!(String::from_utf8_lossy(&output.stdout).contains("warning"));
+    let refused = grainflow()
+        .args([
+            "check",
+            &case("bouncing_dry.toml"),
+            "--set",
+            "time.dt_over_contact_time=0.5",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(2));
+}
