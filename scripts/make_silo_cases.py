@@ -24,9 +24,9 @@ HEADER_SMALL = """# A reduced silo for the tests (the full one is cases/silo.tom
 """
 
 
-def silo(width, fill_top, end, seed, exclude_bottom, slab):
+def silo(width, fill_top, end, seed, exclude_bottom, slab, liner=0.011):
     top = fill_top + 0.05
-    r = 0.0055  # half the liner spacing: liner grains are centred on the walls
+    r = 0.5 * liner  # half the liner spacing: liner grains are centred on the walls
     liners = [
         ([-r, 0.0, 0.0], [r, width, top]),
         ([width - r, 0.0, 0.0], [width + r, width, top]),
@@ -52,7 +52,7 @@ seed = {seed}
 kind = "lattice"
 lower = {lo}
 upper = {hi}
-spacing = 0.011
+spacing = {liner}
 fixed = true
 
 """
@@ -100,5 +100,9 @@ exclude_bottom = {exclude_bottom}
     return text
 
 
+import sys
+if len(sys.argv) > 2:  # variants for studies: make_silo_cases.py OUT LINER_SPACING
+    open(sys.argv[1], "w").write(HEADER_SMALL + silo(0.1, 1.4, 2.0, 3, 0.2, 0.02, float(sys.argv[2])))
+    sys.exit(0)
 open("cases/silo.toml", "w").write(HEADER_FULL + silo(0.1, 8.2, 6.0, 5, 0.7, 0.05))
 open("cases/silo_small.toml", "w").write(HEADER_SMALL + silo(0.1, 1.4, 2.0, 3, 0.2, 0.02))

@@ -349,8 +349,55 @@ fn silo(
         .map(|&s| horizontal_stress[s] / vertical_stress[s])
         .sum::<f64>()
         / fit.len().max(1) as f64;
+    // Mobilised wall friction f_w = Σ|F_v| / Σ|F_h| over the contacts of
+    // grains in the fitted slabs with the wall: glued grains and side planes.
+    let in_fit = |x: &Vec3| {
+        let height = x[vertical] - base;
+        height >= exclude_bottom && height <= top - base - 2.0 * slab
+    };
+    let (mut shear, mut normal) = (0.0, 0.0);
+    let neighbours = &system.neighbours;
+    for (k, (&i, &j)) in neighbours.first.iter().zip(&neighbours.second).enumerate() {
+        let (i, j) = (i as usize, j as usize);
+        let force = system.pair_force[k];
+        let on_mobile = match (p.is_fixed(i), p.is_fixed(j)) {
+            (false, true) if in_fit(&p.position[i]) => force,
+            (true, false) if in_fit(&p.position[j]) => -force,
+            _ => continue,
+        };
+        let vertical_part = on_mobile.dot(&up);
+        shear += vertical_part.abs();
+        normal += (on_mobile - vertical_part * up).norm();
+    }
+    let side_walls: Vec<usize> = (0..system.walls.len())
+        .filter(|&w| system.walls[w].is_present(system.time) && system.walls[w].normal.dot(&up).abs() < 1e-9)
+        .collect();
+    for &k in mobile.iter().filter(|&&k| in_fit(&p.position[k])) {
+        for &w in &side_walls {
+            let wall = &system.walls[w];
+            let overlap = p.radius[k] - wall.distance(&p.position[k]);
+            if overlap <= 0.0 {
+                continue;
+            }
+            let history = system.wall_history[k * system.wall_stride() + w];
+            let contact = system.law.force(
+                overlap,
+                wall.normal,
+                p.velocity[k] - (p.radius[k] * p.angular_velocity[k]).cross(&wall.normal),
+                p.mass[k],
+                wall.friction,
+                history,
+                0.0,
+            );
+            shear += contact.force.dot(&up).abs();
+            normal += contact.normal_force;
+        }
+    }
+    let wall_friction = shear / normal.max(f64::MIN_POSITIVE);
     let mut metrics = Map::new();
     metrics.insert("janssen_K".into(), json!(redirection));
+    metrics.insert("wall_friction_mobilised".into(), json!(wall_friction));
+    metrics.insert("janssen_fwK_direct".into(), json!(wall_friction * redirection));
     metrics.insert("janssen_fwK".into(), json!(section / (perimeter * length)));
     metrics.insert("janssen_length".into(), json!(length));
     metrics.insert("saturation_pressure".into(), json!(saturation));
@@ -449,28 +496,38 @@ impl ColumnCollapse {
         }
     }
 
-    /// Front of the deposit: the farthest grain still connected to the main
-    /// body (gaps between successive grains along x below two diameters).
+    /// Front of the deposit on each side: bins of one mean diameter along
+    /// x are scanned outward from the centre, and the front is the outer
+    /// edge of the last bin before the first one covered by less than half
+    /// a monolayer (fewer grains than half the spanwise length over a
+    /// diameter; in 2D, fewer than half a grain). Grains that rolled or
+    /// bounced away alone do not count. Returns the mean of the two sides.
     fn front(&self, system: &DemSystem) -> f64 {
         let p = &system.particles;
-        let mut distance: Vec<(f64, f64)> = (0..p.n_owned)
-            .filter(|&k| p.inverse_mass[k] > 0.0)
-            .map(|k| {
-                (
-                    (p.position[k].x - self.centre).abs() + p.radius[k],
-                    p.radius[k],
-                )
-            })
-            .collect();
-        distance.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut front = 0.0;
-        for &(d, r) in &distance {
-            if d - front > 4.0 * r && front > 0.0 {
-                break;
+        let mobile: Vec<usize> = (0..p.n_owned).filter(|&k| p.inverse_mass[k] > 0.0).collect();
+        let diameter = 2.0 * mobile.iter().map(|&k| p.radius[k]).sum::<f64>() / mobile.len().max(1) as f64;
+        let vertical = Self::vertical(system);
+        let monolayer = match system.domain.dimension {
+            grainflow_core::Dimension::Two => 1.0,
+            grainflow_core::Dimension::Three => {
+                let spanwise = (0..3).find(|&a| a != 0 && a != vertical).unwrap();
+                system.domain.extent()[spanwise] / diameter
             }
-            front = d;
+        };
+        let bins = ((system.domain.extent().x / diameter).ceil() as usize).max(1);
+        let mut fronts = Vec::new();
+        for side in [-1.0, 1.0] {
+            let mut count = vec![0usize; bins];
+            for &k in &mobile {
+                let d = side * (p.position[k].x - self.centre);
+                if d >= 0.0 {
+                    count[((d / diameter) as usize).min(bins - 1)] += 1;
+                }
+            }
+            let covered = count.iter().take_while(|&&c| c as f64 >= 0.5 * monolayer).count();
+            fronts.push(covered as f64 * diameter);
         }
-        front
+        0.5 * (fronts[0] + fronts[1])
     }
 
     fn finish(&self, system: &DemSystem) -> std::io::Result<Map<String, Value>> {

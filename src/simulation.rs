@@ -254,7 +254,8 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
 /// Root-mean-square speed of the mobile grains that touch another grain,
 /// √(2 E_k / M) over them: grains that roll away alone (a disc on a floor
 /// rolls forever without rolling resistance) do not keep a deposit from
-/// being at rest. Without any grain contact, all mobile grains count.
+/// being at rest. While fewer than half the grains touch others (a falling
+/// fill), all mobile grains count.
 pub fn rms_speed(system: &DemSystem) -> f64 {
     let p = &system.particles;
     let n = p.n_owned;
@@ -273,9 +274,11 @@ pub fn rms_speed(system: &DemSystem) -> f64 {
             }
         }
     }
-    let any = touching.iter().any(|&t| t);
+    let mobile = (0..n).filter(|&k| !p.is_fixed(k)).count();
+    let in_contact = (0..n).filter(|&k| !p.is_fixed(k) && touching[k]).count();
+    let deposit_only = 2 * in_contact >= mobile;
     let (mut energy, mut mass) = (0.0, 0.0);
-    for k in (0..n).filter(|&k| !p.is_fixed(k) && (touching[k] || !any)) {
+    for k in (0..n).filter(|&k| !p.is_fixed(k) && (touching[k] || !deposit_only)) {
         energy += p.mass[k] * p.velocity[k].norm_squared();
         mass += p.mass[k];
     }
