@@ -356,48 +356,31 @@ fn silo(
         height >= exclude_bottom && height <= top - base - 2.0 * slab
     };
     let (mut shear, mut normal) = (0.0, 0.0);
-    let neighbours = &system.neighbours;
-    for (k, (&i, &j)) in neighbours.first.iter().zip(&neighbours.second).enumerate() {
-        let (i, j) = (i as usize, j as usize);
-        let force = system.pair_force[k];
-        let on_mobile = match (p.is_fixed(i), p.is_fixed(j)) {
-            (false, true) if in_fit(&p.position[i]) => force,
-            (true, false) if in_fit(&p.position[j]) => -force,
-            _ => continue,
-        };
-        let vertical_part = on_mobile.dot(&up);
-        shear += vertical_part.abs();
-        normal += (on_mobile - vertical_part * up).norm();
-    }
-    let side_walls: Vec<usize> = (0..system.walls.len())
-        .filter(|&w| system.walls[w].is_present(system.time) && system.walls[w].normal.dot(&up).abs() < 1e-9)
-        .collect();
     for &k in mobile.iter().filter(|&&k| in_fit(&p.position[k])) {
-        for &w in &side_walls {
-            let wall = &system.walls[w];
-            let overlap = p.radius[k] - wall.distance(&p.position[k]);
-            if overlap <= 0.0 {
-                continue;
-            }
-            let history = system.wall_history[k * system.wall_stride() + w];
-            let contact = system.law.force(
-                overlap,
-                wall.normal,
-                p.velocity[k] - (p.radius[k] * p.angular_velocity[k]).cross(&wall.normal),
-                p.mass[k],
-                wall.friction,
-                history,
-                0.0,
-            );
-            shear += contact.force.dot(&up).abs();
-            normal += contact.normal_force;
+        let with_glued = system
+            .particle_contacts_of(k)
+            .into_iter()
+            .filter(|c| p.is_fixed(c.partner))
+            .map(|c| c.force);
+        let with_side_walls = system
+            .wall_contacts_of(k)
+            .into_iter()
+            .filter(|(w, _)| system.walls[*w].normal.dot(&up).abs() < 1e-9)
+            .map(|(_, c)| c.force);
+        for force in with_glued.chain(with_side_walls) {
+            let vertical_part = force.dot(&up);
+            shear += vertical_part.abs();
+            normal += (force - vertical_part * up).norm();
         }
     }
     let wall_friction = shear / normal.max(f64::MIN_POSITIVE);
     let mut metrics = Map::new();
     metrics.insert("janssen_K".into(), json!(redirection));
     metrics.insert("wall_friction_mobilised".into(), json!(wall_friction));
-    metrics.insert("janssen_fwK_direct".into(), json!(wall_friction * redirection));
+    metrics.insert(
+        "janssen_fwK_direct".into(),
+        json!(wall_friction * redirection),
+    );
     metrics.insert("janssen_fwK".into(), json!(section / (perimeter * length)));
     metrics.insert("janssen_length".into(), json!(length));
     metrics.insert("saturation_pressure".into(), json!(saturation));
@@ -496,16 +479,20 @@ impl ColumnCollapse {
         }
     }
 
-    /// Front of the deposit on each side: bins of one mean diameter along
+    /// Front of the deposit on each side: bins two mean diameters wide along
     /// x are scanned outward from the centre, and the front is the outer
-    /// edge of the last bin before the first one covered by less than half
-    /// a monolayer (fewer grains than half the spanwise length over a
-    /// diameter; in 2D, fewer than half a grain). Grains that rolled or
-    /// bounced away alone do not count. Returns the mean of the two sides.
+    /// edge of the farthest grain before the first bin covered by less than
+    /// half a monolayer (in 2D, fewer than one grain in the bin; in 3D,
+    /// fewer than the spanwise length over a diameter). A chain of single grains
+    /// still counts; grains that rolled or bounced away alone do not.
+    /// Returns the mean of the two sides.
     fn front(&self, system: &DemSystem) -> f64 {
         let p = &system.particles;
-        let mobile: Vec<usize> = (0..p.n_owned).filter(|&k| p.inverse_mass[k] > 0.0).collect();
-        let diameter = 2.0 * mobile.iter().map(|&k| p.radius[k]).sum::<f64>() / mobile.len().max(1) as f64;
+        let mobile: Vec<usize> = (0..p.n_owned)
+            .filter(|&k| p.inverse_mass[k] > 0.0)
+            .collect();
+        let diameter =
+            2.0 * mobile.iter().map(|&k| p.radius[k]).sum::<f64>() / mobile.len().max(1) as f64;
         let vertical = Self::vertical(system);
         let monolayer = match system.domain.dimension {
             grainflow_core::Dimension::Two => 1.0,
@@ -514,18 +501,27 @@ impl ColumnCollapse {
                 system.domain.extent()[spanwise] / diameter
             }
         };
-        let bins = ((system.domain.extent().x / diameter).ceil() as usize).max(1);
+        let width = 2.0 * diameter;
+        let bins = ((system.domain.extent().x / width).ceil() as usize).max(1);
         let mut fronts = Vec::new();
         for side in [-1.0, 1.0] {
             let mut count = vec![0usize; bins];
             for &k in &mobile {
                 let d = side * (p.position[k].x - self.centre);
                 if d >= 0.0 {
-                    count[((d / diameter) as usize).min(bins - 1)] += 1;
+                    count[((d / width) as usize).min(bins - 1)] += 1;
                 }
             }
-            let covered = count.iter().take_while(|&&c| c as f64 >= 0.5 * monolayer).count();
-            fronts.push(covered as f64 * diameter);
+            // Half a monolayer of a bin two diameters wide; the front is the
+            // outer edge of the farthest grain in the covered bins.
+            let covered = count.iter().take_while(|&&c| c as f64 >= monolayer).count();
+            let front = mobile
+                .iter()
+                .map(|&k| (side * (p.position[k].x - self.centre), p.radius[k]))
+                .filter(|&(d, _)| d >= 0.0 && d < covered as f64 * width)
+                .map(|(d, r)| d + r)
+                .fold(0.0, f64::max);
+            fronts.push(front);
         }
         0.5 * (fronts[0] + fronts[1])
     }

@@ -134,6 +134,14 @@ pub enum BlockSection {
         #[serde(default)]
         fixed: bool,
     },
+    /// Particles read from a CSV file with the header `x,y,z,radius`
+    /// (2D: `x,y,radius`), optionally followed by velocity columns
+    /// `vx,vy[,vz]`. A relative path is relative to the case file.
+    File {
+        path: String,
+        #[serde(default)]
+        fixed: bool,
+    },
     /// Independent binary collisions, one pair per impact parameter
     /// Ψ1 = v_t / v_n from 0 to `psi_max`: particle 2k moves towards the
     /// resting particle 2k + 1 with normal speed `impact_speed`.
@@ -289,7 +297,17 @@ impl Case {
             path: path.display().to_string(),
             source,
         })?;
-        Self::from_text(&text, &path.display().to_string(), overrides)
+        let mut case = Self::from_text(&text, &path.display().to_string(), overrides)?;
+        // Files named by the case are relative to it.
+        let base = path.parent().unwrap_or(Path::new("."));
+        for block in &mut case.particles.block {
+            if let BlockSection::File { path: file, .. } = block {
+                if Path::new(file.as_str()).is_relative() {
+                    *file = base.join(file.as_str()).display().to_string();
+                }
+            }
+        }
+        Ok(case)
     }
 
     pub fn from_text(text: &str, origin: &str, overrides: &[String]) -> Result<Case, CaseError> {
@@ -471,6 +489,15 @@ impl Case {
                         positive(&key("radii"), *r)?;
                     }
                 }
+                BlockSection::File { path, .. } => {
+                    if path.is_empty() {
+                        return Err(invalid(
+                            &key("path"),
+                            "\"\"",
+                            "allowed: the path of a CSV file",
+                        ));
+                    }
+                }
                 BlockSection::CollisionPairs {
                     count,
                     impact_speed,
@@ -550,27 +577,11 @@ impl Case {
                 "allowed: \"exact\" or \"paper\"",
             ));
         }
-        if !(c.tangential_ratio >= 0.0) {
-            return Err(invalid(
-                "contact.tangential_ratio",
-                c.tangential_ratio,
-                "allowed: ≥ 0",
-            ));
-        }
-        if !(c.friction >= 0.0) {
-            return Err(invalid("contact.friction", c.friction, "allowed: ≥ 0"));
-        }
-        if !(c.rolling_friction >= 0.0) {
-            return Err(invalid(
-                "contact.rolling_friction",
-                c.rolling_friction,
-                "allowed: ≥ 0",
-            ));
-        }
+        non_negative("contact.tangential_ratio", c.tangential_ratio)?;
+        non_negative("contact.friction", c.friction)?;
+        non_negative("contact.rolling_friction", c.rolling_friction)?;
         if let Some(f) = c.wall_friction {
-            if !(f >= 0.0) {
-                return Err(invalid("contact.wall_friction", f, "allowed: ≥ 0"));
-            }
+            non_negative("contact.wall_friction", f)?;
         }
         if let Some(s) = c.skin {
             positive("contact.skin", s)?;
@@ -588,9 +599,7 @@ impl Case {
                 ));
             }
             if let Some(f) = w.friction {
-                if !(f >= 0.0) {
-                    return Err(invalid(&key("friction"), f, "allowed: ≥ 0"));
-                }
+                non_negative(&key("friction"), f)?;
             }
         }
 
@@ -640,6 +649,14 @@ fn check_len(key: &str, values: &[f64], n: usize, allowed: &str) -> Result<(), C
         return Err(invalid(key, format!("{values:?}"), allowed));
     }
     Ok(())
+}
+
+fn non_negative(key: &str, value: f64) -> Result<(), CaseError> {
+    if value >= 0.0 && value.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(key, value, "allowed: a number ≥ 0"))
+    }
 }
 
 fn positive(key: &str, value: f64) -> Result<(), CaseError> {

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 
 pub struct Outputs {
     dir: PathBuf,
+    started: std::time::Instant,
     log: File,
     series: CsvSeries,
     tracked: CsvSeries,
@@ -36,6 +37,7 @@ impl Outputs {
                 "max_overlap_ratio",
                 "max_speed",
                 "neighbour_builds",
+                "wall_seconds",
             ],
         )?;
         let tracked = CsvSeries::create(
@@ -50,6 +52,7 @@ impl Outputs {
         };
         Ok(Outputs {
             dir: dir.to_path_buf(),
+            started: std::time::Instant::now(),
             log,
             series,
             tracked,
@@ -79,6 +82,7 @@ impl Outputs {
             last.max_overlap_ratio,
             system.max_speed(),
             system.neighbours.builds as f64,
+            self.started.elapsed().as_secs_f64(),
         ])?;
         if let Some(index) = &mut self.particles {
             let p = &system.particles;

@@ -171,6 +171,10 @@ pub fn particles(case: &Case) -> Result<Vec<NewParticle>, String> {
                     fixed: *fixed,
                 })
                 .collect(),
+            BlockSection::File { path, fixed } => {
+                read_particles(path, dimension, p.density, *fixed)
+                    .map_err(|e| format!("particles.block[{k}] (file {path}): {e}"))?
+            }
             BlockSection::CollisionPairs {
                 count,
                 impact_speed,
@@ -194,6 +198,61 @@ pub fn particles(case: &Case) -> Result<Vec<NewParticle>, String> {
         all.extend(made);
     }
     Ok(all)
+}
+
+/// Reads `x,y[,z],radius[,vx,vy[,vz]]` rows after a header line.
+fn read_particles(
+    path: &str,
+    dimension: Dimension,
+    density: f64,
+    fixed: bool,
+) -> Result<Vec<NewParticle>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
+    let dim = dimension.count();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines
+        .next()
+        .ok_or("empty file")?
+        .split(',')
+        .map(str::trim)
+        .collect();
+    let names: &[&str] = if dim == 3 {
+        &["x", "y", "z", "radius"]
+    } else {
+        &["x", "y", "radius"]
+    };
+    if header.len() < names.len() || header[..names.len()] != *names {
+        return Err(format!("the header must start with {}", names.join(",")));
+    }
+    let with_velocity = header.len() >= names.len() + dim;
+    let mut out = Vec::new();
+    for (n, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let values: Result<Vec<f64>, _> =
+            line.split(',').map(|v| v.trim().parse::<f64>()).collect();
+        let values = values.map_err(|e| format!("line {}: {e}", n + 2))?;
+        if values.len() < names.len() {
+            return Err(format!("line {}: expected {} values", n + 2, names.len()));
+        }
+        let position = vector(&values[..dim]);
+        let radius = values[dim];
+        if radius.is_nan() || radius <= 0.0 {
+            return Err(format!("line {}: radius must be positive", n + 2));
+        }
+        let velocity = if with_velocity {
+            vector(&values[dim + 1..2 * dim + 1])
+        } else {
+            Vec3::zeros()
+        };
+        out.push(NewParticle {
+            position,
+            velocity,
+            angular_velocity: Vec3::zeros(),
+            radius,
+            density,
+            fixed,
+        });
+    }
+    Ok(out)
 }
 
 /// Pair k: particle 2k moving with (v_n, Ψ1 v_n) towards particle 2k + 1 at

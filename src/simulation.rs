@@ -259,21 +259,9 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
 pub fn rms_speed(system: &DemSystem) -> f64 {
     let p = &system.particles;
     let n = p.n_owned;
-    let mut touching = vec![false; n];
-    for (k, (&i, &j)) in system
-        .neighbours
-        .first
-        .iter()
-        .zip(&system.neighbours.second)
-        .enumerate()
-    {
-        if system.pair_force[k] != grainflow_core::Vec3::zeros() {
-            touching[i as usize] = true;
-            if (j as usize) < n {
-                touching[j as usize] = true;
-            }
-        }
-    }
+    let touching: Vec<bool> = (0..n)
+        .map(|k| system.contacts.get(k).is_some_and(|&c| c > 0))
+        .collect();
     let mobile = (0..n).filter(|&k| !p.is_fixed(k)).count();
     let in_contact = (0..n).filter(|&k| !p.is_fixed(k) && touching[k]).count();
     let deposit_only = 2 * in_contact >= mobile;
@@ -323,7 +311,7 @@ impl Progress {
 
     fn update(&self, time: f64, step: u64, total: u64) {
         if let Some(bar) = &self.bar {
-            if step % 200 == 0 {
+            if step.is_multiple_of(200) {
                 bar.set_position((1000.0 * step as f64 / total as f64) as u64);
                 bar.set_message(format!("step {step} t = {time:.4e} s"));
             }

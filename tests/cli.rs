@@ -129,7 +129,11 @@ fn out_of_range_values_name_the_key_and_the_allowed_range() {
         ("domain.dimension=4", "domain.dimension", "2 or 3"),
         ("contact.model=\"rigid\"", "contact.model", "\"soft\""),
         ("particles.radius=-1.0", "particles.radius", "positive"),
-        ("time.dt=1.0", "time step", "stability limit"),
+        (
+            "time.dt_over_contact_time=1.0",
+            "time step",
+            "stability limit",
+        ),
     ] {
         let (code, stderr, written) = run_with(&[assignment]);
         assert_eq!(code, 2, "{assignment}: {stderr}");

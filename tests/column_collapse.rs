@@ -17,8 +17,17 @@ const HIGHEST_PREFACTOR: f64 = 1.8 * 1.1;
 fn check_runout(summary: &serde_json::Value) {
     let a = metric(summary, "aspect_ratio");
     let runout = metric(summary, "runout");
-    println!("a = {a:.3}, runout = {runout:.3}, runout/a = {:.3}", runout / a);
-    assert!(summary["stop_reason"].as_str().unwrap().starts_with("at rest"), "{summary}");
+    println!(
+        "a = {a:.3}, runout = {runout:.3}, runout/a = {:.3}",
+        runout / a
+    );
+    assert!(
+        summary["stop_reason"]
+            .as_str()
+            .unwrap()
+            .starts_with("at rest"),
+        "{summary}"
+    );
     assert!(
         (LOWEST_PREFACTOR * a..=HIGHEST_PREFACTOR * a).contains(&runout),
         "runout {runout} at a = {a} outside [{}, {}]",
@@ -32,7 +41,11 @@ fn a_2d_column_of_aspect_ratio_one_spreads_as_published() {
     // ~200 discs: H0 ≈ R0 = 0.1 m.
     let (summary, _dir) = run(
         "column_collapse_2d.toml",
-        &["particles.block[0].count=200", "particles.block[0].upper=[0.1, 0.35]", "output.particles=false"],
+        &[
+            "particles.block[0].count=200",
+            "particles.block[0].upper=[0.1, 0.35]",
+            "output.particles=false",
+        ],
     );
     let a = metric(&summary, "aspect_ratio");
     assert!((0.8..1.3).contains(&a), "aspect ratio {a}");

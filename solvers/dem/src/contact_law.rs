@@ -144,6 +144,7 @@ impl ContactLaw {
     /// of i's contact point `relative_velocity`, the pair's effective mass,
     /// the previous tangential displacement and the time step.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)] // the scalars of one contact, kept flat for the hot loop
     pub fn force(
         &self,
         overlap: f64,

@@ -51,6 +51,7 @@ fn particle(position: Vec3, radius: f64, material: &Material) -> NewParticle {
 /// Particles on a rectangular lattice of spacing `spacing` (per axis)
 /// filling `[lower, upper]`, each displaced at random by up to `jitter`
 /// times the free room of its site.
+#[allow(clippy::too_many_arguments)]
 pub fn lattice(
     dimension: Dimension,
     lower: Vec3,

@@ -28,5 +28,5 @@ pub mod walls;
 pub use contact_law::{ContactLaw, NormalCalibration, NormalStiffness};
 pub use neighbours::NeighbourList;
 pub use particles::Particles;
-pub use system::{DemSystem, StepDiagnostics};
+pub use system::{Contact, DemSystem, StepDiagnostics};
 pub use walls::PlaneWall;

@@ -1,8 +1,10 @@
-//! Verlet pair list on a cell grid, with the tangential history of each
+//! Verlet neighbour list on a cell grid, with the tangential history of each
 //! contact.
 //!
-//! Pairs are candidate contacts within r_i + r_j + skin. A pair (i, j) always
-//! has i owned; j is owned with a larger id, or a ghost. The list is rebuilt
+//! Partners are candidate contacts within r_i + r_j + skin. Each owned
+//! particle lists all its partners (a full list, both sides of every pair):
+//! the force loop then runs over particles, each summing its own contacts in
+//! a fixed order, with no shared writes. The list is rebuilt
 //! when some particle has moved by more than half the skin since the last
 //! build, and the tangential displacement of every open contact is carried
 //! over by the pair's ids. Between builds no pair can close unnoticed.
@@ -117,16 +119,15 @@ impl CellBins {
 pub struct NeighbourList {
     /// Extra distance beyond contact within which pairs are listed.
     pub skin: f64,
-    /// Pair (first[k], second[k]); first is owned.
-    pub first: Vec<u32>,
-    pub second: Vec<u32>,
-    /// Tangential displacement ξ of each pair (zero when not in contact).
-    pub history: Vec<Vec3>,
-    /// Per owned particle p, the pairs it belongs to, in pair order:
-    /// `pair_of[offsets[p]..offsets[p + 1]]`, each `2 k` (as first) or
-    /// `2 k + 1` (as second).
+    /// Partners of owned particle i: `partner[offsets[i]..offsets[i + 1]]`,
+    /// owned or ghost, in increasing index. Every pair is listed from both
+    /// sides (a full list), so each particle sums its own forces.
     pub offsets: Vec<u32>,
-    pub pair_of: Vec<u32>,
+    pub partner: Vec<u32>,
+    /// Tangential displacement ξ of each entry, as seen from its owner
+    /// (zero when not in contact). The two entries of a pair mirror each
+    /// other exactly.
+    pub history: Vec<Vec3>,
     /// Owned positions at the last build.
     pub reference_position: Vec<Vec3>,
     bins: CellBins,
@@ -142,28 +143,39 @@ impl NeighbourList {
         }
     }
 
+    /// Number of listed (particle, partner) entries.
     pub fn len(&self) -> usize {
-        self.first.len()
+        self.partner.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.first.is_empty()
+        self.partner.is_empty()
     }
 
-    /// The tangential displacement of every open contact, keyed by the ids of
-    /// its pair. Taken before particles are reordered or ghosts rebuilt.
+    /// Entries of owned particle i.
+    #[inline]
+    pub fn range(&self, i: usize) -> std::ops::Range<usize> {
+        self.offsets[i] as usize..self.offsets[i + 1] as usize
+    }
+
+    /// The tangential displacement of every open contact, keyed by the ids
+    /// (owner, partner). Taken before particles are reordered or ghosts rebuilt.
     pub fn open_contacts(&self, particles: &Particles) -> HashMap<(u64, u64), Vec3> {
-        self.first
-            .iter()
-            .zip(&self.second)
-            .zip(&self.history)
-            .filter(|(_, h)| h.norm_squared() > 0.0)
-            .map(|((&i, &j), h)| ((particles.id[i as usize], particles.id[j as usize]), *h))
-            .collect()
+        let mut open = HashMap::new();
+        for i in 0..self.offsets.len().saturating_sub(1) {
+            for e in self.range(i) {
+                if self.history[e] != Vec3::zeros() {
+                    let j = self.partner[e] as usize;
+                    open.insert((particles.id[i], particles.id[j]), self.history[e]);
+                }
+            }
+        }
+        open
     }
 
-    /// Lists all candidate pairs of owned and ghost particles binned on
-    /// `grid`, and restores the history of the contacts in `open`.
+    /// Lists the partners of every owned particle among owned and ghost
+    /// particles binned on `grid`, and restores the history of the contacts
+    /// in `open`.
     pub fn build(
         &mut self,
         particles: &Particles,
@@ -175,15 +187,16 @@ impl NeighbourList {
         let skin = self.skin;
         let bins = &self.bins;
         let two_d = grid.counts[2] == 1;
-        let chunks: Vec<Vec<(u32, u32)>> = (0..n_owned)
+        let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n_owned)
             .collect::<Vec<_>>()
             .par_chunks(BUILD_CHUNK)
             .map(|chunk| {
-                let mut pairs = Vec::with_capacity(chunk.len() * 8);
+                let mut counts = Vec::with_capacity(chunk.len());
+                let mut partners = Vec::with_capacity(chunk.len() * 12);
                 for &i in chunk {
+                    let start = partners.len();
                     let xi = particles.position[i];
                     let ri = particles.radius[i];
-                    let id_i = particles.id[i];
                     let fixed_i = particles.inverse_mass[i] == 0.0;
                     let c = grid.coordinates(&xi);
                     let z_range = if two_d {
@@ -197,71 +210,42 @@ impl NeighbourList {
                                 let cell = grid.index([cx, cy, cz]);
                                 for &j in &bins.members[bins.start[cell]..bins.start[cell + 1]] {
                                     let j = j as usize;
-                                    let ghost = j >= n_owned;
-                                    if !ghost && particles.id[j] <= id_i {
-                                        continue;
-                                    }
-                                    if fixed_i && particles.inverse_mass[j] == 0.0 {
+                                    if j == i || (fixed_i && particles.inverse_mass[j] == 0.0) {
                                         continue;
                                     }
                                     let reach = ri + particles.radius[j] + skin;
                                     if (particles.position[j] - xi).norm_squared() < reach * reach {
-                                        pairs.push((i as u32, j as u32));
+                                        partners.push(j as u32);
                                     }
                                 }
                             }
                         }
                     }
+                    partners[start..].sort_unstable();
+                    counts.push((partners.len() - start) as u32);
                 }
-                // Within one particle, order partners by index: the pair order
-                // is then fixed by the particle order alone.
-                pairs.sort_unstable();
-                pairs
+                (counts, partners)
             })
             .collect();
 
-        self.first.clear();
-        self.second.clear();
-        for chunk in &chunks {
-            for &(i, j) in chunk {
-                self.first.push(i);
-                self.second.push(j);
-            }
-        }
-        self.history = self
-            .first
-            .iter()
-            .zip(&self.second)
-            .map(|(&i, &j)| {
-                let key = (particles.id[i as usize], particles.id[j as usize]);
-                open.get(&key).copied().unwrap_or_else(Vec3::zeros)
-            })
-            .collect();
-
-        // Gather table: each owned particle's pairs in pair order.
         self.offsets.clear();
-        self.offsets.resize(n_owned + 1, 0);
-        for (&i, &j) in self.first.iter().zip(&self.second) {
-            self.offsets[i as usize + 1] += 1;
-            if (j as usize) < n_owned {
-                self.offsets[j as usize + 1] += 1;
+        self.offsets.push(0);
+        self.partner.clear();
+        for (counts, partners) in &chunks {
+            for &c in counts {
+                let last = *self.offsets.last().unwrap();
+                self.offsets.push(last + c);
+            }
+            self.partner.extend_from_slice(partners);
+        }
+        self.history.clear();
+        for i in 0..n_owned {
+            for e in self.offsets[i] as usize..self.offsets[i + 1] as usize {
+                let key = (particles.id[i], particles.id[self.partner[e] as usize]);
+                self.history
+                    .push(open.get(&key).copied().unwrap_or_else(Vec3::zeros));
             }
         }
-        for p in 0..n_owned {
-            self.offsets[p + 1] += self.offsets[p];
-        }
-        let mut next: Vec<u32> = self.offsets[..n_owned].to_vec();
-        self.pair_of.clear();
-        self.pair_of.resize(self.offsets[n_owned] as usize, 0);
-        for (k, (&i, &j)) in self.first.iter().zip(&self.second).enumerate() {
-            self.pair_of[next[i as usize] as usize] = 2 * k as u32;
-            next[i as usize] += 1;
-            if (j as usize) < n_owned {
-                self.pair_of[next[j as usize] as usize] = 2 * k as u32 + 1;
-                next[j as usize] += 1;
-            }
-        }
-
         self.reference_position.clear();
         self.reference_position
             .extend_from_slice(&particles.position[..n_owned]);

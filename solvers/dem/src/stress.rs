@@ -13,59 +13,20 @@ use nalgebra::Matrix3;
 /// (zero for glued particles), from the last force evaluation.
 pub fn particle_moments(system: &DemSystem) -> Vec<Matrix3<f64>> {
     let p = &system.particles;
-    let n = p.n_owned;
-    let mut moments = vec![Matrix3::zeros(); n];
-    for (k, (&i, &j)) in system
-        .neighbours
-        .first
-        .iter()
-        .zip(&system.neighbours.second)
-        .enumerate()
-    {
-        let (i, j) = (i as usize, j as usize);
-        let force = system.pair_force[k];
-        if force.norm_squared() == 0.0 {
-            continue;
-        }
-        let normal = (p.position[i] - p.position[j]).normalize();
-        // Force on i acts at −r_i n from i; on j, −force acts at +r_j n.
-        if p.inverse_mass[i] > 0.0 {
-            moments[i] += force * (-p.radius[i] * normal).transpose();
-        }
-        if j < n && p.inverse_mass[j] > 0.0 {
-            moments[j] += (-force) * (p.radius[j] * normal).transpose();
-        }
-    }
-    for (k, moment) in moments.iter_mut().enumerate() {
-        if p.inverse_mass[k] == 0.0 {
-            continue;
-        }
-        for wall in system.walls.iter().filter(|w| w.is_present(system.time)) {
-            let gap = wall.distance(&p.position[k]) - p.radius[k];
-            if gap >= 0.0 {
-                continue;
+    (0..p.n_owned)
+        .map(|i| {
+            let mut moment = Matrix3::zeros();
+            if p.is_fixed(i) {
+                return moment;
             }
-            // The wall force is recovered from the stored history through the
-            // same law, without advancing it.
-            let w = system
-                .walls
-                .iter()
-                .position(|x| std::ptr::eq(x, wall))
-                .unwrap();
-            let history = system.wall_history[k * system.wall_stride() + w];
-            let relative_velocity =
-                p.velocity[k] - (p.radius[k] * p.angular_velocity[k]).cross(&wall.normal);
-            let contact = system.law.force(
-                -gap,
-                wall.normal,
-                relative_velocity,
-                p.mass[k],
-                wall.friction,
-                history,
-                0.0,
-            );
-            *moment += contact.force * (-p.radius[k] * wall.normal).transpose();
-        }
-    }
-    moments
+            // Every contact acts at −r_i n from the centre.
+            for c in system.particle_contacts_of(i) {
+                moment += c.force * (-p.radius[i] * c.normal).transpose();
+            }
+            for (_, c) in system.wall_contacts_of(i) {
+                moment += c.force * (-p.radius[i] * c.normal).transpose();
+            }
+            moment
+        })
+        .collect()
 }

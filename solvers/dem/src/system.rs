@@ -19,7 +19,18 @@ use rayon::prelude::*;
 /// Smallest amount of work handed to one thread: below it the loops run on
 /// the calling thread, so small scenes pay no synchronisation.
 const PARTICLES_PER_TASK: usize = 256;
-const PAIRS_PER_TASK: usize = 1024;
+
+/// A contact as seen from one of its particles.
+#[derive(Clone, Copy, Debug)]
+pub struct Contact {
+    /// Index of the partner particle (`usize::MAX` for a wall).
+    pub partner: usize,
+    /// Unit normal from the partner to this particle.
+    pub normal: Vec3,
+    /// Force on this particle.
+    pub force: Vec3,
+    pub normal_force: f64,
+}
 
 /// Per-step measures used to detect a run going wrong.
 #[derive(Clone, Copy, Debug, Default)]
@@ -48,11 +59,9 @@ pub struct DemSystem {
     pub wall_history: Vec<Vec3>,
     pub neighbours: NeighbourList,
     ghosts: Ghosts,
-    /// Force on `first`, and the torques on `first` and on `second`, of each
-    /// pair from the last force evaluation.
-    pub pair_force: Vec<Vec3>,
-    pub pair_torque_first: Vec<Vec3>,
-    pub pair_torque_second: Vec<Vec3>,
+    /// Particle–particle contacts of each owned particle at the last force
+    /// evaluation (its coordination number).
+    pub contacts: Vec<u32>,
     pub time: f64,
     pub steps: u64,
     pub last: StepDiagnostics,
@@ -71,9 +80,7 @@ impl DemSystem {
             wall_history: Vec::new(),
             neighbours: NeighbourList::new(skin),
             ghosts: Ghosts::default(),
-            pair_force: Vec::new(),
-            pair_torque_first: Vec::new(),
-            pair_torque_second: Vec::new(),
+            contacts: Vec::new(),
             time: 0.0,
             steps: 0,
             last: StepDiagnostics::default(),
@@ -226,178 +233,240 @@ impl DemSystem {
 
     /// Contact forces and gravity on every owned particle; `dt` advances the
     /// tangential histories (0 evaluates without advancing them).
+    ///
+    /// One parallel loop over particles: each sums its own contacts (the
+    /// full neighbour list), its wall contacts and gravity, in a fixed order,
+    /// so the result does not depend on the number of threads, and the two
+    /// sides of a pair compute exactly opposite forces.
     pub fn compute_forces(&mut self, dt: f64) -> StepDiagnostics {
-        let p = &self.particles;
+        let n = self.particles.n_owned;
         let law = self.law;
-        let friction = law.friction;
-        let pairs = self.neighbours.len();
-        self.pair_force.resize(pairs, Vec3::zeros());
-        self.pair_torque_first.resize(pairs, Vec3::zeros());
-        self.pair_torque_second.resize(pairs, Vec3::zeros());
         let rolling = law.rolling_friction > 0.0;
-
-        // Eq. 13–16 for every listed pair.
-        let (max_pair_overlap, particle_contacts) = self
-            .neighbours
-            .first
-            .par_iter()
-            .zip(self.neighbours.second.par_iter())
-            .zip(self.neighbours.history.par_iter_mut())
-            .zip(self.pair_force.par_iter_mut())
-            .zip(self.pair_torque_first.par_iter_mut())
-            .zip(self.pair_torque_second.par_iter_mut())
-            .with_min_len(PAIRS_PER_TASK)
-            .map(|(((((&i, &j), history), force), torque_i), torque_j)| {
-                let (i, j) = (i as usize, j as usize);
-                let branch = p.position[i] - p.position[j];
-                let (ri, rj) = (p.radius[i], p.radius[j]);
-                let distance_sq = branch.norm_squared();
-                let reach = ri + rj;
-                if distance_sq >= reach * reach {
-                    *history = Vec3::zeros();
-                    *force = Vec3::zeros();
-                    *torque_i = Vec3::zeros();
-                    *torque_j = Vec3::zeros();
-                    return (0.0, 0usize);
-                }
-                let distance = distance_sq.sqrt();
-                let normal = branch / distance;
-                let overlap = reach - distance;
-                let relative_velocity = p.velocity[i]
-                    - p.velocity[j]
-                    - (ri * p.angular_velocity[i] + rj * p.angular_velocity[j]).cross(&normal);
-                let effective_mass = 1.0 / (p.inverse_mass[i] + p.inverse_mass[j]);
-                let contact = law.force(
-                    overlap,
-                    normal,
-                    relative_velocity,
-                    effective_mass,
-                    friction,
-                    *history,
-                    dt,
-                );
-                if dt > 0.0 {
-                    *history = contact.history;
-                }
-                *force = contact.force;
-                // Eq. 14: F_t acts at −r_i n on i and (as −F_t) at +r_j n on j.
-                let tangential_torque = -normal.cross(&contact.tangential);
-                *torque_i = ri * tangential_torque;
-                *torque_j = rj * tangential_torque;
-                if rolling {
-                    let inverse_inertia = p.inverse_inertia[i] + p.inverse_inertia[j];
-                    let resistance = law.rolling_torque(
-                        normal,
-                        p.angular_velocity[i] - p.angular_velocity[j],
-                        contact.normal_force,
-                        ri * rj / (ri + rj),
-                        1.0 / inverse_inertia,
-                        dt,
-                    );
-                    *torque_i += resistance;
-                    *torque_j -= resistance;
-                }
-                (overlap / ri.min(rj), 1usize)
-            })
-            .reduce(|| (0.0, 0), |a, b| (a.0.max(b.0), a.1 + b.1));
-
-        // Gather per owned particle, in pair order, then walls and gravity.
-        let n_owned = p.n_owned;
         let walls = &self.walls;
         let wall_stride = self.wall_stride();
         let time = self.time;
         let gravity = self.domain.gravity;
         let offsets = &self.neighbours.offsets;
-        let pair_of = &self.neighbours.pair_of;
-        let pair_force = &self.pair_force;
-        let pair_torque_first = &self.pair_torque_first;
-        let pair_torque_second = &self.pair_torque_second;
+        let partner = &self.neighbours.partner;
+
+        // Disjoint slices of the history, one per chunk of particles.
+        let mut history_chunks: Vec<&mut [Vec3]> = Vec::with_capacity(n / PARTICLES_PER_TASK + 1);
+        let mut rest: &mut [Vec3] = &mut self.neighbours.history;
+        for start in (0..n).step_by(PARTICLES_PER_TASK) {
+            let end = (start + PARTICLES_PER_TASK).min(n);
+            let (head, tail) = rest.split_at_mut((offsets[end] - offsets[start]) as usize);
+            history_chunks.push(head);
+            rest = tail;
+        }
+
         let mut force = std::mem::take(&mut self.particles.force);
         let mut torque = std::mem::take(&mut self.particles.torque);
+        self.contacts.resize(n, 0);
         let p = &self.particles;
-        let wall_history: &mut [Vec3] = &mut self.wall_history;
-        let (max_wall_overlap, wall_contacts) = force[..n_owned]
-            .par_iter_mut()
-            .zip(torque[..n_owned].par_iter_mut())
-            .zip(wall_history.par_chunks_mut(wall_stride))
+        let (max_overlap_ratio, entries, wall_contacts) = force[..n]
+            .par_chunks_mut(PARTICLES_PER_TASK)
+            .zip(torque[..n].par_chunks_mut(PARTICLES_PER_TASK))
+            .zip(
+                self.wall_history
+                    .par_chunks_mut(PARTICLES_PER_TASK * wall_stride),
+            )
+            .zip(self.contacts.par_chunks_mut(PARTICLES_PER_TASK))
+            .zip(history_chunks.into_par_iter())
             .enumerate()
-            .with_min_len(PARTICLES_PER_TASK)
-            .map(|(k, ((f, t), histories))| {
-                let mut total_force = Vec3::zeros();
-                let mut total_torque = Vec3::zeros();
-                let radius = p.radius[k];
-                for &entry in &pair_of[offsets[k] as usize..offsets[k + 1] as usize] {
-                    let pair = (entry >> 1) as usize;
-                    if entry & 1 == 0 {
-                        total_force += pair_force[pair];
-                        total_torque += pair_torque_first[pair];
-                    } else {
-                        total_force -= pair_force[pair];
-                        total_torque += pair_torque_second[pair];
-                    }
-                }
-                let mut max_overlap: f64 = 0.0;
-                let mut contacts = 0usize;
-                if p.inverse_mass[k] > 0.0 {
-                    for (w, wall) in walls.iter().enumerate() {
-                        let history = &mut histories[w];
-                        if !wall.is_present(time) {
-                            *history = Vec3::zeros();
-                            continue;
-                        }
-                        let overlap = radius - wall.distance(&p.position[k]);
-                        if overlap <= 0.0 {
-                            *history = Vec3::zeros();
-                            continue;
-                        }
-                        let normal = wall.normal;
-                        let relative_velocity =
-                            p.velocity[k] - (radius * p.angular_velocity[k]).cross(&normal);
-                        let contact = law.force(
-                            overlap,
-                            normal,
-                            relative_velocity,
-                            p.mass[k],
-                            wall.friction,
-                            *history,
-                            dt,
+            .map(
+                |(chunk, ((((forces, torques), wall_histories), counts), histories))| {
+                    let first = chunk * PARTICLES_PER_TASK;
+                    let history_base = offsets[first] as usize;
+                    let mut max_overlap: f64 = 0.0;
+                    let (mut entries, mut wall_contacts) = (0usize, 0usize);
+                    for local in 0..forces.len() {
+                        let i = first + local;
+                        let (xi, vi, wi, ri) = (
+                            p.position[i],
+                            p.velocity[i],
+                            p.angular_velocity[i],
+                            p.radius[i],
                         );
-                        if dt > 0.0 {
-                            *history = contact.history;
-                        }
-                        total_force += contact.force;
-                        total_torque -= radius * normal.cross(&contact.tangential);
-                        if rolling {
-                            total_torque += law.rolling_torque(
+                        let mut total_force = Vec3::zeros();
+                        let mut total_torque = Vec3::zeros();
+                        let mut count = 0u32;
+                        for e in offsets[i] as usize..offsets[i + 1] as usize {
+                            let j = partner[e] as usize;
+                            let history = &mut histories[e - history_base];
+                            let branch = xi - p.position[j];
+                            let rj = p.radius[j];
+                            let reach = ri + rj;
+                            let distance_sq = branch.norm_squared();
+                            if distance_sq >= reach * reach {
+                                *history = Vec3::zeros();
+                                continue;
+                            }
+                            // Eq. 13–16, normal from j to i.
+                            let distance = distance_sq.sqrt();
+                            let normal = branch / distance;
+                            let overlap = reach - distance;
+                            let wj = p.angular_velocity[j];
+                            let relative_velocity =
+                                vi - p.velocity[j] - (ri * wi + rj * wj).cross(&normal);
+                            let effective_mass = 1.0 / (p.inverse_mass[i] + p.inverse_mass[j]);
+                            let contact = law.force(
+                                overlap,
                                 normal,
-                                p.angular_velocity[k],
-                                contact.normal_force,
-                                radius,
-                                1.0 / p.inverse_inertia[k],
+                                relative_velocity,
+                                effective_mass,
+                                law.friction,
+                                *history,
                                 dt,
                             );
+                            if dt > 0.0 {
+                                *history = contact.history;
+                            }
+                            total_force += contact.force;
+                            // Eq. 14: F_t acts on i at −r_i n.
+                            total_torque -= ri * normal.cross(&contact.tangential);
+                            if rolling {
+                                total_torque += law.rolling_torque(
+                                    normal,
+                                    wi - wj,
+                                    contact.normal_force,
+                                    ri * rj / reach,
+                                    1.0 / (p.inverse_inertia[i] + p.inverse_inertia[j]),
+                                    dt,
+                                );
+                            }
+                            max_overlap = max_overlap.max(overlap / ri.min(rj));
+                            count += 1;
                         }
-                        max_overlap = max_overlap.max(overlap / radius);
-                        contacts += 1;
+                        if p.inverse_mass[i] > 0.0 {
+                            let wall_history =
+                                &mut wall_histories[local * wall_stride..(local + 1) * wall_stride];
+                            for (w, wall) in walls.iter().enumerate() {
+                                let history = &mut wall_history[w];
+                                let overlap = ri - wall.distance(&xi);
+                                if overlap <= 0.0 || !wall.is_present(time) {
+                                    *history = Vec3::zeros();
+                                    continue;
+                                }
+                                let normal = wall.normal;
+                                let relative_velocity = vi - (ri * wi).cross(&normal);
+                                let contact = law.force(
+                                    overlap,
+                                    normal,
+                                    relative_velocity,
+                                    p.mass[i],
+                                    wall.friction,
+                                    *history,
+                                    dt,
+                                );
+                                if dt > 0.0 {
+                                    *history = contact.history;
+                                }
+                                total_force += contact.force;
+                                total_torque -= ri * normal.cross(&contact.tangential);
+                                if rolling {
+                                    total_torque += law.rolling_torque(
+                                        normal,
+                                        wi,
+                                        contact.normal_force,
+                                        ri,
+                                        1.0 / p.inverse_inertia[i],
+                                        dt,
+                                    );
+                                }
+                                max_overlap = max_overlap.max(overlap / ri);
+                                wall_contacts += 1;
+                            }
+                            total_force += p.mass[i] * gravity;
+                        }
+                        forces[local] = total_force;
+                        torques[local] = total_torque;
+                        counts[local] = count;
+                        entries += count as usize;
                     }
-                    total_force += p.mass[k] * gravity;
-                }
-                *f = total_force;
-                *t = total_torque;
-                (max_overlap, contacts)
-            })
-            .reduce(|| (0.0, 0), |a, b| (a.0.max(b.0), a.1 + b.1));
+                    (max_overlap, entries, wall_contacts)
+                },
+            )
+            .reduce(|| (0.0, 0, 0), |a, b| (a.0.max(b.0), a.1 + b.1, a.2 + b.2));
         self.particles.force = force;
         self.particles.torque = torque;
 
         StepDiagnostics {
-            max_overlap_ratio: self
-                .communicator
-                .max(max_pair_overlap.max(max_wall_overlap)),
-            particle_contacts: self.communicator.sum_count(particle_contacts),
+            max_overlap_ratio: self.communicator.max(max_overlap_ratio),
+            // Each contact is seen from both of its particles.
+            particle_contacts: self.communicator.sum_count(entries) / 2,
             wall_contacts: self.communicator.sum_count(wall_contacts),
             non_finite: false,
         }
+    }
+
+    /// The contacts of owned particle i with other particles, as evaluated
+    /// by the last force computation (for analyses: stresses, coordination).
+    pub fn particle_contacts_of(&self, i: usize) -> Vec<Contact> {
+        let p = &self.particles;
+        let mut out = Vec::new();
+        for e in self.neighbours.range(i) {
+            let j = self.neighbours.partner[e] as usize;
+            let branch = p.position[i] - p.position[j];
+            let reach = p.radius[i] + p.radius[j];
+            if branch.norm_squared() >= reach * reach {
+                continue;
+            }
+            let distance = branch.norm();
+            let normal = branch / distance;
+            let relative_velocity = p.velocity[i]
+                - p.velocity[j]
+                - (p.radius[i] * p.angular_velocity[i] + p.radius[j] * p.angular_velocity[j])
+                    .cross(&normal);
+            let contact = self.law.force(
+                reach - distance,
+                normal,
+                relative_velocity,
+                1.0 / (p.inverse_mass[i] + p.inverse_mass[j]),
+                self.law.friction,
+                self.neighbours.history[e],
+                0.0,
+            );
+            out.push(Contact {
+                partner: j,
+                normal,
+                force: contact.force,
+                normal_force: contact.normal_force,
+            });
+        }
+        out
+    }
+
+    /// The contacts of owned particle i with walls (normal = the wall's).
+    pub fn wall_contacts_of(&self, i: usize) -> Vec<(usize, Contact)> {
+        let p = &self.particles;
+        let mut out = Vec::new();
+        for (w, wall) in self.walls.iter().enumerate() {
+            let overlap = p.radius[i] - wall.distance(&p.position[i]);
+            if overlap <= 0.0 || !wall.is_present(self.time) || p.inverse_mass[i] == 0.0 {
+                continue;
+            }
+            let relative_velocity =
+                p.velocity[i] - (p.radius[i] * p.angular_velocity[i]).cross(&wall.normal);
+            let contact = self.law.force(
+                overlap,
+                wall.normal,
+                relative_velocity,
+                p.mass[i],
+                wall.friction,
+                self.wall_history[i * self.wall_stride() + w],
+                0.0,
+            );
+            out.push((
+                w,
+                Contact {
+                    partner: usize::MAX,
+                    normal: wall.normal,
+                    force: contact.force,
+                    normal_force: contact.normal_force,
+                },
+            ));
+        }
+        out
     }
 
     /// Largest particle speed (owned, over all ranks).
@@ -463,16 +532,19 @@ mod tests {
         system.add_particles(&new);
 
         let p = &system.particles;
-        let listed: BTreeSet<(u64, u64)> = system
-            .neighbours
-            .first
-            .iter()
-            .zip(&system.neighbours.second)
-            .map(|(&i, &j)| {
-                let (a, b) = (p.id[i as usize], p.id[j as usize]);
-                (a.min(b), a.max(b))
-            })
-            .collect();
+        let mut listed = BTreeSet::new();
+        let mut entries = Vec::new();
+        for i in 0..p.n_owned {
+            for e in system.neighbours.range(i) {
+                let j = system.neighbours.partner[e] as usize;
+                entries.push((p.id[i], p.id[j]));
+                listed.insert((p.id[i].min(p.id[j]), p.id[i].max(p.id[j])));
+            }
+        }
+        // A full list: each pair from both sides, exactly once each.
+        let unique: BTreeSet<(u64, u64)> = entries.iter().copied().collect();
+        assert_eq!(unique.len(), entries.len());
+        assert_eq!(entries.len(), 2 * listed.len());
         let mut expected = BTreeSet::new();
         let extent = domain.extent();
         for a in 0..new.len() {
@@ -488,8 +560,5 @@ mod tests {
         }
         assert!(expected.len() > 1000);
         assert_eq!(listed, expected);
-        // Owned-owned pairs appear once; a pair across the boundary appears
-        // once from each side (one ghost each).
-        assert!(system.neighbours.len() >= expected.len());
     }
 }
