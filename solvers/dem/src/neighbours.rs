@@ -12,7 +12,6 @@
 use crate::particles::Particles;
 use grainflow_core::{Dimension, Vec3};
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// Particles per parallel build chunk: fixed, so the pair order does not
 /// depend on the number of threads.
@@ -158,41 +157,36 @@ impl NeighbourList {
         self.offsets[i] as usize..self.offsets[i + 1] as usize
     }
 
-    /// The tangential displacement of every open contact, keyed by the ids
-    /// (owner, partner). Taken before particles are reordered or ghosts rebuilt.
-    pub fn open_contacts(&self, particles: &Particles) -> HashMap<(u64, u64), Vec3> {
-        let mut open = HashMap::new();
-        for i in 0..self.offsets.len().saturating_sub(1) {
-            for e in self.range(i) {
-                if self.history[e] != Vec3::zeros() {
-                    let j = self.partner[e] as usize;
-                    open.insert((particles.id[i], particles.id[j]), self.history[e]);
-                }
-            }
+    /// Takes the current list out, to carry its open contacts into the next
+    /// build (before particles are reordered or ghosts rebuilt).
+    pub fn take_previous(&mut self, particles: &Particles) -> PreviousList {
+        let n = self.offsets.len().saturating_sub(1);
+        PreviousList {
+            ids: particles.id.clone(),
+            old_index: (0..n).collect(),
+            offsets: std::mem::take(&mut self.offsets),
+            partner: std::mem::take(&mut self.partner),
+            history: std::mem::take(&mut self.history),
         }
-        open
     }
 
     /// Lists the partners of every owned particle among owned and ghost
     /// particles binned on `grid`, and restores the history of the contacts
-    /// in `open`.
-    pub fn build(
-        &mut self,
-        particles: &Particles,
-        grid: &CellGrid,
-        open: &HashMap<(u64, u64), Vec3>,
-    ) {
+    /// open in the `previous` list.
+    pub fn build(&mut self, particles: &Particles, grid: &CellGrid, previous: &PreviousList) {
         self.bins.fill(grid, &particles.position);
         let n_owned = particles.n_owned;
         let skin = self.skin;
         let bins = &self.bins;
         let two_d = grid.counts[2] == 1;
-        let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n_owned)
+        let chunks: Vec<(Vec<u32>, Vec<u32>, Vec<Vec3>)> = (0..n_owned)
             .collect::<Vec<_>>()
             .par_chunks(BUILD_CHUNK)
             .map(|chunk| {
                 let mut counts = Vec::with_capacity(chunk.len());
                 let mut partners = Vec::with_capacity(chunk.len() * 12);
+                let mut histories = Vec::with_capacity(chunk.len() * 12);
+                let mut open: Vec<(u64, Vec3)> = Vec::new();
                 for &i in chunk {
                     let start = partners.len();
                     let xi = particles.position[i];
@@ -223,32 +217,74 @@ impl NeighbourList {
                     }
                     partners[start..].sort_unstable();
                     counts.push((partners.len() - start) as u32);
+                    // Carry over the open contacts of this particle, matched
+                    // by the partner's id.
+                    previous.open_contacts_of(i, &mut open);
+                    for &j in &partners[start..] {
+                        let id = particles.id[j as usize];
+                        let history = open.iter().find(|(k, _)| *k == id).map(|&(_, h)| h);
+                        histories.push(history.unwrap_or_else(Vec3::zeros));
+                    }
                 }
-                (counts, partners)
+                (counts, partners, histories)
             })
             .collect();
 
         self.offsets.clear();
         self.offsets.push(0);
         self.partner.clear();
-        for (counts, partners) in &chunks {
+        self.history.clear();
+        for (counts, partners, histories) in &chunks {
             for &c in counts {
                 let last = *self.offsets.last().unwrap();
                 self.offsets.push(last + c);
             }
             self.partner.extend_from_slice(partners);
-        }
-        self.history.clear();
-        for i in 0..n_owned {
-            for e in self.offsets[i] as usize..self.offsets[i + 1] as usize {
-                let key = (particles.id[i], particles.id[self.partner[e] as usize]);
-                self.history
-                    .push(open.get(&key).copied().unwrap_or_else(Vec3::zeros));
-            }
+            self.history.extend_from_slice(histories);
         }
         self.reference_position.clear();
         self.reference_position
             .extend_from_slice(&particles.position[..n_owned]);
         self.builds += 1;
+    }
+}
+
+/// The neighbour list of the previous build, kept to carry the tangential
+/// history of open contacts into the next one.
+#[derive(Clone, Debug, Default)]
+pub struct PreviousList {
+    /// Ids of the particles (owned and ghosts) at the previous build.
+    ids: Vec<u64>,
+    /// Previous index of each current owned particle.
+    old_index: Vec<usize>,
+    offsets: Vec<u32>,
+    partner: Vec<u32>,
+    history: Vec<Vec3>,
+}
+
+impl PreviousList {
+    /// Follows a reordering of the owned particles (new k was old `order[k]`).
+    pub fn reorder(&mut self, order: &[usize]) {
+        // Particles added since the previous build have no entry there.
+        self.old_index = order
+            .iter()
+            .map(|&k| self.old_index.get(k).copied().unwrap_or(usize::MAX))
+            .collect();
+    }
+
+    /// The open contacts (partner id, ξ) of the current owned particle i.
+    fn open_contacts_of(&self, i: usize, open: &mut Vec<(u64, Vec3)>) {
+        open.clear();
+        let Some(&old) = self.old_index.get(i) else {
+            return;
+        };
+        if old == usize::MAX || old + 1 >= self.offsets.len() {
+            return;
+        }
+        for e in self.offsets[old] as usize..self.offsets[old + 1] as usize {
+            if self.history[e] != Vec3::zeros() {
+                open.push((self.ids[self.partner[e] as usize], self.history[e]));
+            }
+        }
     }
 }

@@ -138,7 +138,9 @@ impl DemSystem {
 
     /// Migration, locality sort, ghosts and pair list.
     pub fn rebuild(&mut self) {
-        let open = self.neighbours.open_contacts(&self.particles);
+        // The old list, with the ids of all particles (owned and ghosts) it
+        // refers to, carries the open contacts over to the new one.
+        let mut previous = self.neighbours.take_previous(&self.particles);
         self.particles.clear_ghosts();
         for x in &mut self.particles.position {
             self.domain.wrap(x);
@@ -150,6 +152,7 @@ impl DemSystem {
         bins.fill(&grid, &self.particles.position);
         let order: Vec<usize> = bins.members.iter().map(|&k| k as usize).collect();
         if order.iter().enumerate().any(|(k, &o)| k != o) {
+            previous.reorder(&order);
             self.particles.permute_owned(&order);
             let stride = self.wall_stride();
             let old = std::mem::take(&mut self.wall_history);
@@ -161,7 +164,7 @@ impl DemSystem {
 
         let range = self.interaction_range();
         self.ghosts.build(&mut self.particles, &self.domain, range);
-        self.neighbours.build(&self.particles, &grid, &open);
+        self.neighbours.build(&self.particles, &grid, &previous);
     }
 
     /// Advances the particles by one step of size `dt`.
@@ -298,7 +301,11 @@ impl DemSystem {
                             let reach = ri + rj;
                             let distance_sq = branch.norm_squared();
                             if distance_sq >= reach * reach {
-                                *history = Vec3::zeros();
+                                // Most listed partners are apart: write
+                                // only when a contact just opened.
+                                if *history != Vec3::zeros() {
+                                    *history = Vec3::zeros();
+                                }
                                 continue;
                             }
                             // Eq. 13–16, normal from j to i.
