@@ -14,7 +14,7 @@ figure, sweeps = sys.argv[1], sys.argv[2:]
 root = os.path.join(os.path.dirname(__file__), "..")
 fig, ax = plt.subplots(figsize=(5.5, 4.2))
 reference = list(csv.DictReader(open(os.path.join(root, "docs/reference/column_collapse_runout.csv"))))
-sources = sorted({r["source"] for r in reference if "axisymmetric" not in r["source"].lower()})
+sources = sorted({r["source"] for r in reference if "axisym" not in r["source"].lower()})
 for source in sources:
     pts = [(float(r["a"]), float(r["runout"])) for r in reference if r["source"] == source]
     pts.sort()

@@ -15,7 +15,7 @@ SPREAD = 0.1
 # Solid fraction of the settled column and of the random fill (measured on
 # the reduced columns of tests/column_collapse.rs).
 SETTLED = {2: 0.75, 3: 0.53}
-FILL = {2: 0.45, 3: 0.30}
+FILL = {2: 0.45, 3: 0.22}
 
 
 def main():
