@@ -587,6 +587,13 @@ impl Case {
             positive("contact.skin", s)?;
         }
 
+        if self.walls.len() > 64 {
+            return Err(invalid(
+                "walls",
+                self.walls.len(),
+                "allowed: at most 64 walls",
+            ));
+        }
         for (k, w) in self.walls.iter().enumerate() {
             let key = |name: &str| format!("walls[{k}].{name}");
             check_len(&key("point"), &w.point, dim, &need)?;

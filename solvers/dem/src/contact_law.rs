@@ -67,14 +67,21 @@ impl NormalStiffness {
     /// (k_n, γ_n) for a pair of effective mass `effective_mass`.
     #[inline(always)]
     pub fn coefficients(&self, effective_mass: f64) -> (f64, f64) {
+        self.coefficients_from_inverse_mass(1.0 / effective_mass)
+    }
+
+    /// (k_n, γ_n) for a pair with 1/m_i + 1/m_j = `inverse_mass_sum` (the
+    /// division is done only where the law needs m*).
+    #[inline(always)]
+    pub fn coefficients_from_inverse_mass(&self, inverse_mass_sum: f64) -> (f64, f64) {
         match *self {
             NormalStiffness::FromRestitution {
                 stiffness_per_mass,
                 damping_per_mass,
                 ..
             } => (
-                effective_mass * stiffness_per_mass,
-                effective_mass * damping_per_mass,
+                stiffness_per_mass / inverse_mass_sum,
+                damping_per_mass / inverse_mass_sum,
             ),
             NormalStiffness::Fixed { stiffness, damping } => (stiffness, damping),
         }
@@ -141,7 +148,8 @@ pub struct ContactForce {
 impl ContactLaw {
     /// Contact force on i from the overlap `overlap` > 0 along the unit
     /// normal `normal` (pointing from the partner to i), the relative velocity
-    /// of i's contact point `relative_velocity`, the pair's effective mass,
+    /// of i's contact point `relative_velocity`, the pair's 1/m_i + 1/m_j
+    /// (1/m* ; 1/m_i against a wall),
     /// the previous tangential displacement and the time step.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)] // the scalars of one contact, kept flat for the hot loop
@@ -150,38 +158,38 @@ impl ContactLaw {
         overlap: f64,
         normal: Vec3,
         relative_velocity: Vec3,
-        effective_mass: f64,
+        inverse_mass_sum: f64,
         friction: f64,
         history: Vec3,
         dt: f64,
     ) -> ContactForce {
-        let (k_n, gamma_n) = self.normal.coefficients(effective_mass);
+        let (k_n, gamma_n) = self.normal.coefficients_from_inverse_mass(inverse_mass_sum);
         let normal_speed = relative_velocity.dot(&normal);
         let normal_force = (k_n * overlap - gamma_n * normal_speed).max(0.0);
         let tangential_velocity = relative_velocity - normal_speed * normal;
 
         // Keep the history in the current tangent plane at its length (the
         // contact frame rotates with the pair), then accumulate the slip.
-        let mut displacement = history - history.dot(&normal) * normal;
+        let mut displacement = tangential_velocity * dt;
         let old_length_sq = history.norm_squared();
-        let new_length_sq = displacement.norm_squared();
-        if new_length_sq > 0.0 {
-            displacement *= (old_length_sq / new_length_sq).sqrt();
+        if old_length_sq > 0.0 {
+            let rotated = history - history.dot(&normal) * normal;
+            let new_length_sq = rotated.norm_squared();
+            if new_length_sq > 0.0 {
+                displacement += rotated * (old_length_sq / new_length_sq).sqrt();
+            }
         }
-        displacement += tangential_velocity * dt;
 
         let k_t = self.tangential_ratio * k_n;
         let mut tangential = -k_t * displacement;
         let limit = friction * normal_force;
         let magnitude_sq = tangential.norm_squared();
         if magnitude_sq > limit * limit {
-            // Eq. 16: sliding; the spring is reset to the Coulomb force.
-            tangential *= limit / magnitude_sq.sqrt();
-            displacement = if k_t > 0.0 {
-                -tangential / k_t
-            } else {
-                Vec3::zeros()
-            };
+            // Eq. 16: sliding; the spring is shortened to the Coulomb force
+            // (F_t = −k_t ξ, so ξ scales with F_t).
+            let scale = limit / magnitude_sq.sqrt();
+            tangential *= scale;
+            displacement *= scale;
         }
         ContactForce {
             force: normal_force * normal + tangential,

@@ -57,6 +57,9 @@ pub struct DemSystem {
     /// Tangential displacement of each owned particle against each wall:
     /// `wall_history[p * wall_stride() + w]`.
     pub wall_history: Vec<Vec3>,
+    /// Bit w set while owned particle p touches wall w (so that the loop
+    /// reads a wall history only for contacts that are or were open).
+    wall_touching: Vec<u64>,
     pub neighbours: NeighbourList,
     ghosts: Ghosts,
     /// Particle–particle contacts of each owned particle at the last force
@@ -78,6 +81,7 @@ impl DemSystem {
             law,
             walls,
             wall_history: Vec::new(),
+            wall_touching: Vec::new(),
             neighbours: NeighbourList::new(skin),
             ghosts: Ghosts::default(),
             contacts: Vec::new(),
@@ -108,6 +112,7 @@ impl DemSystem {
         }
         self.wall_history
             .resize(self.particles.n_owned * self.wall_stride(), Vec3::zeros());
+        self.wall_touching.resize(self.particles.n_owned, 0);
         self.rebuild();
         self.compute_forces(0.0);
     }
@@ -155,6 +160,7 @@ impl DemSystem {
             previous.reorder(&order);
             self.particles.permute_owned(&order);
             let stride = self.wall_stride();
+            self.wall_touching = order.iter().map(|&o| self.wall_touching[o]).collect();
             let old = std::mem::take(&mut self.wall_history);
             self.wall_history = order
                 .iter()
@@ -275,9 +281,13 @@ impl DemSystem {
             )
             .zip(self.contacts.par_chunks_mut(PARTICLES_PER_TASK))
             .zip(history_chunks.into_par_iter())
+            .zip(self.wall_touching.par_chunks_mut(PARTICLES_PER_TASK))
             .enumerate()
             .map(
-                |(chunk, ((((forces, torques), wall_histories), counts), histories))| {
+                |(
+                    chunk,
+                    (((((forces, torques), wall_histories), counts), histories), touching),
+                )| {
                     let first = chunk * PARTICLES_PER_TASK;
                     let history_base = offsets[first] as usize;
                     let mut max_overlap: f64 = 0.0;
@@ -310,17 +320,16 @@ impl DemSystem {
                             }
                             // Eq. 13–16, normal from j to i.
                             let distance = distance_sq.sqrt();
-                            let normal = branch / distance;
+                            let normal = branch * (1.0 / distance);
                             let overlap = reach - distance;
                             let wj = p.angular_velocity[j];
                             let relative_velocity =
                                 vi - p.velocity[j] - (ri * wi + rj * wj).cross(&normal);
-                            let effective_mass = 1.0 / (p.inverse_mass[i] + p.inverse_mass[j]);
                             let contact = law.force(
                                 overlap,
                                 normal,
                                 relative_velocity,
-                                effective_mass,
+                                p.inverse_mass[i] + p.inverse_mass[j],
                                 law.friction,
                                 *history,
                                 dt,
@@ -347,20 +356,26 @@ impl DemSystem {
                         if p.inverse_mass[i] > 0.0 {
                             let wall_history =
                                 &mut wall_histories[local * wall_stride..(local + 1) * wall_stride];
+                            let mut touches = touching[local];
                             for (w, wall) in walls.iter().enumerate() {
-                                let history = &mut wall_history[w];
+                                let bit = 1u64 << w;
                                 let overlap = ri - wall.distance(&xi);
                                 if overlap <= 0.0 || !wall.is_present(time) {
-                                    *history = Vec3::zeros();
+                                    if touches & bit != 0 {
+                                        wall_history[w] = Vec3::zeros();
+                                        touches &= !bit;
+                                    }
                                     continue;
                                 }
+                                touches |= bit;
+                                let history = &mut wall_history[w];
                                 let normal = wall.normal;
                                 let relative_velocity = vi - (ri * wi).cross(&normal);
                                 let contact = law.force(
                                     overlap,
                                     normal,
                                     relative_velocity,
-                                    p.mass[i],
+                                    p.inverse_mass[i],
                                     wall.friction,
                                     *history,
                                     dt,
@@ -383,6 +398,7 @@ impl DemSystem {
                                 max_overlap = max_overlap.max(overlap / ri);
                                 wall_contacts += 1;
                             }
+                            touching[local] = touches;
                             total_force += p.mass[i] * gravity;
                         }
                         forces[local] = total_force;
@@ -428,7 +444,7 @@ impl DemSystem {
                 reach - distance,
                 normal,
                 relative_velocity,
-                1.0 / (p.inverse_mass[i] + p.inverse_mass[j]),
+                p.inverse_mass[i] + p.inverse_mass[j],
                 self.law.friction,
                 self.neighbours.history[e],
                 0.0,
@@ -458,7 +474,7 @@ impl DemSystem {
                 overlap,
                 wall.normal,
                 relative_velocity,
-                p.mass[i],
+                p.inverse_mass[i],
                 wall.friction,
                 self.wall_history[i * self.wall_stride() + w],
                 0.0,
