@@ -121,6 +121,27 @@ pub fn clamped_restitution(stiffness_per_mass: f64, damping_per_mass: f64) -> f6
     (-beta * (std::f64::consts::PI - 2.0 * (beta / omega).atan()) / omega).exp()
 }
 
+/// What the law needs to know of one contact, seen from particle i.
+#[derive(Clone, Copy, Debug)]
+pub struct ContactPoint {
+    /// Overlap δ > 0.
+    pub overlap: f64,
+    /// Unit normal from the partner (or wall) to i.
+    pub normal: Vec3,
+    /// Velocity of i's contact point relative to the partner's.
+    pub relative_velocity: Vec3,
+    /// ω_i − ω_j (ω_i against a wall).
+    pub relative_spin: Vec3,
+    /// r_i and r_j (infinite for a wall).
+    pub radius: f64,
+    pub partner_radius: f64,
+    /// 1/m_i + 1/m_j = 1/m* (1/m_i against a wall), and likewise 1/I.
+    pub inverse_mass_sum: f64,
+    pub inverse_inertia_sum: f64,
+    /// Coulomb coefficient of this pair or wall.
+    pub friction: f64,
+}
+
 /// The whole contact law of a scene.
 #[derive(Clone, Copy, Debug)]
 pub struct ContactLaw {
@@ -199,6 +220,44 @@ impl ContactLaw {
         }
     }
 
+    /// Force and torque on i of one contact (eq. 13–16, torque eq. 14 plus
+    /// rolling resistance), advancing its tangential history when dt > 0.
+    #[inline(always)]
+    pub fn load(&self, contact: &ContactPoint, history: &mut Vec3, dt: f64) -> (Vec3, Vec3) {
+        let result = self.force(
+            contact.overlap,
+            contact.normal,
+            contact.relative_velocity,
+            contact.inverse_mass_sum,
+            contact.friction,
+            *history,
+            dt,
+        );
+        if dt > 0.0 {
+            *history = result.history;
+        }
+        // Eq. 14: F_t acts on i at −r_i n.
+        let mut torque = -contact.radius * contact.normal.cross(&result.tangential);
+        if self.rolling_friction > 0.0 {
+            // R* = r_i r_j/(r_i + r_j), r_i against a wall.
+            let (ri, rj) = (contact.radius, contact.partner_radius);
+            let effective_radius = if rj.is_finite() {
+                ri * rj / (ri + rj)
+            } else {
+                ri
+            };
+            torque += self.rolling_torque(
+                contact.normal,
+                contact.relative_spin,
+                result.normal_force,
+                effective_radius,
+                1.0 / contact.inverse_inertia_sum,
+                dt,
+            );
+        }
+        (result.force, torque)
+    }
+
     /// Rolling-resistance torque on i (the partner receives its opposite):
     /// constant magnitude μ_r R* F_n against the rolling part of ω_i − ω_j,
     /// capped so that it cannot reverse the rolling within one step
@@ -222,13 +281,6 @@ impl ContactLaw {
         let magnitude = (self.rolling_friction * effective_radius * normal_force)
             .min(effective_inertia * speed / dt);
         -magnitude / speed * rolling
-    }
-
-    /// Natural period of the stiffest contact a particle of mass `mass` can
-    /// make (with a wall or a glued particle, m* = m): 2π/√(k_n/m*).
-    pub fn stiffest_period(&self, mass: f64) -> f64 {
-        let (k_n, _) = self.normal.coefficients(mass);
-        2.0 * std::f64::consts::PI * (mass / k_n).sqrt()
     }
 
     /// Duration of a binary contact of effective mass m* (t_c, or derived

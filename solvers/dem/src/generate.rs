@@ -2,7 +2,7 @@
 //! start of a sedimentation), with uniformly spread radii from a seeded
 //! generator so that a case is reproducible.
 
-use crate::neighbours::{CellBins, CellGrid};
+use crate::neighbours::CellGrid;
 use crate::particles::NewParticle;
 use grainflow_core::{Dimension, Vec3};
 use rand::Rng;
@@ -176,11 +176,4 @@ pub fn random(
         }
     }
     Ok(placed)
-}
-
-/// Bins positions for callers that need a neighbour query outside a step.
-pub fn bin(grid: &CellGrid, positions: &[Vec3]) -> CellBins {
-    let mut bins = CellBins::default();
-    bins.fill(grid, positions);
-    bins
 }

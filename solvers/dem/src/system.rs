@@ -8,7 +8,7 @@
 //!    gathers its pairs in a fixed order, its wall contacts and gravity;
 //! 4. half kick with the new forces.
 
-use crate::contact_law::ContactLaw;
+use crate::contact_law::{ContactLaw, ContactPoint};
 use crate::ghosts::Ghosts;
 use crate::neighbours::{CellBins, CellGrid, NeighbourList};
 use crate::particles::{NewParticle, Particles};
@@ -250,7 +250,6 @@ impl DemSystem {
     pub fn compute_forces(&mut self, dt: f64) -> StepDiagnostics {
         let n = self.particles.n_owned;
         let law = self.law;
-        let rolling = law.rolling_friction > 0.0;
         let walls = &self.walls;
         let wall_stride = self.wall_stride();
         let time = self.time;
@@ -312,7 +311,7 @@ impl DemSystem {
                             let distance_sq = branch.norm_squared();
                             if distance_sq >= reach * reach {
                                 // Most listed partners are apart: write
-                                // only when a contact just opened.
+                                // only when a contact has just ended.
                                 if *history != Vec3::zeros() {
                                     *history = Vec3::zeros();
                                 }
@@ -323,33 +322,22 @@ impl DemSystem {
                             let normal = branch * (1.0 / distance);
                             let overlap = reach - distance;
                             let wj = p.angular_velocity[j];
-                            let relative_velocity =
-                                vi - p.velocity[j] - (ri * wi + rj * wj).cross(&normal);
-                            let contact = law.force(
+                            let contact = ContactPoint {
                                 overlap,
                                 normal,
-                                relative_velocity,
-                                p.inverse_mass[i] + p.inverse_mass[j],
-                                law.friction,
-                                *history,
-                                dt,
-                            );
-                            if dt > 0.0 {
-                                *history = contact.history;
-                            }
-                            total_force += contact.force;
-                            // Eq. 14: F_t acts on i at −r_i n.
-                            total_torque -= ri * normal.cross(&contact.tangential);
-                            if rolling {
-                                total_torque += law.rolling_torque(
-                                    normal,
-                                    wi - wj,
-                                    contact.normal_force,
-                                    ri * rj / reach,
-                                    1.0 / (p.inverse_inertia[i] + p.inverse_inertia[j]),
-                                    dt,
-                                );
-                            }
+                                relative_velocity: vi
+                                    - p.velocity[j]
+                                    - (ri * wi + rj * wj).cross(&normal),
+                                relative_spin: wi - wj,
+                                radius: ri,
+                                partner_radius: rj,
+                                inverse_mass_sum: p.inverse_mass[i] + p.inverse_mass[j],
+                                inverse_inertia_sum: p.inverse_inertia[i] + p.inverse_inertia[j],
+                                friction: law.friction,
+                            };
+                            let (force, torque) = law.load(&contact, history, dt);
+                            total_force += force;
+                            total_torque += torque;
                             max_overlap = max_overlap.max(overlap / ri.min(rj));
                             count += 1;
                         }
@@ -368,33 +356,20 @@ impl DemSystem {
                                     continue;
                                 }
                                 touches |= bit;
-                                let history = &mut wall_history[w];
-                                let normal = wall.normal;
-                                let relative_velocity = vi - (ri * wi).cross(&normal);
-                                let contact = law.force(
+                                let contact = ContactPoint {
                                     overlap,
-                                    normal,
-                                    relative_velocity,
-                                    p.inverse_mass[i],
-                                    wall.friction,
-                                    *history,
-                                    dt,
-                                );
-                                if dt > 0.0 {
-                                    *history = contact.history;
-                                }
-                                total_force += contact.force;
-                                total_torque -= ri * normal.cross(&contact.tangential);
-                                if rolling {
-                                    total_torque += law.rolling_torque(
-                                        normal,
-                                        wi,
-                                        contact.normal_force,
-                                        ri,
-                                        1.0 / p.inverse_inertia[i],
-                                        dt,
-                                    );
-                                }
+                                    normal: wall.normal,
+                                    relative_velocity: vi - (ri * wi).cross(&wall.normal),
+                                    relative_spin: wi,
+                                    radius: ri,
+                                    partner_radius: f64::INFINITY,
+                                    inverse_mass_sum: p.inverse_mass[i],
+                                    inverse_inertia_sum: p.inverse_inertia[i],
+                                    friction: wall.friction,
+                                };
+                                let (force, torque) = law.load(&contact, &mut wall_history[w], dt);
+                                total_force += force;
+                                total_torque += torque;
                                 max_overlap = max_overlap.max(overlap / ri);
                                 wall_contacts += 1;
                             }
