@@ -221,7 +221,7 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     }
     let particle_steps = system.particles.n_owned as f64 * system.steps as f64;
     let json = json!({
-        "case": case.analysis.as_ref().map(|_| "analysed").unwrap_or("plain"),
+        "analysis": case.analysis,
         "status": if failure.is_some() { "unstable" } else { "ok" },
         "stop_reason": failure.clone().unwrap_or(stop_reason.clone()),
         "particles": system.particles.n_owned,
@@ -251,24 +251,20 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     Ok(Summary { json, metrics })
 }
 
-/// Root-mean-square speed of the mobile grains that touch another grain,
-/// √(2 E_k / M) over them: grains that roll away alone (a disc on a floor
-/// rolls forever without rolling resistance) do not keep a deposit from
-/// being at rest. While fewer than half the grains touch others (a falling
-/// fill), all mobile grains count.
+/// Root-mean-square speed √(2 E_k / M) of the mobile grains, leaving out
+/// grains that touch a wall but no other grain: a grain rolling away alone
+/// on the floor (a disc rolls forever without rolling resistance) does not
+/// keep a deposit from being at rest, while a grain still falling or flying
+/// (touching nothing) does.
 pub fn rms_speed(system: &DemSystem) -> f64 {
     let p = &system.particles;
-    let n = p.n_owned;
-    let touching: Vec<bool> = (0..n)
-        .map(|k| system.contacts.get(k).is_some_and(|&c| c > 0))
-        .collect();
-    let mobile = (0..n).filter(|&k| !p.is_fixed(k)).count();
-    let in_contact = (0..n).filter(|&k| !p.is_fixed(k) && touching[k]).count();
-    let deposit_only = 2 * in_contact >= mobile;
     let (mut energy, mut mass) = (0.0, 0.0);
-    for k in (0..n).filter(|&k| !p.is_fixed(k) && (touching[k] || !deposit_only)) {
-        energy += p.mass[k] * p.velocity[k].norm_squared();
-        mass += p.mass[k];
+    for k in (0..p.n_owned).filter(|&k| !p.is_fixed(k)) {
+        let lone_on_a_wall = system.contacts.get(k) == Some(&0) && system.touches_a_wall(k);
+        if !lone_on_a_wall {
+            energy += p.mass[k] * p.velocity[k].norm_squared();
+            mass += p.mass[k];
+        }
     }
     let c = &system.communicator;
     (c.sum(energy) / c.sum(mass).max(f64::MIN_POSITIVE)).sqrt()

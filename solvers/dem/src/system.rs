@@ -467,6 +467,11 @@ impl DemSystem {
         out
     }
 
+    /// Whether owned particle k touched a wall at the last force evaluation.
+    pub fn touches_a_wall(&self, k: usize) -> bool {
+        self.wall_touching.get(k).is_some_and(|&bits| bits != 0)
+    }
+
     /// Largest particle speed (owned, over all ranks).
     pub fn max_speed(&self) -> f64 {
         let n = self.particles.n_owned;
