@@ -127,6 +127,10 @@ pub struct NeighbourList {
     /// (zero when not in contact). The two entries of a pair mirror each
     /// other exactly.
     pub history: Vec<Vec3>,
+    /// Whether each entry may hold a non-zero history (it was a contact at
+    /// the last force evaluation): the force loop reads this byte rather
+    /// than the 24-byte history for the many listed pairs that are apart.
+    pub open: Vec<bool>,
     /// Owned positions at the last build.
     pub reference_position: Vec<Vec3>,
     bins: CellBins,
@@ -242,6 +246,9 @@ impl NeighbourList {
             self.partner.extend_from_slice(partners);
             self.history.extend_from_slice(histories);
         }
+        self.open.clear();
+        self.open
+            .extend(self.history.iter().map(|h| *h != Vec3::zeros()));
         self.reference_position.clear();
         self.reference_position
             .extend_from_slice(&particles.position[..n_owned]);

@@ -60,6 +60,10 @@ pub struct DemSystem {
     /// Bit w set while owned particle p touches wall w (so that the loop
     /// reads a wall history only for contacts that are or were open).
     wall_touching: Vec<u64>,
+    /// Bit w set for owned particle p if wall w was within its radius plus
+    /// the skin at the last neighbour build: no other wall can reach it
+    /// before the next build (a particle moves less than half the skin).
+    wall_candidates: Vec<u64>,
     pub neighbours: NeighbourList,
     ghosts: Ghosts,
     /// Particle–particle contacts of each owned particle at the last force
@@ -82,6 +86,7 @@ impl DemSystem {
             walls,
             wall_history: Vec::new(),
             wall_touching: Vec::new(),
+            wall_candidates: Vec::new(),
             neighbours: NeighbourList::new(skin),
             ghosts: Ghosts::default(),
             contacts: Vec::new(),
@@ -171,6 +176,28 @@ impl DemSystem {
         let range = self.interaction_range();
         self.ghosts.build(&mut self.particles, &self.domain, range);
         self.neighbours.build(&self.particles, &grid, &previous);
+        self.list_wall_candidates();
+    }
+
+    /// Marks, for each owned particle, the walls it may touch before the
+    /// next neighbour build.
+    fn list_wall_candidates(&mut self) {
+        let n = self.particles.n_owned;
+        let skin = self.neighbours.skin;
+        let walls = &self.walls;
+        let p = &self.particles;
+        self.wall_candidates.resize(n, 0);
+        self.wall_candidates
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(PARTICLES_PER_TASK)
+            .for_each(|(i, candidates)| {
+                *candidates = walls
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, wall)| wall.distance(&p.position[i]) < p.radius[i] + skin)
+                    .fold(0, |bits, (w, _)| bits | 1u64 << w);
+            });
     }
 
     /// Advances the particles by one step of size `dt`.
@@ -257,19 +284,24 @@ impl DemSystem {
         let offsets = &self.neighbours.offsets;
         let partner = &self.neighbours.partner;
 
-        // Disjoint slices of the history, one per chunk of particles.
-        let mut history_chunks: Vec<&mut [Vec3]> = Vec::with_capacity(n / PARTICLES_PER_TASK + 1);
-        let mut rest: &mut [Vec3] = &mut self.neighbours.history;
+        // Disjoint slices of the histories, one per chunk of particles.
+        let mut history_chunks: Vec<(&mut [Vec3], &mut [bool])> =
+            Vec::with_capacity(n / PARTICLES_PER_TASK + 1);
+        let mut rest: (&mut [Vec3], &mut [bool]) =
+            (&mut self.neighbours.history, &mut self.neighbours.open);
         for start in (0..n).step_by(PARTICLES_PER_TASK) {
             let end = (start + PARTICLES_PER_TASK).min(n);
-            let (head, tail) = rest.split_at_mut((offsets[end] - offsets[start]) as usize);
-            history_chunks.push(head);
-            rest = tail;
+            let len = (offsets[end] - offsets[start]) as usize;
+            let (history_head, history_tail) = rest.0.split_at_mut(len);
+            let (open_head, open_tail) = rest.1.split_at_mut(len);
+            history_chunks.push((history_head, open_head));
+            rest = (history_tail, open_tail);
         }
 
         let mut force = std::mem::take(&mut self.particles.force);
         let mut torque = std::mem::take(&mut self.particles.torque);
         self.contacts.resize(n, 0);
+        assert_eq!(self.wall_candidates.len(), n, "wall candidates not built");
         let p = &self.particles;
         let (max_overlap_ratio, entries, wall_contacts) = force[..n]
             .par_chunks_mut(PARTICLES_PER_TASK)
@@ -281,11 +313,18 @@ impl DemSystem {
             .zip(self.contacts.par_chunks_mut(PARTICLES_PER_TASK))
             .zip(history_chunks.into_par_iter())
             .zip(self.wall_touching.par_chunks_mut(PARTICLES_PER_TASK))
+            .zip(self.wall_candidates.par_chunks(PARTICLES_PER_TASK))
             .enumerate()
             .map(
                 |(
                     chunk,
-                    (((((forces, torques), wall_histories), counts), histories), touching),
+                    (
+                        (
+                            ((((forces, torques), wall_histories), counts), (histories, open)),
+                            touching,
+                        ),
+                        candidates,
+                    ),
                 )| {
                     let first = chunk * PARTICLES_PER_TASK;
                     let history_base = offsets[first] as usize;
@@ -304,19 +343,22 @@ impl DemSystem {
                         let mut count = 0u32;
                         for e in offsets[i] as usize..offsets[i + 1] as usize {
                             let j = partner[e] as usize;
-                            let history = &mut histories[e - history_base];
+                            let local_entry = e - history_base;
                             let branch = xi - p.position[j];
                             let rj = p.radius[j];
                             let reach = ri + rj;
                             let distance_sq = branch.norm_squared();
                             if distance_sq >= reach * reach {
-                                // Most listed partners are apart: write
-                                // only when a contact has just ended.
-                                if *history != Vec3::zeros() {
-                                    *history = Vec3::zeros();
+                                // Most listed partners are apart: touch the
+                                // history only when a contact has just ended.
+                                if open[local_entry] {
+                                    open[local_entry] = false;
+                                    histories[local_entry] = Vec3::zeros();
                                 }
                                 continue;
                             }
+                            open[local_entry] = true;
+                            let history = &mut histories[local_entry];
                             // Eq. 13–16, normal from j to i.
                             let distance = distance_sq.sqrt();
                             let normal = branch * (1.0 / distance);
@@ -345,7 +387,12 @@ impl DemSystem {
                             let wall_history =
                                 &mut wall_histories[local * wall_stride..(local + 1) * wall_stride];
                             let mut touches = touching[local];
-                            for (w, wall) in walls.iter().enumerate() {
+                            // In increasing w, as a loop over all walls would.
+                            let mut near = candidates[local] | touches;
+                            while near != 0 {
+                                let w = near.trailing_zeros() as usize;
+                                near &= near - 1;
+                                let wall = &walls[w];
                                 let bit = 1u64 << w;
                                 let overlap = ri - wall.distance(&xi);
                                 if overlap <= 0.0 || !wall.is_present(time) {
