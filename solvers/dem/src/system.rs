@@ -341,9 +341,11 @@ impl DemSystem {
                         let mut total_force = Vec3::zeros();
                         let mut total_torque = Vec3::zeros();
                         let mut count = 0u32;
-                        for e in offsets[i] as usize..offsets[i + 1] as usize {
-                            let j = partner[e] as usize;
-                            let local_entry = e - history_base;
+                        let listed = offsets[i] as usize..offsets[i + 1] as usize;
+                        for (local_entry, &j) in
+                            (listed.start - history_base..).zip(&partner[listed])
+                        {
+                            let j = j as usize;
                             let branch = xi - p.position[j];
                             let rj = p.radius[j];
                             let reach = ri + rj;
