@@ -1,0 +1,216 @@
+//! The staggered (MAC) grid of a rank's subdomain.
+//!
+//! Pressure lives at cell centres; the velocity component along axis `a`
+//! lives on the faces normal to `a` (Izard et al. 2014, eq. 1–2 are
+//! discretised on this arrangement, which couples pressure and velocity
+//! without odd–even modes). Spacing is uniform along every axis.
+//!
+//! Every field is one flat `Vec<f64>` over the padded block: the `cells`
+//! of the subdomain plus one ghost layer on each side of every active axis
+//! (x fastest, then y, then z). In 2D the z axis has one cell and no ghost
+//! layer. Padded index `i` along an active axis covers:
+//!
+//! - cell centres at `lower + (i - 1/2) h` for `i = 0..=n+1` (0 and n+1 are ghosts),
+//! - faces at `lower + i h` for `i = 0..=n+1`: face `i` is the upper face of
+//!   cell `i`, so faces 0 and `n` are the lower and upper ends of the subdomain.
+
+use std::ops::Range;
+
+use grainflow_core::Dimension;
+
+/// Where the values of a field sit in a cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// Cell centre (pressure, divergence).
+    Centre,
+    /// Centre of the upper face normal to the axis (velocity component along it).
+    Face(usize),
+}
+
+/// A box of padded indices, `start[a]..end[a]` along each axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Block {
+    pub start: [usize; 3],
+    pub end: [usize; 3],
+}
+
+/// The uniform staggered grid of one subdomain.
+#[derive(Clone, Debug)]
+pub struct Grid {
+    pub dimension: Dimension,
+    /// Cells along x, y, z (z is 1 in 2D).
+    pub cells: [usize; 3],
+    /// Lower corner of the subdomain (m).
+    pub lower: [f64; 3],
+    /// Upper corner of the subdomain (m).
+    pub upper: [f64; 3],
+    /// Cell size along each axis (m).
+    pub spacing: [f64; 3],
+    ghost: [usize; 3],
+    padded: [usize; 3],
+    strides: [usize; 3],
+}
+
+impl Grid {
+    /// A grid of `cells` between `lower` and `upper`. In 2D the z entries
+    /// are ignored: one cell of unit depth.
+    pub fn new(dimension: Dimension, cells: [usize; 3], lower: [f64; 3], upper: [f64; 3]) -> Self {
+        let active = dimension.count();
+        let mut cells = cells;
+        let mut lower = lower;
+        let mut upper = upper;
+        let mut ghost = [0; 3];
+        for axis in 0..3 {
+            if axis < active {
+                assert!(cells[axis] >= 2, "at least two cells along axis {axis}");
+                assert!(upper[axis] > lower[axis], "empty extent along axis {axis}");
+                ghost[axis] = 1;
+            } else {
+                cells[axis] = 1;
+                lower[axis] = 0.0;
+                upper[axis] = 1.0;
+            }
+        }
+        let spacing = [0, 1, 2].map(|a| (upper[a] - lower[a]) / cells[a] as f64);
+        let padded = [0, 1, 2].map(|a| cells[a] + 2 * ghost[a]);
+        let strides = [1, padded[0], padded[0] * padded[1]];
+        Grid {
+            dimension,
+            cells,
+            lower,
+            upper,
+            spacing,
+            ghost,
+            padded,
+            strides,
+        }
+    }
+
+    /// Number of active axes (2 or 3).
+    pub fn dim(&self) -> usize {
+        self.dimension.count()
+    }
+
+    /// Ghost layers along `axis` (1 if active, 0 for z in 2D).
+    pub fn ghost(&self, axis: usize) -> usize {
+        self.ghost[axis]
+    }
+
+    /// Points along each axis including ghosts.
+    pub fn padded(&self) -> [usize; 3] {
+        self.padded
+    }
+
+    /// Distance in the flat array between neighbours along `axis`.
+    pub fn stride(&self, axis: usize) -> usize {
+        self.strides[axis]
+    }
+
+    /// Length of a flat field.
+    pub fn len(&self) -> usize {
+        self.padded.iter().product()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Flat index of padded indices `(i, j, k)`.
+    #[inline]
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        i + self.strides[1] * j + self.strides[2] * k
+    }
+
+    /// A zero field.
+    pub fn zeros(&self) -> Vec<f64> {
+        vec![0.0; self.len()]
+    }
+
+    /// Padded indices of the cells owned by this subdomain along `axis`.
+    pub fn interior(&self, axis: usize) -> Range<usize> {
+        self.ghost[axis]..self.ghost[axis] + self.cells[axis]
+    }
+
+    /// All owned cells.
+    pub fn cell_block(&self) -> Block {
+        Block {
+            start: [0, 1, 2].map(|a| self.interior(a).start),
+            end: [0, 1, 2].map(|a| self.interior(a).end),
+        }
+    }
+
+    /// Volume of a cell (area in 2D).
+    pub fn cell_volume(&self) -> f64 {
+        self.spacing[..self.dim()].iter().product()
+    }
+
+    /// Coordinate along `axis` of padded index `i` of a field at `location`.
+    pub fn coordinate(&self, location: Location, axis: usize, i: usize) -> f64 {
+        let offset = if location == Location::Face(axis) {
+            1.0
+        } else {
+            0.5
+        };
+        self.lower[axis] + (i as f64 - self.ghost[axis] as f64 + offset) * self.spacing[axis]
+    }
+
+    /// Position of padded point `(i, j, k)` of a field at `location`.
+    pub fn position(&self, location: Location, i: usize, j: usize, k: usize) -> [f64; 3] {
+        [
+            self.coordinate(location, 0, i),
+            self.coordinate(location, 1, j),
+            self.coordinate(location, 2, k),
+        ]
+    }
+
+    /// Calls `visit(index, [i, j, k])` for every padded point of `block`,
+    /// x fastest.
+    #[inline]
+    pub fn for_each(&self, block: &Block, mut visit: impl FnMut(usize, [usize; 3])) {
+        for k in block.start[2]..block.end[2] {
+            for j in block.start[1]..block.end[1] {
+                let row = self.index(0, j, k);
+                for i in block.start[0]..block.end[0] {
+                    visit(row + i, [i, j, k]);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn faces_and_centres_sit_where_documented() {
+        let grid = Grid::new(
+            Dimension::Three,
+            [4, 5, 6],
+            [0.0, -1.0, 2.0],
+            [2.0, 1.5, 5.0],
+        );
+        assert_eq!(grid.padded(), [6, 7, 8]);
+        assert_eq!(grid.len(), 6 * 7 * 8);
+        assert_eq!(grid.index(1, 2, 3), 1 + 6 * 2 + 42 * 3);
+        assert!((grid.spacing[1] - 0.5).abs() < 1e-15);
+        // First owned cell centre is half a cell inside, face 0 is the lower end.
+        assert!((grid.coordinate(Location::Centre, 1, 1) - (-0.75)).abs() < 1e-15);
+        assert!((grid.coordinate(Location::Face(1), 1, 0) - (-1.0)).abs() < 1e-15);
+        assert!((grid.coordinate(Location::Face(1), 1, 5) - 1.5).abs() < 1e-15);
+        // A face along another axis sits at the cell centre of that axis.
+        assert!((grid.coordinate(Location::Face(0), 1, 1) - (-0.75)).abs() < 1e-15);
+        let mut count = 0;
+        grid.for_each(&grid.cell_block(), |_, _| count += 1);
+        assert_eq!(count, 4 * 5 * 6);
+    }
+
+    #[test]
+    fn two_dimensional_grid_has_no_z_ghosts() {
+        let grid = Grid::new(Dimension::Two, [8, 4, 99], [0.0; 3], [1.0, 0.5, 7.0]);
+        assert_eq!(grid.cells, [8, 4, 1]);
+        assert_eq!(grid.padded(), [10, 6, 1]);
+        assert_eq!(grid.interior(2), 0..1);
+        assert!((grid.cell_volume() - 0.125 * 0.125).abs() < 1e-15);
+    }
+}
