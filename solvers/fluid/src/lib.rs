@@ -19,11 +19,13 @@
 pub mod boundary;
 pub mod error;
 pub mod grid;
+pub mod navier_stokes;
 pub mod operators;
 pub mod poisson;
 pub mod transform;
 
 pub use boundary::{Boundaries, BoundaryCondition};
 pub use error::FluidError;
-pub use grid::{Grid, Location};
+pub use grid::{Block, Grid, Location};
+pub use navier_stokes::{FlowSolver, StepReport};
 pub use poisson::DirectSolver;
