@@ -166,6 +166,17 @@ pub struct ContactForce {
     pub history: Vec3,
 }
 
+/// What one contact does to its two particles.
+#[derive(Clone, Copy, Debug)]
+pub struct PairLoad {
+    /// Force on i (the partner receives its opposite).
+    pub force: Vec3,
+    /// Torque on i.
+    pub torque: Vec3,
+    /// Torque on the partner (meaningless against a wall).
+    pub partner_torque: Vec3,
+}
+
 impl ContactLaw {
     /// Contact force on i from the overlap `overlap` > 0 along the unit
     /// normal `normal` (pointing from the partner to i), the relative velocity
@@ -220,10 +231,11 @@ impl ContactLaw {
         }
     }
 
-    /// Force and torque on i of one contact (eq. 13–16, torque eq. 14 plus
-    /// rolling resistance), advancing its tangential history when dt > 0.
+    /// Force on i and torques on i and on its partner of one contact
+    /// (eq. 13–16, torques eq. 14 plus rolling resistance), advancing its
+    /// tangential history when dt > 0. The partner receives −force.
     #[inline(always)]
-    pub fn load(&self, contact: &ContactPoint, history: &mut Vec3, dt: f64) -> (Vec3, Vec3) {
+    pub fn load(&self, contact: &ContactPoint, history: &mut Vec3, dt: f64) -> PairLoad {
         let result = self.force(
             contact.overlap,
             contact.normal,
@@ -236,8 +248,11 @@ impl ContactLaw {
         if dt > 0.0 {
             *history = result.history;
         }
-        // Eq. 14: F_t acts on i at −r_i n.
-        let mut torque = -contact.radius * contact.normal.cross(&result.tangential);
+        // Eq. 14: F_t acts on i at −r_i n and −F_t on the partner at +r_j n,
+        // so both torques are −r n × F_t.
+        let arm_torque = -contact.normal.cross(&result.tangential);
+        let mut torque = contact.radius * arm_torque;
+        let mut partner_torque = contact.partner_radius * arm_torque;
         if self.rolling_friction > 0.0 {
             // R* = r_i r_j/(r_i + r_j), r_i against a wall.
             let (ri, rj) = (contact.radius, contact.partner_radius);
@@ -246,7 +261,7 @@ impl ContactLaw {
             } else {
                 ri
             };
-            torque += self.rolling_torque(
+            let rolling = self.rolling_torque(
                 contact.normal,
                 contact.relative_spin,
                 result.normal_force,
@@ -254,8 +269,14 @@ impl ContactLaw {
                 1.0 / contact.inverse_inertia_sum,
                 dt,
             );
+            torque += rolling;
+            partner_torque -= rolling;
         }
-        (result.force, torque)
+        PairLoad {
+            force: result.force,
+            torque,
+            partner_torque,
+        }
     }
 
     /// Rolling-resistance torque on i (the partner receives its opposite):

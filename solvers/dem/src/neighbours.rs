@@ -2,9 +2,11 @@
 //! contact.
 //!
 //! Partners are candidate contacts within r_i + r_j + skin. Each owned
-//! particle lists all its partners (a full list, both sides of every pair):
-//! the force loop then runs over particles, each summing its own contacts in
-//! a fixed order, with no shared writes. The list is rebuilt
+//! particle lists all its partners (a full list, both sides of every pair),
+//! in increasing index. A pair of owned particles i < j is evaluated once,
+//! from i's entry (the upper entry); j's entry (the lower one) points back
+//! to it (`mirror`) to collect the result. A pair with a ghost is evaluated
+//! from both sides, each side keeping its own history. The list is rebuilt
 //! when some particle has moved by more than half the skin since the last
 //! build, and the tangential displacement of every open contact is carried
 //! over by the pair's ids. Between builds no pair can close unnoticed.
@@ -123,13 +125,20 @@ pub struct NeighbourList {
     /// sides (a full list), so each particle sums its own forces.
     pub offsets: Vec<u32>,
     pub partner: Vec<u32>,
-    /// Tangential displacement ξ of each entry, as seen from its owner
-    /// (zero when not in contact). The two entries of a pair mirror each
-    /// other exactly.
+    /// First upper entry of owned particle i (partner index above i): its
+    /// lower entries are `offsets[i]..upper_start[i]`.
+    pub upper_start: Vec<u32>,
+    /// For a lower entry, the index of its pair's upper entry (in the
+    /// partner's list); `u32::MAX` for upper entries.
+    pub mirror: Vec<u32>,
+    /// Tangential displacement ξ of each upper entry, as seen from its owner
+    /// (zero when not in contact; lower entries hold zero, their pair's
+    /// history is −ξ of the mirror).
     pub history: Vec<Vec3>,
-    /// Whether each entry may hold a non-zero history (it was a contact at
-    /// the last force evaluation): the force loop reads this byte rather
-    /// than the 24-byte history for the many listed pairs that are apart.
+    /// Whether each upper entry may hold a non-zero history (it was a
+    /// contact at the last force evaluation): the force loop reads this byte
+    /// rather than the 24-byte history for the many listed pairs that are
+    /// apart.
     pub open: Vec<bool>,
     /// Owned positions at the last build.
     pub reference_position: Vec<Vec3>,
@@ -161,6 +170,22 @@ impl NeighbourList {
         self.offsets[i] as usize..self.offsets[i + 1] as usize
     }
 
+    /// Tangential history of entry e, seen from its owner.
+    pub fn history_of(&self, e: usize) -> Vec3 {
+        match self.mirror[e] {
+            u32::MAX => self.history[e],
+            upper => -self.history[upper as usize],
+        }
+    }
+
+    /// Whether the pair of entry e was in contact at the last evaluation.
+    pub fn is_open(&self, e: usize) -> bool {
+        match self.mirror[e] {
+            u32::MAX => self.open[e],
+            upper => self.open[upper as usize],
+        }
+    }
+
     /// Takes the current list out, to carry its open contacts into the next
     /// build (before particles are reordered or ghosts rebuilt).
     pub fn take_previous(&mut self, particles: &Particles) -> PreviousList {
@@ -170,6 +195,7 @@ impl NeighbourList {
             old_index: (0..n).collect(),
             offsets: std::mem::take(&mut self.offsets),
             partner: std::mem::take(&mut self.partner),
+            mirror: std::mem::take(&mut self.mirror),
             history: std::mem::take(&mut self.history),
         }
     }
@@ -225,6 +251,11 @@ impl NeighbourList {
                     // by the partner's id.
                     previous.open_contacts_of(i, &mut open);
                     for &j in &partners[start..] {
+                        if (j as usize) < i {
+                            // A lower entry: the partner's entry holds it.
+                            histories.push(Vec3::zeros());
+                            continue;
+                        }
                         let id = particles.id[j as usize];
                         let history = open.iter().find(|(k, _)| *k == id).map(|&(_, h)| h);
                         histories.push(history.unwrap_or_else(Vec3::zeros));
@@ -249,10 +280,39 @@ impl NeighbourList {
         self.open.clear();
         self.open
             .extend(self.history.iter().map(|h| *h != Vec3::zeros()));
+        self.link_pairs(n_owned);
         self.reference_position.clear();
         self.reference_position
             .extend_from_slice(&particles.position[..n_owned]);
         self.builds += 1;
+    }
+}
+
+impl NeighbourList {
+    /// Finds the upper entries of every owned particle and the mirror of
+    /// every lower entry (a binary search in the partner's sorted list).
+    fn link_pairs(&mut self, n_owned: usize) {
+        let (offsets, partner) = (&self.offsets, &self.partner);
+        let entries_of = |i: usize| &partner[offsets[i] as usize..offsets[i + 1] as usize];
+        self.upper_start = (0..n_owned)
+            .into_par_iter()
+            .map(|i| offsets[i] + entries_of(i).partition_point(|&j| (j as usize) < i) as u32)
+            .collect();
+        self.mirror = (0..n_owned)
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                entries_of(i).iter().map(move |&j| {
+                    if (j as usize) < i {
+                        let back = entries_of(j as usize)
+                            .binary_search(&(i as u32))
+                            .expect("the pair list is symmetric");
+                        offsets[j as usize] + back as u32
+                    } else {
+                        u32::MAX
+                    }
+                })
+            })
+            .collect();
     }
 }
 
@@ -266,6 +326,7 @@ pub struct PreviousList {
     old_index: Vec<usize>,
     offsets: Vec<u32>,
     partner: Vec<u32>,
+    mirror: Vec<u32>,
     history: Vec<Vec3>,
 }
 
@@ -289,8 +350,12 @@ impl PreviousList {
             return;
         }
         for e in self.offsets[old] as usize..self.offsets[old + 1] as usize {
-            if self.history[e] != Vec3::zeros() {
-                open.push((self.ids[self.partner[e] as usize], self.history[e]));
+            let history = match self.mirror[e] {
+                u32::MAX => self.history[e],
+                upper => -self.history[upper as usize],
+            };
+            if history != Vec3::zeros() {
+                open.push((self.ids[self.partner[e] as usize], history));
             }
         }
     }
