@@ -808,8 +808,7 @@ mod pair_evaluation_tests {
         );
         // Third law: the owned grains' contact forces cancel exactly.
         let total: Vec3 = (0..n)
-            .map(|i| system.particle_contacts_of(i))
-            .flatten()
+            .flat_map(|i| system.particle_contacts_of(i))
             .filter(|c| c.partner < n)
             .map(|c| c.force)
             .sum();
