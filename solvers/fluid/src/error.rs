@@ -7,12 +7,22 @@ use std::fmt;
 pub enum FluidError {
     /// Inconsistent or unsupported boundary conditions.
     Boundary(String),
+    /// A time step beyond the stability limit of the explicit terms.
+    Unstable { cfl: f64, limit: f64 },
+    /// A set-up this version does not run.
+    Unsupported(String),
 }
 
 impl fmt::Display for FluidError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             FluidError::Boundary(message) => write!(f, "fluid boundary conditions: {message}"),
+            FluidError::Unstable { cfl, limit } => write!(
+                f,
+                "fluid time step refused: CFL number {cfl:.3} exceeds the limit {limit:.3} \
+                 (reduce dt)"
+            ),
+            FluidError::Unsupported(message) => write!(f, "fluid: {message}"),
         }
     }
 }

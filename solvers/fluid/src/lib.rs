@@ -27,5 +27,5 @@ pub mod transform;
 pub use boundary::{Boundaries, BoundaryCondition};
 pub use error::FluidError;
 pub use grid::{Block, Grid, Location};
-pub use navier_stokes::{FlowSolver, StepReport};
+pub use navier_stokes::{FlowSolver, StepReport, CFL_LIMIT};
 pub use poisson::DirectSolver;

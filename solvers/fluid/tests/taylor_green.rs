@@ -55,6 +55,9 @@ fn run_taylor_green(cells: usize, end: f64, steps: usize) -> FlowSolver {
     .unwrap();
     solver.set_velocity(|component, position| taylor_green(component, position, 0.0));
     solver.set_pressure(|position| taylor_green_pressure(position, 0.0));
+    // ½ ∫ |u|² = 2π² (U² + V²) + π², exact on the grid at t = 0.
+    let energy = 2.0 * PI * PI * (STREAM[0].powi(2) + STREAM[1].powi(2)) + PI * PI;
+    assert!((solver.kinetic_energy() - energy).abs() <= 1e-13 * energy);
     let speed = 1.0 + STREAM[0].hypot(STREAM[1]);
     advance(&mut solver, end / steps as f64, steps, speed);
     solver

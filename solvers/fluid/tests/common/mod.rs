@@ -34,7 +34,7 @@ pub fn advance(solver: &mut FlowSolver, dt: f64, steps: usize, velocity_scale: f
         .fold(f64::INFINITY, f64::min);
     let mut worst: f64 = 0.0;
     for _ in 0..steps {
-        let report = solver.step(dt);
+        let report = solver.step(dt).unwrap();
         let divergence = report.max_divergence * spacing / velocity_scale;
         assert!(
             divergence <= 1e-12,

@@ -1,0 +1,110 @@
+//! Where the time step stops being stable, and the step's diagnostics.
+//!
+//! Convection is explicit (RK3) with central differences: a perturbation
+//! carried by a uniform stream is amplified per step by
+//! `|1 + z + z²/2 + z³/6|`, `z = i CFL sin(k h)`, which exceeds 1 only
+//! beyond CFL √3. The tests run just below and above that limit, and check
+//! that the solver refuses a step above it.
+
+mod common;
+
+use grainflow_core::{Communicator, Dimension};
+use grainflow_fluid::{Boundaries, FlowSolver, FluidError, Grid, CFL_LIMIT};
+
+/// A rough field with every mode present, of magnitude ≤ 1.
+fn rough(component: usize, position: [f64; 3]) -> f64 {
+    let [x, y, z] = position;
+    let phase = 12.9898 * x + 78.233 * y + 37.719 * z + 3.1 * component as f64;
+    (phase.sin() * 43758.5453).fract()
+}
+
+/// A unit stream along x with a divergence-free perturbation of 1e-6,
+/// inviscid, doubly periodic.
+fn perturbed_stream() -> FlowSolver {
+    let grid = Grid::new(Dimension::Two, [32, 8, 1], [0.0; 3], [1.0, 0.25, 1.0]);
+    let mut solver =
+        FlowSolver::new(grid, Boundaries::periodic(), 0.0, Communicator::serial()).unwrap();
+    solver.set_velocity(|c, x| if c == 0 { 1.0 } else { 0.0 } + 1e-6 * rough(c, x));
+    solver.project(1.0);
+    solver
+}
+
+/// `Σ (u − U)² + v²` over the faces.
+fn perturbation_energy(solver: &FlowSolver) -> f64 {
+    let mut sum = 0.0;
+    for component in 0..2 {
+        let stream = if component == 0 { 1.0 } else { 0.0 };
+        solver
+            .grid
+            .for_each(solver.velocity_unknowns(component), |index, _| {
+                let perturbation = solver.velocity[component][index] - stream;
+                sum += perturbation * perturbation;
+            });
+    }
+    sum
+}
+
+/// Growth of the perturbation energy over `steps` steps at `cfl`.
+fn growth(cfl: f64, steps: usize) -> f64 {
+    let mut solver = perturbed_stream();
+    solver.cfl_limit = f64::INFINITY;
+    let dt = solver.time_step_for_cfl(cfl);
+    let before = perturbation_energy(&solver);
+    for _ in 0..steps {
+        solver.step(dt).unwrap();
+    }
+    perturbation_energy(&solver) / before
+}
+
+#[test]
+fn convection_is_stable_up_to_cfl_root_three() {
+    let below = growth(0.98 * CFL_LIMIT, 200);
+    let above = growth(1.1 * CFL_LIMIT, 100);
+    println!("perturbation energy growth: CFL 0.98 √3 over 200 steps {below:.3e}, CFL 1.1 √3 over 100 steps {above:.3e}");
+    assert!(below <= 1.0, "{below}");
+    // At 1.1 √3 the worst mode (k h = π/2) gains a factor 1.23 in energy
+    // a step; it starts with a small share of the perturbation.
+    assert!(above >= 1e6, "{above}");
+}
+
+#[test]
+fn a_step_beyond_the_limit_is_refused() {
+    let mut solver = perturbed_stream();
+    let dt = solver.time_step_for_cfl(1.01 * CFL_LIMIT);
+    let before = solver.velocity.clone();
+    match solver.step(dt) {
+        Err(FluidError::Unstable { cfl, limit }) => {
+            assert!((cfl - 1.01 * CFL_LIMIT).abs() < 1e-12);
+            assert_eq!(limit, CFL_LIMIT);
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    assert_eq!(solver.velocity, before);
+    assert_eq!(solver.time, 0.0);
+    assert!(solver.step(0.99 * dt).is_ok());
+}
+
+/// A uniform stream is an exact steady solution: it stays, and the
+/// diagnostics take their exact values.
+#[test]
+fn a_uniform_stream_is_kept_and_measured_exactly() {
+    let grid = Grid::new(Dimension::Three, [6, 5, 4], [0.0; 3], [1.2, 1.0, 0.8]);
+    let stream = [1.0, -2.0, 0.5];
+    let mut solver =
+        FlowSolver::new(grid, Boundaries::periodic(), 0.3, Communicator::serial()).unwrap();
+    solver.set_velocity(|c, _| stream[c]);
+    let dt = solver.time_step_for_cfl(1.0);
+    assert!((dt - 1.0 / 17.5).abs() <= 1e-15, "{dt}");
+    for _ in 0..3 {
+        let report = solver.step(dt).unwrap();
+        let energy = 0.5 * (1.0 + 4.0 + 0.25) * 0.96;
+        assert!(
+            (report.kinetic_energy - energy).abs() <= 1e-14 * energy,
+            "{report:?}"
+        );
+        assert!((report.max_cfl - 1.0).abs() <= 1e-14, "{report:?}");
+        assert!(report.max_divergence <= 1e-13, "{report:?}");
+    }
+    let error = common::max_velocity_error(&solver, |c, _| stream[c]);
+    assert!(error <= 1e-14, "{error}");
+}
