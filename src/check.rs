@@ -7,13 +7,14 @@ use crate::{scene, stability, RunError};
 use std::fmt::Write;
 
 /// Bytes of the DEM state per particle: five vectors and five scalars, the
-/// reference position, the coordination and the cell bins (~230 B), 24 B of
-/// tangential history per wall, and per listed partner 4 B of index and 24 B
-/// of history. A dense 3D packing lists about 13 partners (the 20,000-grain
-/// benchmark column measured 884 B per particle of peak memory in all).
+/// reference position, the coordination, the wall marks and the cell bins
+/// (~240 B), 24 B of tangential history per wall, and per listed partner
+/// 81 B: index and mirror (8 B), history (24 B), an open flag, and the
+/// pair's force and partner torque handed between the two passes of the
+/// force loop (48 B). A dense 3D packing lists about 13 partners.
 fn bytes_per_particle(dimension: usize, walls: usize) -> usize {
     let partners = if dimension == 3 { 13 } else { 6 };
-    230 + 24 * walls.max(1) + partners * 28
+    240 + 24 * walls.max(1) + partners * 81
 }
 
 pub fn report(case: &Case) -> Result<String, RunError> {

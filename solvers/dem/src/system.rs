@@ -4,8 +4,9 @@
 //! 1. half kick v += Δt/2 F/m, ω += Δt/2 T/I, then drift x += Δt v;
 //! 2. rebuild the neighbour list (migrate, sort, ghosts) if a particle moved
 //!    more than half the skin, else refresh the ghosts;
-//! 3. contact forces: each pair in parallel (eq. 13–16), then each particle
-//!    gathers its pairs in a fixed order, its wall contacts and gravity;
+//! 3. contact forces (eq. 13–16): each particle evaluates the pairs it
+//!    holds the upper side of, its walls and gravity; then each particle
+//!    collects the pairs evaluated by its partners, in a fixed order;
 //! 4. half kick with the new forces.
 
 use crate::contact_law::{ContactLaw, ContactPoint};
