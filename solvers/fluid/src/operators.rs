@@ -76,27 +76,24 @@ pub fn convective_tendency(
     block: &Block,
     tendency: &mut [f64],
 ) {
-    let dim = grid.dim();
     let along = &velocity[component];
     let sc = grid.stride(component);
+    // One pass per flux direction keeps the inner loop branch-free.
+    let h = grid.spacing[component];
     grid.for_each(block, |index, _| {
-        let mut flux_divergence = 0.0;
-        for axis in 0..dim {
-            let h = grid.spacing[axis];
-            if axis == component {
-                let upper = along[index] + along[index + sc];
-                let lower = along[index - sc] + along[index];
-                flux_divergence += 0.25 * (upper * upper - lower * lower) / h;
-            } else {
-                let across = &velocity[axis];
-                let sd = grid.stride(axis);
-                let upper =
-                    (along[index] + along[index + sd]) * (across[index] + across[index + sc]);
-                let lower = (along[index - sd] + along[index])
-                    * (across[index - sd] + across[index - sd + sc]);
-                flux_divergence += 0.25 * (upper - lower) / h;
-            }
-        }
-        tendency[index] = -flux_divergence;
+        let upper = along[index] + along[index + sc];
+        let lower = along[index - sc] + along[index];
+        tendency[index] = -0.25 * (upper * upper - lower * lower) / h;
     });
+    for axis in (0..grid.dim()).filter(|&axis| axis != component) {
+        let across = &velocity[axis];
+        let sd = grid.stride(axis);
+        let factor = 0.25 / grid.spacing[axis];
+        grid.for_each(block, |index, _| {
+            let upper = (along[index] + along[index + sd]) * (across[index] + across[index + sc]);
+            let lower =
+                (along[index - sd] + along[index]) * (across[index - sd] + across[index - sd + sc]);
+            tendency[index] -= factor * (upper - lower);
+        });
+    }
 }

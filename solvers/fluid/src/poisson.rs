@@ -35,10 +35,10 @@ pub struct DirectSolver {
     /// Unknowns along each axis (1 along an inactive axis).
     shape: [usize; 3],
     transforms: Vec<AxisTransform>,
-    /// `λ_k` of every transformed axis.
-    eigenvalues: Vec<Vec<f64>>,
+    /// `Σ λ_k` over the transformed axes, for every mode.
+    modal: Vec<f64>,
     modes: Vec<f64>,
-    line: LineWork,
+    lines: ModeLines,
 }
 
 impl DirectSolver {
@@ -51,7 +51,7 @@ impl DirectSolver {
         let block = unknowns(grid, ends);
         let shape = [0, 1, 2].map(|a| block.end[a] - block.start[a]);
         let mut transforms = Vec::new();
-        let mut eigenvalues = Vec::new();
+        let mut eigenvalues: Vec<Vec<f64>> = Vec::new();
         for (axis, end) in ends.iter().enumerate().take(line_axis) {
             let kind = match (end[0].kind, end[1].kind) {
                 (EndKind::Periodic, EndKind::Periodic) => TransformKind::Periodic,
@@ -88,6 +88,19 @@ impl DirectSolver {
                 "axis {line_axis}: a periodic line needs at least 3 cells"
             )));
         }
+        // Modes are ordered like the compact array: first axis fastest.
+        let mode_count: usize = shape[..line_axis].iter().product();
+        let modal = (0..mode_count)
+            .map(|mode| {
+                let mut remainder = mode;
+                let mut sum = 0.0;
+                for (axis, eigenvalues) in eigenvalues.iter().enumerate() {
+                    sum += eigenvalues[remainder % shape[axis]];
+                    remainder /= shape[axis];
+                }
+                sum
+            })
+            .collect();
         let total = shape.iter().product();
         Ok(DirectSolver {
             line_axis,
@@ -96,9 +109,9 @@ impl DirectSolver {
             block,
             shape,
             transforms,
-            eigenvalues,
+            modal,
             modes: vec![0.0; total],
-            line: LineWork::new(shape[line_axis]),
+            lines: ModeLines::new(mode_count, shape[line_axis], periodic_line[0]),
         })
     }
 
@@ -151,10 +164,11 @@ impl DirectSolver {
         });
     }
 
-    /// One tridiagonal solve along the line axis per transformed mode.
+    /// One tridiagonal solve along the line axis per transformed mode, all
+    /// modes swept together: at each row the modes are contiguous, so the
+    /// elimination runs over flat arrays.
     fn solve_lines(&mut self, identity: f64, laplacian: f64) {
         let length = self.shape[self.line_axis];
-        let stride: usize = self.shape[..self.line_axis].iter().product();
         let coupling = laplacian / (self.line_spacing * self.line_spacing);
         let end_shift = self.line_ends.map(|kind| match kind {
             EndKind::Neumann => coupling,
@@ -162,127 +176,206 @@ impl DirectSolver {
             EndKind::DirichletFace | EndKind::Periodic => 0.0,
         });
         let periodic = self.line_ends[0] == EndKind::Periodic;
-        let can_be_singular = identity == 0.0
+        let singular = identity == 0.0
+            && self.modal[0] == 0.0
             && self
                 .line_ends
                 .iter()
                 .all(|&kind| matches!(kind, EndKind::Periodic | EndKind::Neumann));
-        for mode in 0..stride {
-            // Modal eigenvalue of the transformed axes.
-            let mut remainder = mode;
-            let mut modal = 0.0;
-            for (axis, eigenvalues) in self.eigenvalues.iter().enumerate() {
-                modal += eigenvalues[remainder % self.shape[axis]];
-                remainder /= self.shape[axis];
-            }
+        let work = &mut self.lines;
+        for (m, &modal) in self.modal.iter().enumerate() {
             let diagonal = identity + laplacian * modal - 2.0 * coupling;
-            let work = &mut self.line;
-            for j in 0..length {
-                work.rhs[j] = self.modes[mode + j * stride];
-                work.diagonal[j] = diagonal;
+            work.interior[m] = diagonal;
+            work.first[m] = diagonal + end_shift[0];
+            work.last[m] = diagonal + end_shift[1];
+            if length == 1 {
+                work.first[m] += end_shift[1];
             }
-            work.diagonal[0] += end_shift[0];
-            work.diagonal[length - 1] += end_shift[1];
-            if can_be_singular && laplacian * modal == 0.0 {
-                work.solve_singular(coupling);
-            } else if periodic {
-                work.solve_cyclic(coupling);
-            } else {
-                work.solve_open(coupling);
-            }
-            for j in 0..length {
-                self.modes[mode + j * stride] = work.rhs[j];
+        }
+        if singular {
+            // Set the singular mode aside; identity rows keep the sweep finite.
+            work.singular_line.clear();
+            work.singular_line
+                .extend((0..length).map(|j| self.modes[j * self.modal.len()]));
+            work.interior[0] = 1.0;
+            work.first[0] = 1.0;
+            work.last[0] = 1.0;
+        }
+        if periodic {
+            work.solve_cyclic(&mut self.modes, length, coupling);
+        } else {
+            work.sweep(&mut self.modes, length, coupling);
+        }
+        if singular {
+            let line = work.solve_singular(length, coupling, end_shift[1]);
+            let stride = self.modal.len();
+            for (j, value) in line.iter().enumerate() {
+                self.modes[j * stride] = *value;
             }
         }
     }
 }
 
-/// Work arrays of one tridiagonal line with constant off-diagonal
-/// `coupling` and a per-row `diagonal`.
-struct LineWork {
-    diagonal: Vec<f64>,
-    rhs: Vec<f64>,
+/// Work arrays of the tridiagonal systems of all modes: off-diagonal
+/// `coupling`, per-mode diagonal `first` (row 0), `interior`, `last` (row
+/// n − 1). Row `j` of mode `m` is at `m + j · modes` in a flat array.
+struct ModeLines {
+    first: Vec<f64>,
+    interior: Vec<f64>,
+    last: Vec<f64>,
+    /// The elimination's modified upper diagonal, one per row and mode.
     modified: Vec<f64>,
+    /// Sherman–Morrison correction of a periodic line, one per row and mode.
     correction: Vec<f64>,
+    /// `γ = −b₀` of the Sherman–Morrison update, per mode.
+    gamma: Vec<f64>,
+    singular_line: Vec<f64>,
 }
 
-impl LineWork {
-    fn new(length: usize) -> Self {
-        LineWork {
-            diagonal: vec![0.0; length],
-            rhs: vec![0.0; length],
-            modified: vec![0.0; length],
-            correction: vec![0.0; length],
+impl ModeLines {
+    fn new(modes: usize, length: usize, periodic: bool) -> Self {
+        ModeLines {
+            first: vec![0.0; modes],
+            interior: vec![0.0; modes],
+            last: vec![0.0; modes],
+            modified: vec![0.0; modes * length],
+            correction: if periodic {
+                vec![0.0; modes * length]
+            } else {
+                Vec::new()
+            },
+            gamma: if periodic {
+                vec![0.0; modes]
+            } else {
+                Vec::new()
+            },
+            singular_line: Vec::with_capacity(length),
         }
     }
 
-    /// Thomas algorithm: `rhs` is overwritten with the solution of the
-    /// tridiagonal system (`coupling`, `diagonal`, `coupling`).
-    fn thomas(diagonal: &[f64], coupling: f64, rhs: &mut [f64], modified: &mut [f64]) {
-        let n = rhs.len();
-        let mut pivot = diagonal[0];
-        modified[0] = coupling / pivot;
-        rhs[0] /= pivot;
-        for j in 1..n {
-            pivot = diagonal[j] - coupling * modified[j - 1];
-            modified[j] = coupling / pivot;
-            rhs[j] = (rhs[j] - coupling * rhs[j - 1]) / pivot;
-        }
-        for j in (0..n - 1).rev() {
-            rhs[j] -= modified[j] * rhs[j + 1];
-        }
-    }
-
-    fn solve_open(&mut self, coupling: f64) {
-        Self::thomas(&self.diagonal, coupling, &mut self.rhs, &mut self.modified);
-    }
-
-    /// Periodic line: the corner entries `coupling` are a rank-one update
-    /// `u vᵀ` of a tridiagonal matrix (Sherman–Morrison).
-    fn solve_cyclic(&mut self, coupling: f64) {
-        let n = self.rhs.len();
-        let gamma = -self.diagonal[0];
-        let first = self.diagonal[0];
-        let last = self.diagonal[n - 1];
-        self.diagonal[0] = first - gamma;
-        self.diagonal[n - 1] = last - coupling * coupling / gamma;
-        Self::thomas(&self.diagonal, coupling, &mut self.rhs, &mut self.modified);
-        self.correction.fill(0.0);
-        self.correction[0] = gamma;
-        self.correction[n - 1] = coupling;
-        Self::thomas(
-            &self.diagonal,
+    /// Thomas algorithm on every mode: `rhs` is overwritten with the
+    /// solutions.
+    fn sweep(&mut self, rhs: &mut [f64], length: usize, coupling: f64) {
+        thomas(
+            rhs,
+            &mut self.modified,
+            length,
             coupling,
+            [&self.first[..], &self.interior[..], &self.last[..]],
+        );
+    }
+
+    /// Periodic lines: the corner entries `coupling` are a rank-one update
+    /// `u vᵀ` of a tridiagonal matrix, `u = (γ, 0, …, 0, c)`,
+    /// `v = (1, 0, …, 0, c/γ)` with `γ = −b₀` (Sherman–Morrison); two
+    /// sweeps, then `x = y − z (v·y) / (1 + v·z)`.
+    fn solve_cyclic(&mut self, rhs: &mut [f64], length: usize, coupling: f64) {
+        let modes = self.first.len();
+        let last_row = (length - 1) * modes;
+        self.correction.fill(0.0);
+        for m in 0..modes {
+            let gamma = -self.first[m];
+            self.gamma[m] = gamma;
+            self.correction[m] = gamma;
+            self.correction[last_row + m] = coupling;
+            self.first[m] -= gamma;
+            self.last[m] -= coupling * coupling / gamma;
+        }
+        let diagonals = [&self.first[..], &self.interior[..], &self.last[..]];
+        thomas(rhs, &mut self.modified, length, coupling, diagonals);
+        thomas(
             &mut self.correction,
             &mut self.modified,
+            length,
+            coupling,
+            diagonals,
         );
-        let factor = (self.rhs[0] + coupling / gamma * self.rhs[n - 1])
-            / (1.0 + self.correction[0] + coupling / gamma * self.correction[n - 1]);
-        for j in 0..n {
-            self.rhs[j] -= factor * self.correction[j];
+        // v·y / (1 + v·z) per mode, kept in `gamma`'s place once used.
+        for m in 0..modes {
+            let ratio = coupling / self.gamma[m];
+            let numerator = rhs[m] + ratio * rhs[last_row + m];
+            let denominator = 1.0 + self.correction[m] + ratio * self.correction[last_row + m];
+            self.gamma[m] = numerator / denominator;
         }
-        self.diagonal[0] = first;
-        self.diagonal[n - 1] = last;
+        let factor = &self.gamma;
+        for (row, correction) in rhs
+            .chunks_exact_mut(modes)
+            .zip(self.correction.chunks_exact(modes))
+        {
+            for m in 0..modes {
+                row[m] -= factor[m] * correction[m];
+            }
+        }
     }
 
     /// The singular mode of a pure Neumann or periodic Laplacian: remove
     /// the mean of the right-hand side (the compatibility condition), pin
     /// the first value to zero and drop its row (implied by the others),
-    /// then shift the solution to zero mean.
-    fn solve_singular(&mut self, coupling: f64) {
-        let n = self.rhs.len() as f64;
-        let mean = self.rhs.iter().sum::<f64>() / n;
-        self.rhs.iter_mut().for_each(|r| *r -= mean);
-        // Rows 1..n with x_0 = 0: for a periodic line the wrap-around
-        // coupling of the last row to x_0 vanishes too.
-        self.rhs[0] = 0.0;
-        Self::thomas(
-            &self.diagonal[1..],
+    /// then shift the solution to zero mean. For a periodic line the
+    /// wrap-around couplings to the pinned value vanish too.
+    fn solve_singular(&mut self, length: usize, coupling: f64, last_shift: f64) -> &[f64] {
+        let line = &mut self.singular_line;
+        let count = length as f64;
+        let mean = line.iter().sum::<f64>() / count;
+        line.iter_mut().for_each(|r| *r -= mean);
+        line[0] = 0.0;
+        let interior = [-2.0 * coupling];
+        let last = [-2.0 * coupling + last_shift];
+        // With two cells the one remaining row is the last one.
+        let first = if length == 2 { last } else { interior };
+        let mut modified = vec![0.0; length - 1];
+        thomas(
+            &mut line[1..],
+            &mut modified,
+            length - 1,
             coupling,
-            &mut self.rhs[1..],
-            &mut self.modified[1..],
+            [&first[..], &interior[..], &last[..]],
         );
-        let mean = self.rhs.iter().sum::<f64>() / n;
-        self.rhs.iter_mut().for_each(|x| *x -= mean);
+        let mean = line.iter().sum::<f64>() / count;
+        line.iter_mut().for_each(|x| *x -= mean);
+        line
+    }
+}
+
+/// Thomas algorithm for `modes = diagonals[0].len()` independent
+/// tridiagonal systems of `length` rows with off-diagonals `coupling` and
+/// diagonals `[first row, interior rows, last row]` per mode, right-hand
+/// sides in `rhs` (row-major over modes), overwritten with the solutions.
+fn thomas(
+    rhs: &mut [f64],
+    modified: &mut [f64],
+    length: usize,
+    coupling: f64,
+    diagonals: [&[f64]; 3],
+) {
+    let [first, interior, last] = diagonals;
+    let modes = first.len();
+    for m in 0..modes {
+        let pivot = first[m];
+        modified[m] = coupling / pivot;
+        rhs[m] /= pivot;
+    }
+    for j in 1..length {
+        let diagonal = if j == length - 1 { last } else { interior };
+        let (done, rest) = rhs.split_at_mut(j * modes);
+        let previous = &done[(j - 1) * modes..];
+        let current = &mut rest[..modes];
+        let (done_modified, rest_modified) = modified.split_at_mut(j * modes);
+        let previous_modified = &done_modified[(j - 1) * modes..];
+        let current_modified = &mut rest_modified[..modes];
+        for m in 0..modes {
+            let pivot = diagonal[m] - coupling * previous_modified[m];
+            current_modified[m] = coupling / pivot;
+            current[m] = (current[m] - coupling * previous[m]) / pivot;
+        }
+    }
+    for j in (0..length - 1).rev() {
+        let (head, tail) = rhs.split_at_mut((j + 1) * modes);
+        let current = &mut head[j * modes..];
+        let next = &tail[..modes];
+        let current_modified = &modified[j * modes..(j + 1) * modes];
+        for m in 0..modes {
+            current[m] -= current_modified[m] * next[m];
+        }
     }
 }

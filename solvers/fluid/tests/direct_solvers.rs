@@ -135,3 +135,27 @@ fn poisson_with_dirichlet_ends() {
         assert!(error <= TOLERANCE, "{kinds:?}: {error}");
     }
 }
+
+/// The smallest lines: two cells along the tridiagonal axis (one unknown
+/// between prescribed faces, a singular pair of Neumann cells), three
+/// along a periodic one.
+#[test]
+fn two_cells_along_the_last_axis() {
+    let grid = Grid::new(Dimension::Two, [6, 2, 1], [0.0; 3], [1.0, 0.5, 1.0]);
+    for (kinds, identity, laplacian) in [
+        ([[P, P], [N, N], [P, P]], 0.0, 1.0),
+        ([[N, N], [N, N], [P, P]], 0.0, 1.0),
+        ([[P, P], [Df, Df], [P, P]], 1.0, -0.1),
+        ([[P, P], [Dc, N], [P, P]], 1.0, -0.1),
+    ] {
+        let error = recovery_error(&grid, kinds, identity, laplacian);
+        println!("two cells {kinds:?}: relative error {error:.2e}");
+        assert!(error <= TOLERANCE, "{kinds:?}: {error}");
+    }
+    let grid = Grid::new(Dimension::Three, [4, 5, 3], [0.0; 3], [1.0, 1.0, 0.75]);
+    for (identity, laplacian) in [(0.0, 1.0), (1.0, -0.1)] {
+        let error = recovery_error(&grid, [[P, P], [N, N], [P, P]], identity, laplacian);
+        println!("three periodic cells, identity {identity}: relative error {error:.2e}");
+        assert!(error <= TOLERANCE, "{error}");
+    }
+}
