@@ -195,3 +195,45 @@ fn shear_mode_between_free_slip_walls_decays_at_second_order() {
     );
     assert!(orders.iter().all(|&p| p >= 1.9), "orders {orders:?}");
 }
+
+/// A shear mode `u = sin(π y)` between no-slip walls at y = 0 and 1 is an
+/// exact eigenvector of the discrete Laplacian with the ghost condition,
+/// with eigenvalue `λ_h = −(2 − 2 cos π h) / h²`: the semi-discrete
+/// solution `sin(π y) e^{ν λ_h t}` has no space error, so the distance to
+/// it is the time error alone, second order (Crank–Nicolson over the
+/// three sub-steps); and `λ_h` is `−π²` to second order in `h`.
+#[test]
+fn shear_mode_between_no_slip_walls_is_second_order_in_time() {
+    let viscosity = 0.5;
+    let end = 0.5;
+    let cells = 32;
+    let run = |steps: usize| -> f64 {
+        let grid = Grid::new(Dimension::Two, [4, cells, 1], [0.0; 3], [0.25, 1.0, 1.0]);
+        let h = grid.spacing[1];
+        let rate = -(2.0 - 2.0 * (PI * h).cos()) / (h * h);
+        let boundaries =
+            Boundaries::periodic().with(1, BoundaryCondition::NoSlip, BoundaryCondition::NoSlip);
+        let mut solver =
+            FlowSolver::new(grid, boundaries, viscosity, Communicator::serial()).unwrap();
+        solver.set_velocity(|c, x| if c == 0 { (PI * x[1]).sin() } else { 0.0 });
+        advance(&mut solver, end / steps as f64, steps, 1.0);
+        let decay = (viscosity * rate * end).exp();
+        max_velocity_error(&solver, |c, x| {
+            if c == 0 {
+                (PI * x[1]).sin() * decay
+            } else {
+                0.0
+            }
+        })
+    };
+    let errors: Vec<f64> = [5, 10, 20, 40].iter().map(|&steps| run(steps)).collect();
+    let orders: Vec<f64> = errors
+        .windows(2)
+        .map(|pair| order(pair[0], pair[1]))
+        .collect();
+    println!(
+        "no-slip shear mode, time: errors {}, orders {orders:.3?}",
+        scientific(&errors)
+    );
+    assert!(orders.iter().all(|&p| p >= 1.9), "orders {orders:?}");
+}

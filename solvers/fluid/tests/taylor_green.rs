@@ -178,3 +178,47 @@ fn beltrami_3d_is_second_order_in_space() {
     );
     assert!(observed >= 1.9, "order {observed}");
 }
+
+/// Second order in time in 3D: Beltrami flow on 16³, Δt against Δt/16.
+#[test]
+fn beltrami_3d_is_second_order_in_time() {
+    let end = 0.5;
+    let run = |steps: usize| {
+        let side = 2.0 * PI;
+        let grid = Grid::new(Dimension::Three, [16; 3], [0.0; 3], [side; 3]);
+        let mut solver = FlowSolver::new(
+            grid,
+            Boundaries::periodic(),
+            VISCOSITY,
+            Communicator::serial(),
+        )
+        .unwrap();
+        solver.set_velocity(|component, position| beltrami(component, position, 0.0));
+        advance(&mut solver, end / steps as f64, steps, 2.4);
+        solver
+    };
+    let reference = run(160);
+    let errors: Vec<f64> = [10, 20, 40]
+        .iter()
+        .map(|&steps| {
+            let solver = run(steps);
+            let mut error: f64 = 0.0;
+            for component in 0..3 {
+                solver
+                    .grid
+                    .for_each(solver.velocity_unknowns(component), |index, _| {
+                        let difference = solver.velocity[component][index]
+                            - reference.velocity[component][index];
+                        error = error.max(difference.abs());
+                    });
+            }
+            error
+        })
+        .collect();
+    let orders = [order(errors[0], errors[1]), order(errors[1], errors[2])];
+    println!(
+        "Beltrami 3D time: errors {}, orders {orders:.3?}",
+        scientific(&errors)
+    );
+    assert!(orders.iter().all(|&p| p >= 1.9), "orders {orders:?}");
+}
