@@ -70,8 +70,10 @@ pub struct FlowSolver {
     pub mean_pressure_gradient: [f64; 3],
     /// Velocity components on the faces: `velocity[a]` is normal to axis `a` (m/s).
     pub velocity: Vec<Vec<f64>>,
-    /// Kinematic pressure `p/ρ` at cell centres (m²/s²), zero mean when no wall
-    /// fixes it, the mean gradient excluded.
+    /// Kinematic pressure `p/ρ` at cell centres (m²/s²), zero mean, the
+    /// mean gradient excluded. After a step it is first order in time at
+    /// the step's end (the velocity is second order): the last stage's
+    /// projection balances convection centred near `t + 5Δt/6`.
     pub pressure: Vec<f64>,
     /// Simulated time (s).
     pub time: f64,
