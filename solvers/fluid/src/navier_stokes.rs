@@ -158,7 +158,7 @@ impl FlowSolver {
 
     /// Sets every velocity unknown to `profile(component, position)`, then
     /// the boundary values. The field is used as given: project it first
-    /// ([`FlowSolver::project`]) if it is not discretely divergence free.
+    /// ([`FlowSolver::remove_divergence`]) if it is not discretely divergence free.
     pub fn set_velocity(&mut self, profile: impl Fn(usize, [f64; 3]) -> f64) {
         for component in 0..self.grid.dim() {
             let grid = &self.grid;
@@ -198,6 +198,7 @@ impl FlowSolver {
             self.predict(stage, dt);
             let alpha = GAMMA[stage] + ZETA[stage];
             self.project(alpha * dt);
+            self.update_pressure(alpha * dt);
             max_divergence = max_divergence.max(self.max_divergence());
         }
         self.time += dt;
@@ -263,12 +264,17 @@ impl FlowSolver {
         }
     }
 
+    /// Removes the divergence of the current velocity (a projection that
+    /// leaves the pressure alone): for an initial field that is not
+    /// discretely divergence free.
+    pub fn remove_divergence(&mut self) {
+        self.project(1.0);
+    }
+
     /// Projects the velocity onto discretely divergence-free fields with
-    /// the potential `φ` of `L φ = D u / scale`, `u −= scale G φ`, and
-    /// updates the pressure, `p += φ − ν scale/2 L φ` (the part of the
-    /// Crank–Nicolson term the projection moved into `φ`). `scale` is
-    /// `α_k Δt` in a stage.
-    pub fn project(&mut self, scale: f64) {
+    /// the potential `φ` of `L φ = D u / scale`, `u −= scale G φ`; `φ` is
+    /// left in `self.correction`. `scale` is `α_k Δt` in a stage.
+    fn project(&mut self, scale: f64) {
         self.fill_velocity_ghosts();
         let grid = &self.grid;
         let correction = &mut self.correction;
@@ -287,18 +293,25 @@ impl FlowSolver {
                 &mut self.velocity[component],
             );
         }
+        self.fill_velocity_ghosts();
+    }
+
+    /// Pressure after a stage's projection, `p += φ − ν scale/2 L φ`: the
+    /// second term is the part of the Crank–Nicolson viscous term that the
+    /// projection moved into `φ`.
+    fn update_pressure(&mut self, scale: f64) {
+        let grid = &self.grid;
+        let cells = grid.cell_block();
         let pressure = &mut self.pressure;
-        grid.for_each(&grid.cell_block(), |index, _| {
-            pressure[index] += correction[index]
-        });
+        let correction = &self.correction;
+        grid.for_each(&cells, |index, _| pressure[index] += correction[index]);
         add_laplacian(
             grid,
             correction,
-            &grid.cell_block(),
+            &cells,
             -0.5 * scale * self.viscosity,
             pressure,
         );
-        self.fill_velocity_ghosts();
     }
 
     /// Ghost values and wall-face values of every velocity component.

@@ -25,7 +25,7 @@ fn perturbed_stream() -> FlowSolver {
     let mut solver =
         FlowSolver::new(grid, Boundaries::periodic(), 0.0, Communicator::serial()).unwrap();
     solver.set_velocity(|c, x| if c == 0 { 1.0 } else { 0.0 } + 1e-6 * rough(c, x));
-    solver.project(1.0);
+    solver.remove_divergence();
     solver
 }
 
@@ -115,7 +115,7 @@ fn inviscid_energy_change(boundaries: Boundaries, cfl: f64) -> f64 {
     let grid = Grid::new(Dimension::Three, [12, 10, 8], [0.0; 3], [1.2, 1.0, 0.8]);
     let mut solver = FlowSolver::new(grid, boundaries, 0.0, Communicator::serial()).unwrap();
     solver.set_velocity(rough);
-    solver.project(1.0);
+    solver.remove_divergence();
     let dt = solver.time_step_for_cfl(cfl);
     let steps = (0.4 / cfl).round() as usize * 10;
     let before = solver.kinetic_energy();
