@@ -22,9 +22,11 @@
 //! 2. projection: `L φ = D u* / (α_k Δt)`, `u^k = u* − α_k Δt G φ`;
 //! 3. pressure: `p^k = p^{k−1} + φ − α_k ν Δt/2 L φ`.
 //!
-//! The scheme is second order in time (Crank–Nicolson and the incremental
-//! pressure) and in space (central differences on the staggered grid), and
-//! after every projection `D u` vanishes to round-off.
+//! The velocity is second order in time (Crank–Nicolson and the
+//! incremental pressure) and in space (central differences on the
+//! staggered grid); the pressure after a step is first order in time (see
+//! [`FlowSolver::pressure`]). After every projection `D u` vanishes to
+//! round-off.
 
 use grainflow_core::Communicator;
 
