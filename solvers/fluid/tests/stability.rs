@@ -8,6 +8,8 @@
 
 mod common;
 
+use approx::assert_relative_eq;
+
 use grainflow_core::{Communicator, Dimension};
 use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, FluidError, Grid, CFL_LIMIT};
 
@@ -94,15 +96,12 @@ fn a_uniform_stream_is_kept_and_measured_exactly() {
         FlowSolver::new(grid, Boundaries::periodic(), 0.3, Communicator::serial()).unwrap();
     solver.set_velocity(|c, _| stream[c]);
     let dt = solver.time_step_for_cfl(1.0);
-    assert!((dt - 1.0 / 17.5).abs() <= 1e-15, "{dt}");
+    assert_relative_eq!(dt, 1.0 / 17.5, max_relative = 1e-14);
     for _ in 0..3 {
         let report = solver.step(dt).unwrap();
         let energy = 0.5 * (1.0 + 4.0 + 0.25) * 0.96;
-        assert!(
-            (report.kinetic_energy - energy).abs() <= 1e-14 * energy,
-            "{report:?}"
-        );
-        assert!((report.max_cfl - 1.0).abs() <= 1e-14, "{report:?}");
+        assert_relative_eq!(report.kinetic_energy, energy, max_relative = 1e-14);
+        assert_relative_eq!(report.max_cfl, 1.0, max_relative = 1e-14);
         assert!(report.max_divergence <= 1e-13, "{report:?}");
     }
     let error = common::max_velocity_error(&solver, |c, _| stream[c]);
