@@ -35,6 +35,9 @@ impl Analysis {
             Some(AnalysisSection::ColumnCollapse) => {
                 Analysis::ColumnCollapse(ColumnCollapse::new(system))
             }
+            Some(AnalysisSection::ExactDecay | AnalysisSection::Channel) => {
+                unreachable!("validation keeps fluid analyses out of scenes of grains")
+            }
         }
     }
 

@@ -38,8 +38,14 @@ fn invalid(key: &str, value: impl std::fmt::Display, allowed: &str) -> CaseError
 #[serde(deny_unknown_fields)]
 pub struct Case {
     pub domain: DomainSection,
-    pub particles: ParticlesSection,
-    pub contact: ContactSection,
+    /// The fluid (absent in a dry scene: no grid is allocated).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fluid: Option<FluidSection>,
+    /// The grains and their contacts (absent in a fluid-only scene).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub particles: Option<ParticlesSection>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactSection>,
     #[serde(default)]
     pub walls: Vec<WallSection>,
     pub time: TimeSection,
@@ -63,6 +69,98 @@ pub struct DomainSection {
     /// Gravity vector [m/s²] (default: none).
     #[serde(default)]
     pub gravity: Vec<f64>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluidSection {
+    /// Cells along each axis (one entry per axis).
+    pub cells: Vec<usize>,
+    /// Density ρ [kg/m³].
+    pub density: f64,
+    /// Dynamic viscosity μ [Pa s].
+    pub viscosity: f64,
+    /// Conditions on the faces of the domain.
+    #[serde(default)]
+    pub boundary: FluidBoundarySection,
+    /// Imposed mean pressure gradient [Pa/m], one entry per axis (drives a
+    /// periodic channel: a negative x entry pushes the flow towards +x).
+    #[serde(default)]
+    pub pressure_gradient: Vec<f64>,
+    /// Velocity field at t = 0.
+    #[serde(default)]
+    pub initial: InitialFlowSection,
+}
+
+/// Face conditions per axis, `[lower, upper]`, each one of "periodic",
+/// "no_slip", "free_slip" or "moving" (a wall sliding in its plane at
+/// `<axis>_<side>_velocity`). An axis left out is periodic if the domain is.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FluidBoundarySection {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x: Option<Vec<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y: Option<Vec<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z: Option<Vec<String>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x_lower_velocity: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x_upper_velocity: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y_lower_velocity: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y_upper_velocity: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z_lower_velocity: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z_upper_velocity: Option<Vec<f64>>,
+}
+
+pub const FACE_KINDS: &str = "\"periodic\", \"no_slip\", \"free_slip\" or \"moving\"";
+
+impl FluidBoundarySection {
+    /// The `[lower, upper]` face kinds given for `axis`.
+    pub fn faces(&self, axis: usize) -> Option<&Vec<String>> {
+        [&self.x, &self.y, &self.z][axis].as_ref()
+    }
+
+    /// The velocity of a moving face.
+    pub fn velocity(&self, axis: usize, side: usize) -> Option<&Vec<f64>> {
+        [
+            [&self.x_lower_velocity, &self.x_upper_velocity],
+            [&self.y_lower_velocity, &self.y_upper_velocity],
+            [&self.z_lower_velocity, &self.z_upper_velocity],
+        ][axis][side]
+            .as_ref()
+    }
+}
+
+/// The velocity at t = 0.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum InitialFlowSection {
+    /// Fluid at rest.
+    #[default]
+    Rest,
+    /// The same velocity everywhere [m/s].
+    Uniform { velocity: Vec<f64> },
+    /// The Taylor–Green vortex in the x–y plane, u = U sin(kx) cos(ky),
+    /// v = −U cos(kx) sin(ky), k = 2π/L, carried by a uniform `stream`
+    /// [m/s]; an exact solution of the Navier–Stokes equations (in 3D
+    /// uniform along z) on a periodic square.
+    TaylorGreen {
+        /// Amplitude U [m/s].
+        velocity: f64,
+        #[serde(default)]
+        stream: Vec<f64>,
+    },
+    /// The Arnold–Beltrami–Childress flow u = U (sin kz + cos ky,
+    /// sin kx + cos kz, sin ky + cos kx): its vorticity is k u, so the
+    /// convective term is a gradient and it decays as exp(−ν k² t), an
+    /// exact 3D solution on a periodic cube.
+    Beltrami { velocity: f64 },
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -236,6 +334,10 @@ pub struct TimeSection {
     /// Largest overlap / radius before the run is declared unstable.
     #[serde(default = "default_overlap_limit")]
     pub overlap_limit: f64,
+    /// Fluid: adapt the time step to this convective CFL number instead
+    /// of a fixed `dt` (at most the RK3 limit √3).
+    #[serde(default)]
+    pub cfl: Option<f64>,
 }
 
 fn default_overlap_limit() -> f64 {
@@ -254,6 +356,9 @@ pub struct OutputSection {
     /// Write particle files for ParaView.
     #[serde(default = "default_true")]
     pub particles: bool,
+    /// Write fluid field files (velocity, pressure, vorticity) for ParaView.
+    #[serde(default = "default_true")]
+    pub fields: bool,
 }
 
 impl Default for OutputSection {
@@ -262,6 +367,7 @@ impl Default for OutputSection {
             interval: None,
             tracked_interval: None,
             particles: true,
+            fields: true,
         }
     }
 }
@@ -288,6 +394,13 @@ pub enum AnalysisSection {
     /// Runout (R∞ − R0)/R0 and aspect ratio H0/R0 of a symmetric collapse
     /// released by removing the walls named `gate`.
     ColumnCollapse,
+    /// Fluid: relative L2 error of the velocity against the exact decaying
+    /// solution of `fluid.initial` (Taylor–Green or Beltrami) at the end.
+    ExactDecay,
+    /// Fluid: the steady Poiseuille–Couette profile between the walls of the
+    /// last axis, driven by `fluid.pressure_gradient` and moving walls, against
+    /// the computed one at the end.
+    Channel,
 }
 
 impl Case {
@@ -300,7 +413,7 @@ impl Case {
         let mut case = Self::from_text(&text, &path.display().to_string(), overrides)?;
         // Files named by the case are relative to it.
         let base = path.parent().unwrap_or(Path::new("."));
-        for block in &mut case.particles.block {
+        for block in case.particles.iter_mut().flat_map(|p| &mut p.block) {
             if let BlockSection::File { path: file, .. } = block {
                 if Path::new(file.as_str()).is_relative() {
                     *file = base.join(file.as_str()).display().to_string();
@@ -335,6 +448,21 @@ impl Case {
         self.domain.dimension as usize
     }
 
+    /// The particle section of a scene with grains (validation guarantees
+    /// it with the contact section whenever either is present).
+    pub fn particles_section(&self) -> &ParticlesSection {
+        self.particles.as_ref().expect("a scene with grains")
+    }
+
+    pub fn contact_section(&self) -> &ContactSection {
+        self.contact.as_ref().expect("a scene with grains")
+    }
+
+    /// Whether the scene has grains (else it is fluid only).
+    pub fn has_grains(&self) -> bool {
+        self.particles.is_some()
+    }
+
     /// Checks ranges and consistency; the error names the key and what is
     /// allowed.
     pub fn validate(&self) -> Result<(), CaseError> {
@@ -366,7 +494,67 @@ impl Case {
             check_len("domain.gravity", &d.gravity, dim, &need)?;
         }
 
-        let p = &self.particles;
+        match (&self.particles, &self.contact, &self.fluid) {
+            (Some(p), Some(c), _) => self.validate_grains(p, c)?,
+            (Some(_), None, _) => {
+                return Err(invalid(
+                    "contact",
+                    "(missing)",
+                    "a scene with [particles] needs a [contact] table",
+                ))
+            }
+            (None, Some(_), _) => {
+                return Err(invalid(
+                    "particles",
+                    "(missing)",
+                    "a [contact] table needs [particles]",
+                ))
+            }
+            (None, None, None) => {
+                return Err(invalid(
+                    "particles",
+                    "(missing)",
+                    "a scene needs [particles] (with [contact]), a [fluid], or both",
+                ))
+            }
+            (None, None, Some(_)) => {}
+        }
+        if let Some(fluid) = &self.fluid {
+            if self.particles.is_some() {
+                return Err(invalid(
+                    "fluid",
+                    "(with particles)",
+                    "grains in a fluid (immersed boundaries) are not available yet; allowed now: \
+                     a dry scene ([particles]) or a fluid-only scene ([fluid])",
+                ));
+            }
+            self.validate_fluid(fluid)?;
+        }
+        self.validate_walls_time_output()
+    }
+
+    fn validate_grains(&self, p: &ParticlesSection, c: &ContactSection) -> Result<(), CaseError> {
+        let dim = self.dimension();
+        let need = format!("allowed: a list of {dim} numbers (one per axis)");
+        if matches!(
+            self.analysis,
+            Some(AnalysisSection::ExactDecay | AnalysisSection::Channel)
+        ) {
+            return Err(invalid(
+                "analysis.kind",
+                "(a fluid analysis)",
+                "a scene of grains allows \"binary_collision\", \"bouncing\", \"silo\" or \
+                 \"column_collapse\"",
+            ));
+        }
+        if self.time.cfl.is_some() {
+            return Err(invalid(
+                "time.cfl",
+                "(dry scene)",
+                "time.cfl sets the step of a fluid; a dry scene uses time.dt or \
+                 time.dt_over_contact_time",
+            ));
+        }
         positive("particles.density", p.density)?;
         positive("particles.radius", p.radius)?;
         if !(0.0..1.0).contains(&p.radius_spread) {
@@ -517,7 +705,6 @@ impl Case {
                 }
             }
         }
-        let c = &self.contact;
         match c.model.as_str() {
             "soft" => {}
             "cocd" | "nscd" => {
@@ -586,6 +773,198 @@ impl Case {
         if let Some(s) = c.skin {
             positive("contact.skin", s)?;
         }
+        Ok(())
+    }
+
+    fn validate_fluid(&self, f: &FluidSection) -> Result<(), CaseError> {
+        let dim = self.dimension();
+        if f.cells.len() != dim || f.cells.iter().any(|&n| n < 2) {
+            return Err(invalid(
+                "fluid.cells",
+                format!("{:?}", f.cells),
+                &format!("allowed: a list of {dim} cell counts, each at least 2"),
+            ));
+        }
+        positive("fluid.density", f.density)?;
+        positive("fluid.viscosity", f.viscosity)?;
+        if !f.pressure_gradient.is_empty() {
+            check_len(
+                "fluid.pressure_gradient",
+                &f.pressure_gradient,
+                dim,
+                &format!("allowed: a list of {dim} numbers [Pa/m]"),
+            )?;
+        }
+        let axes = ["x", "y", "z"];
+        for axis in 0..dim {
+            let key = format!("fluid.boundary.{}", axes[axis]);
+            let domain_periodic = self.domain.periodic.get(axis).copied().unwrap_or(false);
+            let Some(faces) = f.boundary.faces(axis) else {
+                if !domain_periodic {
+                    return Err(invalid(
+                        &key,
+                        "(missing)",
+                        &format!(
+                            "axis {} is not periodic in domain.periodic: give its two faces, \
+                             each {FACE_KINDS}",
+                            axes[axis]
+                        ),
+                    ));
+                }
+                continue;
+            };
+            if faces.len() != 2 {
+                return Err(invalid(
+                    &key,
+                    format!("{faces:?}"),
+                    &format!("allowed: [lower, upper], each {FACE_KINDS}"),
+                ));
+            }
+            for (side, face) in faces.iter().enumerate() {
+                let side_name = ["lower", "upper"][side];
+                match face.as_str() {
+                    "periodic" | "no_slip" | "free_slip" | "moving" => {}
+                    other => return Err(invalid(&key, other, &format!("allowed: {FACE_KINDS}"))),
+                }
+                if (face == "periodic") != domain_periodic {
+                    return Err(invalid(
+                        &key,
+                        format!("{faces:?}"),
+                        "allowed: \"periodic\" on both faces exactly when domain.periodic \
+                         marks the axis periodic",
+                    ));
+                }
+                let velocity_key = format!("fluid.boundary.{}_{side_name}_velocity", axes[axis]);
+                match (face.as_str(), f.boundary.velocity(axis, side)) {
+                    ("moving", Some(v)) => {
+                        check_len(
+                            &velocity_key,
+                            v,
+                            dim,
+                            &format!("allowed: a list of {dim} numbers [m/s]"),
+                        )?;
+                        if v[axis] != 0.0 {
+                            return Err(invalid(
+                                &velocity_key,
+                                format!("{v:?}"),
+                                "allowed: a velocity in the plane of the wall (zero normal component)",
+                            ));
+                        }
+                    }
+                    ("moving", None) => {
+                        return Err(invalid(
+                            &velocity_key,
+                            "(missing)",
+                            "a \"moving\" face needs its velocity [m/s]",
+                        ))
+                    }
+                    (_, Some(_)) => {
+                        return Err(invalid(
+                            &velocity_key,
+                            "(given)",
+                            "allowed only for a \"moving\" face",
+                        ))
+                    }
+                    (_, None) => {}
+                }
+            }
+        }
+        let periodic = |axis: usize| self.domain.periodic.get(axis).copied().unwrap_or(false);
+        let extent = |axis: usize| self.domain.upper[axis] - self.domain.lower[axis];
+        match &f.initial {
+            InitialFlowSection::Rest => {}
+            InitialFlowSection::Uniform { velocity } => check_len(
+                "fluid.initial.velocity",
+                velocity,
+                dim,
+                &format!("allowed: a list of {dim} numbers [m/s]"),
+            )?,
+            InitialFlowSection::TaylorGreen { velocity, stream } => {
+                non_negative("fluid.initial.velocity", *velocity)?;
+                if !stream.is_empty() {
+                    check_len(
+                        "fluid.initial.stream",
+                        stream,
+                        dim,
+                        &format!("allowed: a list of {dim} numbers [m/s]"),
+                    )?;
+                }
+                if !(periodic(0) && periodic(1))
+                    || (extent(0) - extent(1)).abs() > 1e-12 * extent(0)
+                {
+                    return Err(invalid(
+                        "fluid.initial.kind",
+                        "taylor_green",
+                        "needs a domain periodic along x and y with equal x and y extents",
+                    ));
+                }
+            }
+            InitialFlowSection::Beltrami { velocity } => {
+                non_negative("fluid.initial.velocity", *velocity)?;
+                if dim != 3
+                    || !(0..3).all(periodic)
+                    || (0..3).any(|a| (extent(a) - extent(0)).abs() > 1e-12 * extent(0))
+                {
+                    return Err(invalid(
+                        "fluid.initial.kind",
+                        "beltrami",
+                        "needs a 3D domain periodic along every axis with equal extents (a cube)",
+                    ));
+                }
+            }
+        }
+        if let Some(cfl) = self.time.cfl {
+            if !(cfl > 0.0 && cfl <= grainflow_fluid::CFL_LIMIT) {
+                return Err(invalid(
+                    "time.cfl",
+                    cfl,
+                    "allowed: 0 < cfl ≤ √3 = 1.732 (the stability limit of RK3 with central \
+                     convection)",
+                ));
+            }
+        }
+        match (&self.analysis, &f.initial) {
+            (Some(AnalysisSection::ExactDecay), InitialFlowSection::TaylorGreen { .. })
+            | (Some(AnalysisSection::ExactDecay), InitialFlowSection::Beltrami { .. }) => {}
+            (Some(AnalysisSection::ExactDecay), _) => {
+                return Err(invalid(
+                    "analysis.kind",
+                    "exact_decay",
+                    "needs fluid.initial.kind = \"taylor_green\" or \"beltrami\"",
+                ))
+            }
+            (Some(AnalysisSection::Channel), _) => {
+                let last = dim - 1;
+                if periodic(last) || (0..last).any(|a| !periodic(a)) {
+                    return Err(invalid(
+                        "analysis.kind",
+                        "channel",
+                        "needs walls on the faces of the last axis and periodic other axes",
+                    ));
+                }
+            }
+            (Some(_), _) => {
+                return Err(invalid(
+                    "analysis.kind",
+                    "(a particle analysis)",
+                    "a fluid-only scene allows \"exact_decay\" or \"channel\"",
+                ))
+            }
+            (None, _) => {}
+        }
+        Ok(())
+    }
+
+    fn validate_walls_time_output(&self) -> Result<(), CaseError> {
+        let dim = self.dimension();
+        let need = format!("allowed: a list of {dim} numbers (one per axis)");
+        if !self.walls.is_empty() && !self.has_grains() {
+            return Err(invalid(
+                "walls",
+                self.walls.len(),
+                "[[walls]] are particle walls; a fluid-only scene sets fluid.boundary",
+            ));
+        }
 
         if self.walls.len() > 64 {
             return Err(invalid(
@@ -634,6 +1013,20 @@ impl Case {
         }
         if let Some(i) = self.output.tracked_interval {
             positive("output.tracked_interval", i)?;
+        }
+        if self.time.cfl.is_some() && self.time.dt.is_some() {
+            return Err(invalid(
+                "time.cfl",
+                "(with time.dt)",
+                "allowed: one of time.dt and time.cfl",
+            ));
+        }
+        if self.fluid.is_some() && self.time.cfl.is_none() && self.time.dt.is_none() {
+            return Err(invalid(
+                "time.dt",
+                "(missing)",
+                "a fluid scene needs time.dt [s] or time.cfl",
+            ));
         }
         if let Some(AnalysisSection::Silo { slab, .. }) = &self.analysis {
             positive("analysis.slab", *slab)?;

@@ -3,7 +3,8 @@
 
 use crate::case::Case;
 use crate::simulation::{check_time_step, time_step};
-use crate::{scene, stability, RunError};
+use crate::{fluid_scene, scene, stability, RunError};
+use grainflow_fluid::CFL_LIMIT;
 use std::fmt::Write;
 
 /// Bytes of the DEM state per particle: five vectors and five scalars, the
@@ -18,6 +19,9 @@ fn bytes_per_particle(dimension: usize, walls: usize) -> usize {
 }
 
 pub fn report(case: &Case) -> Result<String, RunError> {
+    if !case.has_grains() {
+        return fluid_report(case);
+    }
     let system = scene::build(case).map_err(RunError::Case)?;
     let (dt, contact_time) = time_step(case, &system);
     let warning = check_time_step(dt, contact_time)?;
@@ -110,6 +114,110 @@ pub fn report(case: &Case) -> Result<String, RunError> {
         out,
         "memory estimate: {:.1} MiB",
         (n * bytes_per_particle(dim, system.walls.len())) as f64 / (1 << 20) as f64
+    );
+    Ok(out)
+}
+
+/// Bytes of the flow state per cell: velocity, its two RK3 tendencies and
+/// its increment (4 vectors), pressure, correction and divergence, plus the
+/// transform work arrays of the direct solvers (about two fields).
+fn bytes_per_cell(dimension: usize) -> usize {
+    8 * (4 * dimension + 3 + 2)
+}
+
+/// `check` of a fluid-only scene: grid, Reynolds number of the initial
+/// flow, the convective and viscous time-step limits, memory.
+fn fluid_report(case: &Case) -> Result<String, RunError> {
+    let solver = fluid_scene::build(case).map_err(RunError::Case)?;
+    let f = fluid_scene::fluid_section(case);
+    let grid = &solver.grid;
+    let dim = grid.dim();
+    let cells: usize = grid.cells.iter().product();
+    let h = grid.spacing[..dim]
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let nu = solver.viscosity;
+    let mut out = String::new();
+    let _ = writeln!(out, "models:");
+    let _ = writeln!(
+        out,
+        "  {dim}D incompressible Navier–Stokes, staggered grid, RK3 + Crank–Nicolson, \
+         FFT/tridiagonal direct pressure solve"
+    );
+    let _ = writeln!(
+        out,
+        "  fluid-only scene: no [particles], so no DEM and no lubrication"
+    );
+    for (name, [lower, upper]) in ["x", "y", "z"]
+        .iter()
+        .zip(solver.boundaries.faces)
+        .take(dim)
+    {
+        let _ = writeln!(out, "  {name} faces: {lower:?}, {upper:?}");
+    }
+    let _ = writeln!(
+        out,
+        "fluid: {:?} cells ({cells}), spacing {:?} m",
+        &grid.cells[..dim],
+        &grid.spacing[..dim]
+    );
+    let _ = writeln!(
+        out,
+        "  density {} kg/m3, viscosity {} Pa s (nu = {nu:.4e} m2/s)",
+        f.density, f.viscosity
+    );
+    let speed = solver.max_cfl(1.0) * h / dim as f64;
+    let length = (0..dim)
+        .map(|a| case.domain.upper[a] - case.domain.lower[a])
+        .fold(0.0, f64::max);
+    if speed > 0.0 {
+        let _ = writeln!(
+            out,
+            "  initial flow: largest speed about {speed:.4e} m/s, Re = U L / nu = {:.4e}",
+            speed * length / nu
+        );
+    }
+    let _ = writeln!(out, "time:");
+    let convective = solver.time_step_for_cfl(CFL_LIMIT);
+    let viscous = h * h / (2.0 * dim as f64 * nu);
+    let _ = writeln!(
+        out,
+        "  convective limit (CFL sqrt(3), RK3): dt <= {convective:.4e} s on the initial flow"
+    );
+    let _ = writeln!(
+        out,
+        "  viscous limit of an explicit step: dt <= {viscous:.4e} s (lifted here by Crank–Nicolson)"
+    );
+    match (case.time.dt, case.time.cfl) {
+        (Some(dt), _) => {
+            let _ = writeln!(
+                out,
+                "  dt = {dt:.4e} s: initial CFL {:.3}{}",
+                solver.max_cfl(dt),
+                if solver.max_cfl(dt) > CFL_LIMIT {
+                    " -- beyond the RK3 limit: the run will refuse it"
+                } else {
+                    ""
+                }
+            );
+            let steps = (case.time.end / dt).ceil();
+            let _ = writeln!(
+                out,
+                "  end = {} s: {steps:.0} steps, {:.3e} cell-steps",
+                case.time.end,
+                steps * cells as f64
+            );
+        }
+        (None, Some(cfl)) => {
+            let _ = writeln!(out, "  dt adapted to CFL {cfl}");
+        }
+        (None, None) => {}
+    }
+    let _ = writeln!(
+        out,
+        "memory estimate: {:.1} MiB",
+        (cells * bytes_per_cell(dim)) as f64 / (1 << 20) as f64
     );
     Ok(out)
 }

@@ -1,13 +1,17 @@
 //! grainflow: resolved grains in fluids.
 //!
 //! This crate assembles scenes from case files and runs them; the physics
-//! lives in the solver crates (`grainflow-dem`, ...). A run goes
-//! case file → [`case::Case`] (typed, validated) → [`scene::build`] →
-//! [`simulation::run`] (time loop, [`output::Outputs`], [`analysis`]).
+//! lives in the solver crates (`grainflow-dem`, `grainflow-fluid`, ...). A
+//! run goes case file → [`case::Case`] (typed, validated) → [`scene::build`]
+//! → [`simulation::run`] (time loop, [`output::Outputs`], [`analysis`]); a
+//! fluid-only scene goes through [`fluid_scene::build`] and
+//! [`fluid_simulation::run`].
 
 pub mod analysis;
 pub mod case;
 pub mod check;
+pub mod fluid_scene;
+pub mod fluid_simulation;
 pub mod output;
 pub mod scene;
 pub mod simulation;

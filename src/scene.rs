@@ -44,7 +44,7 @@ pub fn domain(case: &Case) -> Domain {
 }
 
 pub fn contact_law(case: &Case) -> ContactLaw {
-    let c = &case.contact;
+    let c = case.contact_section();
     let normal = match (c.restitution, c.contact_time, c.stiffness, c.damping) {
         (Some(e), Some(tc), _, _) => {
             let calibration = if c.calibration == "paper" {
@@ -69,7 +69,8 @@ pub fn contact_law(case: &Case) -> ContactLaw {
 }
 
 pub fn walls(case: &Case) -> Vec<PlaneWall> {
-    let default_friction = case.contact.wall_friction.unwrap_or(case.contact.friction);
+    let contact = case.contact_section();
+    let default_friction = contact.wall_friction.unwrap_or(contact.friction);
     case.walls
         .iter()
         .enumerate()
@@ -85,7 +86,7 @@ pub fn walls(case: &Case) -> Vec<PlaneWall> {
 
 /// The particles of every generator block, in order.
 pub fn particles(case: &Case) -> Result<Vec<NewParticle>, String> {
-    let p = &case.particles;
+    let p = case.particles_section();
     let dimension = domain(case).dimension;
     let mut rng = Pcg64::seed_from_u64(p.seed);
     let radii = RadiusDistribution {
@@ -302,7 +303,9 @@ fn collision_pairs(
 
 /// Default Verlet skin: a tenth of the mean diameter.
 pub fn skin(case: &Case) -> f64 {
-    case.contact.skin.unwrap_or(0.2 * case.particles.radius)
+    case.contact_section()
+        .skin
+        .unwrap_or(0.2 * case.particles_section().radius)
 }
 
 /// The scene's DEM system, with its particles placed.

@@ -5,7 +5,7 @@ use crate::analysis::Analysis;
 use crate::case::Case;
 use crate::output::Outputs;
 use crate::stability::{self, TimeStepVerdict};
-use crate::{scene, RunError};
+use crate::{fluid_simulation, scene, RunError};
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
 use std::io::IsTerminal;
@@ -79,6 +79,9 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
 }
 
 fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
+    if !case.has_grains() {
+        return fluid_simulation::run(case, out, show_progress);
+    }
     let started = Instant::now();
     let mut system = scene::build(case).map_err(RunError::Case)?;
     let (dt, contact_time) = time_step(case, &system);
@@ -126,7 +129,7 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
 
     outputs.write_frame(&system, dt).map_err(RunError::Io)?;
     outputs
-        .write_tracked(&system, &case.particles.tracked)
+        .write_tracked(&system, &case.particles_section().tracked)
         .map_err(RunError::Io)?;
     next_output += interval;
     next_tracked += tracked_interval;
@@ -171,7 +174,7 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
 
         if system.time >= next_tracked - 0.5 * dt {
             outputs
-                .write_tracked(&system, &case.particles.tracked)
+                .write_tracked(&system, &case.particles_section().tracked)
                 .map_err(RunError::Io)?;
             next_tracked += tracked_interval;
         }
@@ -280,12 +283,12 @@ pub fn peak_memory_bytes() -> Option<u64> {
 
 /// A progress bar with ETA on a terminal; nothing otherwise (plain log lines
 /// are written instead).
-struct Progress {
+pub(crate) struct Progress {
     bar: Option<indicatif::ProgressBar>,
 }
 
 impl Progress {
-    fn new(visible: bool, end: f64) -> Self {
+    pub(crate) fn new(visible: bool, end: f64) -> Self {
         let bar = visible.then(|| {
             let bar = indicatif::ProgressBar::new(1000);
             bar.set_style(
@@ -301,11 +304,11 @@ impl Progress {
         Progress { bar }
     }
 
-    fn is_visible(&self) -> bool {
+    pub(crate) fn is_visible(&self) -> bool {
         self.bar.is_some()
     }
 
-    fn update(&self, time: f64, step: u64, total: u64) {
+    pub(crate) fn update(&self, time: f64, step: u64, total: u64) {
         if let Some(bar) = &self.bar {
             if step.is_multiple_of(200) {
                 bar.set_position((1000.0 * step as f64 / total as f64) as u64);
@@ -314,7 +317,7 @@ impl Progress {
         }
     }
 
-    fn finish(&self) {
+    pub(crate) fn finish(&self) {
         if let Some(bar) = &self.bar {
             bar.finish_and_clear();
         }

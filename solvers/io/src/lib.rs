@@ -1,8 +1,9 @@
-//! grainflow output writers: VTK PolyData particle files with a ParaView
-//! time-series index (`.pvd`), and CSV series written row by row.
+//! grainflow output writers: VTK PolyData particle files and ImageData
+//! field files with a ParaView time-series index (`.pvd`), and CSV series
+//! written row by row.
 
 pub mod csv;
 pub mod vtk;
 
 pub use csv::CsvSeries;
-pub use vtk::{ParticleFrame, PvdIndex};
+pub use vtk::{FieldFrame, ParticleFrame, PvdIndex};

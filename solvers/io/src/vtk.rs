@@ -1,5 +1,6 @@
-//! VTK XML PolyData (`.vtp`) particle files and the `.pvd` collection that
-//! lets ParaView open them as one time series.
+//! VTK XML PolyData (`.vtp`) particle files, ImageData (`.vti`) files of
+//! cell-centred fields on a uniform grid, and the `.pvd` collection that
+//! lets ParaView open either as one time series.
 //!
 //! Arrays are written in binary (base64, little-endian, with a UInt32 byte
 //! count header), which ParaView reads directly; one vertex per particle.
@@ -85,6 +86,54 @@ impl ParticleFrame<'_> {
         write_array(&mut out, "offsets", "Int64", 1, &offsets)?;
         writeln!(out, "</Verts>")?;
         writeln!(out, "</Piece>\n</PolyData>\n</VTKFile>")?;
+        out.flush()
+    }
+}
+
+/// Cell-centred fields on a uniform grid of `cells` cells of size
+/// `spacing` from `origin` (a 2D grid has one cell along z).
+pub struct FieldFrame<'a> {
+    pub cells: [usize; 3],
+    pub origin: [f64; 3],
+    pub spacing: [f64; 3],
+    /// Scalar fields, one value per cell, x fastest.
+    pub scalars: &'a [(&'a str, &'a [f64])],
+    /// Vector fields, one [x, y, z] per cell, x fastest.
+    pub vectors: &'a [(&'a str, &'a [[f64; 3]])],
+}
+
+impl FieldFrame<'_> {
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let [nx, ny, nz] = self.cells;
+        let [ox, oy, oz] = self.origin;
+        let [dx, dy, dz] = self.spacing;
+        let mut out = BufWriter::new(File::create(path)?);
+        writeln!(out, r#"<?xml version="1.0"?>"#)?;
+        writeln!(
+            out,
+            r#"<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
+        )?;
+        let extent = format!("0 {nx} 0 {ny} 0 {nz}");
+        writeln!(
+            out,
+            r#"<ImageData WholeExtent="{extent}" Origin="{ox:e} {oy:e} {oz:e}" Spacing="{dx:e} {dy:e} {dz:e}">"#
+        )?;
+        writeln!(out, r#"<Piece Extent="{extent}">"#)?;
+        writeln!(out, "<CellData>")?;
+        for (name, values) in self.scalars {
+            write_array(&mut out, name, "Float64", 1, &to_bytes_f64(values))?;
+        }
+        for (name, values) in self.vectors {
+            write_array(
+                &mut out,
+                name,
+                "Float64",
+                3,
+                &to_bytes_f64(values.as_flattened()),
+            )?;
+        }
+        writeln!(out, "</CellData>")?;
+        writeln!(out, "</Piece>\n</ImageData>\n</VTKFile>")?;
         out.flush()
     }
 }

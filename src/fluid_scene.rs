@@ -1,0 +1,249 @@
+//! Fluid scene assembly: turns the `[fluid]` table of a validated [`Case`]
+//! into a [`FlowSolver`], and the exact solutions its analyses compare with.
+//!
+//! The solver works with the kinematic pressure p/ρ and viscosity ν = μ/ρ;
+//! the case speaks in Pa, Pa/m and Pa s, converted here once.
+
+use crate::case::{AnalysisSection, Case, FluidSection, InitialFlowSection};
+use grainflow_core::{Communicator, Dimension};
+use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid};
+use std::f64::consts::PI;
+
+pub fn fluid_section(case: &Case) -> &FluidSection {
+    case.fluid.as_ref().expect("a fluid scene")
+}
+
+fn axis_values(values: &[f64]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    out[..values.len().min(3)].copy_from_slice(&values[..values.len().min(3)]);
+    out
+}
+
+pub fn grid(case: &Case) -> Grid {
+    let f = fluid_section(case);
+    let dimension = if case.dimension() == 2 {
+        Dimension::Two
+    } else {
+        Dimension::Three
+    };
+    let mut cells = [1; 3];
+    cells[..f.cells.len()].copy_from_slice(&f.cells);
+    let mut upper = axis_values(&case.domain.upper);
+    if dimension == Dimension::Two {
+        upper[2] = 1.0;
+    }
+    Grid::new(dimension, cells, axis_values(&case.domain.lower), upper)
+}
+
+pub fn boundaries(case: &Case) -> Boundaries {
+    let f = fluid_section(case);
+    let mut boundaries = Boundaries::periodic();
+    for axis in 0..case.dimension() {
+        let Some(faces) = f.boundary.faces(axis) else {
+            continue;
+        };
+        let condition = |side: usize| match faces[side].as_str() {
+            "periodic" => BoundaryCondition::Periodic,
+            "no_slip" => BoundaryCondition::NoSlip,
+            "free_slip" => BoundaryCondition::FreeSlip,
+            "moving" => BoundaryCondition::MovingWall(axis_values(
+                f.boundary.velocity(axis, side).expect("validated"),
+            )),
+            other => unreachable!("validated face kind {other}"),
+        };
+        boundaries = boundaries.with(axis, condition(0), condition(1));
+    }
+    boundaries
+}
+
+/// The flow of the scene at t = 0.
+pub fn build(case: &Case) -> Result<FlowSolver, String> {
+    let f = fluid_section(case);
+    let grid = grid(case);
+    let mut solver = FlowSolver::new(
+        grid,
+        boundaries(case),
+        f.viscosity / f.density,
+        Communicator::serial(),
+    )
+    .map_err(|e| format!("fluid: {e}"))?;
+    solver.body_force = axis_values(&case.domain.gravity);
+    let gradient = axis_values(&f.pressure_gradient);
+    solver.mean_pressure_gradient = gradient.map(|g| g / f.density);
+    match &f.initial {
+        InitialFlowSection::Rest => {}
+        InitialFlowSection::Uniform { velocity } => {
+            let velocity = axis_values(velocity);
+            solver.set_velocity(|component, _| velocity[component]);
+        }
+        InitialFlowSection::TaylorGreen { .. } | InitialFlowSection::Beltrami { .. } => {
+            let exact = ExactFlow::of(case).expect("an exact initial flow");
+            solver.set_velocity(|component, x| exact.velocity(component, x, 0.0));
+            solver.set_pressure(|x| exact.kinematic_pressure(x, 0.0));
+        }
+    }
+    // A sampled field is divergence free only up to truncation error, and
+    // walls may contradict it: start from its discrete projection.
+    solver.remove_divergence();
+    Ok(solver)
+}
+
+/// An exact unsteady solution of the Navier–Stokes equations.
+#[derive(Clone, Copy, Debug)]
+pub enum ExactFlow {
+    /// u = S + U (sin kX cos kY, −cos kX sin kY, 0) e^{−2νk²t} with
+    /// X = x − x0 − S_x t, Y = y − y0 − S_y t;
+    /// p/ρ = U²/4 (cos 2kX + cos 2kY) e^{−4νk²t}.
+    TaylorGreen {
+        amplitude: f64,
+        stream: [f64; 3],
+        wavenumber: f64,
+        origin: [f64; 3],
+        viscosity: f64,
+    },
+    /// u = U (sin kZ + cos kY, sin kX + cos kZ, sin kY + cos kX) e^{−νk²t}
+    /// (X = x − x0, ...); p/ρ = −|u|²/2.
+    Beltrami {
+        amplitude: f64,
+        wavenumber: f64,
+        origin: [f64; 3],
+        viscosity: f64,
+    },
+}
+
+impl ExactFlow {
+    /// The exact solution the case's initial flow follows, if any.
+    pub fn of(case: &Case) -> Option<ExactFlow> {
+        let f = fluid_section(case);
+        let origin = axis_values(&case.domain.lower);
+        let wavenumber = 2.0 * PI / (case.domain.upper[0] - case.domain.lower[0]);
+        let viscosity = f.viscosity / f.density;
+        match &f.initial {
+            InitialFlowSection::TaylorGreen { velocity, stream } => Some(ExactFlow::TaylorGreen {
+                amplitude: *velocity,
+                stream: axis_values(stream),
+                wavenumber,
+                origin,
+                viscosity,
+            }),
+            InitialFlowSection::Beltrami { velocity } => Some(ExactFlow::Beltrami {
+                amplitude: *velocity,
+                wavenumber,
+                origin,
+                viscosity,
+            }),
+            _ => None,
+        }
+    }
+
+    pub fn velocity(&self, component: usize, x: [f64; 3], time: f64) -> f64 {
+        match *self {
+            ExactFlow::TaylorGreen {
+                amplitude,
+                stream,
+                wavenumber: k,
+                origin,
+                viscosity,
+            } => {
+                let along_x = k * (x[0] - origin[0] - stream[0] * time);
+                let along_y = k * (x[1] - origin[1] - stream[1] * time);
+                let decay = amplitude * (-2.0 * viscosity * k * k * time).exp();
+                stream[component]
+                    + match component {
+                        0 => along_x.sin() * along_y.cos() * decay,
+                        1 => -along_x.cos() * along_y.sin() * decay,
+                        _ => 0.0,
+                    }
+            }
+            ExactFlow::Beltrami {
+                amplitude,
+                wavenumber: k,
+                origin,
+                viscosity,
+            } => {
+                let [a, b, c] = [0, 1, 2].map(|axis| k * (x[axis] - origin[axis]));
+                let decay = amplitude * (-viscosity * k * k * time).exp();
+                decay
+                    * match component {
+                        0 => c.sin() + b.cos(),
+                        1 => a.sin() + c.cos(),
+                        _ => b.sin() + a.cos(),
+                    }
+            }
+        }
+    }
+
+    pub fn kinematic_pressure(&self, x: [f64; 3], time: f64) -> f64 {
+        match *self {
+            ExactFlow::TaylorGreen {
+                amplitude,
+                stream,
+                wavenumber: k,
+                origin,
+                viscosity,
+            } => {
+                let along_x = k * (x[0] - origin[0] - stream[0] * time);
+                let along_y = k * (x[1] - origin[1] - stream[1] * time);
+                0.25 * amplitude
+                    * amplitude
+                    * ((2.0 * along_x).cos() + (2.0 * along_y).cos())
+                    * (-4.0 * viscosity * k * k * time).exp()
+            }
+            ExactFlow::Beltrami { .. } => {
+                let speed_sq: f64 = (0..3).map(|c| self.velocity(c, x, time).powi(2)).sum();
+                -0.5 * speed_sq
+            }
+        }
+    }
+}
+
+/// The steady Poiseuille–Couette profile between the walls of the last
+/// axis: ν u_c'' = ∂p/∂x_c / ρ − g_c for each streamwise component c, with
+/// the wall velocities as end values (second-order central differences are
+/// exact for this parabola, so the discrete steady state matches it).
+pub struct ChannelProfile {
+    pub wall_axis: usize,
+    lower: f64,
+    height: f64,
+    /// ∂p/∂x_c / (ρ ν) − g_c / ν.
+    curvature: [f64; 3],
+    wall_velocity: [[f64; 3]; 2],
+}
+
+impl ChannelProfile {
+    pub fn of(case: &Case) -> Option<ChannelProfile> {
+        if !matches!(case.analysis, Some(AnalysisSection::Channel)) {
+            return None;
+        }
+        let f = fluid_section(case);
+        let wall_axis = case.dimension() - 1;
+        let viscosity = f.viscosity / f.density;
+        let gradient = axis_values(&f.pressure_gradient);
+        let gravity = axis_values(&case.domain.gravity);
+        let wall_velocity = [0, 1].map(|side| {
+            f.boundary
+                .velocity(wall_axis, side)
+                .map_or([0.0; 3], |v| axis_values(v))
+        });
+        Some(ChannelProfile {
+            wall_axis,
+            lower: case.domain.lower[wall_axis],
+            height: case.domain.upper[wall_axis] - case.domain.lower[wall_axis],
+            curvature: [0, 1, 2].map(|c| (gradient[c] / f.density - gravity[c]) / viscosity),
+            wall_velocity,
+        })
+    }
+
+    /// Velocity component `component` at height `y` above the lower wall's
+    /// coordinate origin.
+    pub fn velocity(&self, component: usize, y: f64) -> f64 {
+        if component == self.wall_axis {
+            return 0.0;
+        }
+        let eta = (y - self.lower) / self.height;
+        let [lower, upper] = self.wall_velocity.map(|v| v[component]);
+        0.5 * self.curvature[component] * (y - self.lower) * (y - self.lower - self.height)
+            + lower * (1.0 - eta)
+            + upper * eta
+    }
+}

@@ -1,0 +1,343 @@
+//! The time loop of a fluid-only scene: steps of the flow solver (three
+//! RK3 stages with Crank–Nicolson viscosity and a projection each), fixed
+//! or adapted to a CFL number, with the output contract of every case
+//! (`case.toml`, `log.txt`, `series.csv`, `tracked.csv`, `fields/*.vti` with
+//! `fields.pvd`, `summary.json`).
+
+use crate::case::{AnalysisSection, Case};
+use crate::fluid_scene::{self, ChannelProfile, ExactFlow};
+use crate::simulation::{peak_memory_bytes, Progress, Summary};
+use crate::RunError;
+use grainflow_fluid::{FlowSolver, Location, StepReport, CFL_LIMIT};
+use grainflow_io::{CsvSeries, FieldFrame, PvdIndex};
+use serde_json::{json, Map, Value};
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Runs a validated fluid-only case into `out`. Nothing is written if the
+/// flow cannot be built or its fixed time step is beyond the CFL limit.
+pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
+    let started = Instant::now();
+    let mut solver = fluid_scene::build(case).map_err(RunError::Case)?;
+    let density = fluid_scene::fluid_section(case).density;
+    let end = case.time.end;
+    let step_size = |solver: &FlowSolver| -> f64 {
+        match (case.time.dt, case.time.cfl) {
+            (Some(dt), _) => dt,
+            (None, Some(cfl)) => solver.time_step_for_cfl(cfl).min(end),
+            (None, None) => unreachable!("validated: time.dt or time.cfl"),
+        }
+    };
+    let first_dt = step_size(&solver);
+    let first_cfl = solver.max_cfl(first_dt);
+    if first_cfl > CFL_LIMIT {
+        return Err(RunError::Case(format!(
+            "time.dt = {first_dt:e} s gives a convective CFL number of {first_cfl:.3} on the initial \
+             flow, beyond the RK3 limit √3 = {CFL_LIMIT:.3}: use time.dt ≤ {:.3e} s or time.cfl",
+            solver.time_step_for_cfl(CFL_LIMIT)
+        )));
+    }
+
+    let mut outputs = FluidOutputs::create(out, case).map_err(RunError::Io)?;
+    let grid = &solver.grid;
+    let cells: usize = grid.cells.iter().product();
+    outputs.log(&format!(
+        "grainflow {}: fluid-only scene, {}D staggered grid {:?} ({cells} cells), ν = {:.4e} m²/s, \
+         RK3 + Crank–Nicolson, direct pressure solve; no particles",
+        env!("CARGO_PKG_VERSION"),
+        grid.dim(),
+        &grid.cells[..grid.dim()],
+        solver.viscosity
+    ));
+    match case.time.cfl {
+        Some(cfl) => outputs.log(&format!("dt adapted to CFL {cfl}")),
+        None => outputs.log(&format!(
+            "dt = {first_dt:.4e} s (initial CFL {first_cfl:.3}, limit {CFL_LIMIT:.3})"
+        )),
+    }
+
+    let interval = case.output.interval.unwrap_or(end / 100.0);
+    let mut next_output = interval;
+    let mut steps = 0u64;
+    let mut report = StepReport {
+        kinetic_energy: solver.kinetic_energy(),
+        max_cfl: first_cfl,
+        max_divergence: solver.max_divergence(),
+    };
+    outputs
+        .write_frame(&mut solver, first_dt, steps, &report, density)
+        .map_err(RunError::Io)?;
+    let progress = Progress::new(
+        show_progress && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        end,
+    );
+    let mut failure = None;
+    let mut dt = first_dt;
+    while solver.time < end * (1.0 - 1e-12) {
+        // The last step lands on the end time, where analyses compare.
+        dt = step_size(&solver).min(end - solver.time);
+        match solver.step(dt) {
+            Ok(r) if r.kinetic_energy.is_finite() => report = r,
+            Ok(_) => {
+                failure = Some(format!(
+                    "unstable at t = {:.6e} s (step {steps}): the kinetic energy is not finite",
+                    solver.time
+                ));
+                break;
+            }
+            Err(e) => {
+                failure = Some(format!(
+                    "unstable at t = {:.6e} s (step {steps}): {e}; reduce time.dt or set time.cfl",
+                    solver.time
+                ));
+                break;
+            }
+        }
+        steps += 1;
+        let at_end = solver.time >= end * (1.0 - 1e-12);
+        if solver.time >= next_output - 0.5 * dt || at_end {
+            outputs
+                .write_frame(&mut solver, dt, steps, &report, density)
+                .map_err(RunError::Io)?;
+            next_output += interval;
+        }
+        progress.update(solver.time, steps, (end / dt).ceil() as u64);
+    }
+    progress.finish();
+
+    let wall_seconds = started.elapsed().as_secs_f64();
+    let metrics = if failure.is_none() {
+        fluid_metrics(case, &mut solver, &report)
+    } else {
+        Map::new()
+    };
+    let cell_steps = cells as f64 * steps as f64;
+    let summary = json!({
+        "analysis": case.analysis,
+        "status": if failure.is_some() { "unstable" } else { "ok" },
+        "stop_reason": failure.clone().unwrap_or_else(|| "end time reached".to_string()),
+        "cells": cells,
+        "dimension": solver.grid.dim(),
+        "steps": steps,
+        "dt": dt,
+        "simulated_time": solver.time,
+        "wall_seconds": wall_seconds,
+        "cell_steps_per_second": cell_steps / wall_seconds,
+        "threads": rayon::current_num_threads(),
+        "peak_memory_bytes": peak_memory_bytes(),
+        "metrics": metrics,
+    });
+    outputs.write_summary(&summary).map_err(RunError::Io)?;
+    if let Some(message) = failure {
+        outputs.log(&message);
+        outputs.log("the outputs hold the last good state before the failure");
+        return Err(RunError::Unstable(message));
+    }
+    outputs.log(&format!(
+        "done: {steps} steps in {wall_seconds:.2} s ({:.3e} cell-steps/s)",
+        cell_steps / wall_seconds
+    ));
+    Ok(Summary {
+        json: summary,
+        metrics,
+    })
+}
+
+/// `max_divergence` (max |D u| Δx / U after the projections of the last
+/// step) for every fluid scene, `l2_error` against the exact decaying flow,
+/// `profile_error` against the steady channel profile.
+fn fluid_metrics(case: &Case, solver: &mut FlowSolver, report: &StepReport) -> Map<String, Value> {
+    let mut metrics = Map::new();
+    let grid = solver.grid.clone();
+    let h = grid.spacing[..grid.dim()]
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let speed = max_speed(solver).max(f64::MIN_POSITIVE);
+    metrics.insert(
+        "max_divergence".into(),
+        json!(report.max_divergence * h / speed),
+    );
+    match &case.analysis {
+        Some(AnalysisSection::ExactDecay) => {
+            let exact = ExactFlow::of(case).expect("validated");
+            let (mut error_sq, mut norm_sq) = (0.0, 0.0);
+            for component in 0..grid.dim() {
+                let field = &solver.velocity[component];
+                grid.for_each(solver.velocity_unknowns(component), |index, [i, j, k]| {
+                    let x = grid.position(Location::Face(component), i, j, k);
+                    let reference = exact.velocity(component, x, solver.time);
+                    error_sq += (field[index] - reference).powi(2);
+                    norm_sq += reference * reference;
+                });
+            }
+            metrics.insert("l2_error".into(), json!((error_sq / norm_sq).sqrt()));
+        }
+        Some(AnalysisSection::Channel) => {
+            let profile = ChannelProfile::of(case).expect("validated");
+            let (mut error, mut scale): (f64, f64) = (0.0, 0.0);
+            for component in 0..grid.dim() {
+                let field = &solver.velocity[component];
+                grid.for_each(solver.velocity_unknowns(component), |index, [i, j, k]| {
+                    let x = grid.position(Location::Face(component), i, j, k);
+                    let reference = profile.velocity(component, x[profile.wall_axis]);
+                    error = error.max((field[index] - reference).abs());
+                    scale = scale.max(reference.abs());
+                });
+            }
+            metrics.insert("profile_error".into(), json!(error / scale));
+        }
+        _ => {}
+    }
+    metrics.insert("kinetic_energy".into(), json!(report.kinetic_energy));
+    metrics
+}
+
+fn max_speed(solver: &FlowSolver) -> f64 {
+    let grid = &solver.grid;
+    let mut speed: f64 = 0.0;
+    for component in 0..grid.dim() {
+        let field = &solver.velocity[component];
+        grid.for_each(solver.velocity_unknowns(component), |index, _| {
+            speed = speed.max(field[index].abs());
+        });
+    }
+    speed
+}
+
+/// Cell-centred velocity (mean of a cell's two faces along each axis),
+/// pressure [Pa] and vorticity (the curl on the cell's edges, averaged to
+/// its centre) of the current flow, for ParaView.
+fn cell_fields(solver: &mut FlowSolver, density: f64) -> (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>) {
+    solver.fill_velocity_ghosts();
+    let grid = &solver.grid;
+    let dim = grid.dim();
+    let velocity = &solver.velocity;
+    let cells = grid.cell_block();
+    let mut cell_velocity = Vec::new();
+    let mut pressure = Vec::new();
+    let mut vorticity = Vec::new();
+    grid.for_each(&cells, |index, _| {
+        let mut u = [0.0; 3];
+        for a in 0..dim {
+            u[a] = 0.5 * (velocity[a][index - grid.stride(a)] + velocity[a][index]);
+        }
+        cell_velocity.push(u);
+        pressure.push(density * solver.pressure[index]);
+        // ω_c = ∂u_b/∂x_a − ∂u_a/∂x_b on the four edges of the cell along c.
+        let curl = |a: usize, b: usize| {
+            let (sa, sb) = (grid.stride(a), grid.stride(b));
+            let mut sum = 0.0;
+            for edge_a in [index - sa, index] {
+                for edge_b in [edge_a - sb, edge_a] {
+                    sum += (velocity[b][edge_b + sa] - velocity[b][edge_b]) / grid.spacing[a]
+                        - (velocity[a][edge_b + sb] - velocity[a][edge_b]) / grid.spacing[b];
+                }
+            }
+            0.25 * sum
+        };
+        vorticity.push(if dim == 3 {
+            [curl(1, 2), curl(2, 0), curl(0, 1)]
+        } else {
+            [0.0, 0.0, curl(0, 1)]
+        });
+    });
+    (cell_velocity, pressure, vorticity)
+}
+
+struct FluidOutputs {
+    dir: PathBuf,
+    started: Instant,
+    log: File,
+    series: CsvSeries,
+    fields: Option<PvdIndex>,
+    frames: usize,
+}
+
+impl FluidOutputs {
+    fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
+        std::fs::create_dir_all(dir)?;
+        std::fs::write(dir.join("case.toml"), case.to_toml())?;
+        let log = File::create(dir.join("log.txt"))?;
+        let series = CsvSeries::create(
+            &dir.join("series.csv"),
+            &[
+                "t",
+                "dt",
+                "step",
+                "kinetic_energy",
+                "max_cfl",
+                "max_divergence",
+                "wall_seconds",
+            ],
+        )?;
+        // The contract's file, empty: a fluid-only scene tracks no particle.
+        CsvSeries::create(
+            &dir.join("tracked.csv"),
+            &["t", "id", "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz"],
+        )?;
+        let fields = if case.output.fields {
+            std::fs::create_dir_all(dir.join("fields"))?;
+            Some(PvdIndex::new(dir.join("fields.pvd")))
+        } else {
+            None
+        };
+        Ok(FluidOutputs {
+            dir: dir.to_path_buf(),
+            started: Instant::now(),
+            log,
+            series,
+            fields,
+            frames: 0,
+        })
+    }
+
+    fn log(&mut self, line: &str) {
+        let _ = writeln!(self.log, "{line}");
+        let _ = self.log.flush();
+    }
+
+    /// A row of `series.csv` (kinetic energy per unit density) and, if
+    /// enabled, a field file.
+    fn write_frame(
+        &mut self,
+        solver: &mut FlowSolver,
+        dt: f64,
+        steps: u64,
+        report: &StepReport,
+        density: f64,
+    ) -> std::io::Result<()> {
+        self.series.row(&[
+            solver.time,
+            dt,
+            steps as f64,
+            report.kinetic_energy,
+            report.max_cfl,
+            report.max_divergence,
+            self.started.elapsed().as_secs_f64(),
+        ])?;
+        if let Some(index) = &mut self.fields {
+            let (velocity, pressure, vorticity) = cell_fields(solver, density);
+            let grid = &solver.grid;
+            let name = format!("fields/fields_{:06}.vti", self.frames);
+            FieldFrame {
+                cells: grid.cells,
+                origin: grid.lower,
+                spacing: grid.spacing,
+                scalars: &[("pressure", &pressure)],
+                vectors: &[("velocity", &velocity), ("vorticity", &vorticity)],
+            }
+            .write(&self.dir.join(&name))?;
+            index.add(solver.time, &name)?;
+        }
+        self.frames += 1;
+        Ok(())
+    }
+
+    fn write_summary(&self, summary: &Value) -> std::io::Result<()> {
+        let text = serde_json::to_string_pretty(summary).expect("json");
+        std::fs::write(self.dir.join("summary.json"), text + "\n")
+    }
+}
