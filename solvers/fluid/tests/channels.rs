@@ -237,3 +237,54 @@ fn shear_mode_between_no_slip_walls_is_second_order_in_time() {
     );
     assert!(orders.iter().all(|&p| p >= 1.9), "orders {orders:?}");
 }
+
+/// Gravity normal to the walls of a closed box is balanced by a
+/// hydrostatic pressure, `∇p/ρ = g`: the fluid stays at rest and the
+/// pressure is hydrostatic, both to round-off (the Helmholtz solve bends
+/// the predicted velocity near the walls; the `− ν α Δt/2 L φ` pressure
+/// term undoes exactly that).
+/// Along the last axis (2D, walls normal to y) and across a transformed
+/// axis (3D, walls normal to x).
+#[test]
+fn hydrostatic_balance_under_gravity_normal_to_walls() {
+    let gravity = 9.81;
+    for (grid, axis) in [
+        (
+            Grid::new(Dimension::Two, [8, 16, 1], [0.0; 3], [1.0, 2.0, 1.0]),
+            1,
+        ),
+        (
+            Grid::new(Dimension::Three, [16, 4, 6], [0.0; 3], [2.0, 0.5, 0.75]),
+            0,
+        ),
+    ] {
+        let h = grid.spacing[axis];
+        let dim = grid.dim();
+        let boundaries =
+            Boundaries::periodic().with(axis, BoundaryCondition::NoSlip, BoundaryCondition::NoSlip);
+        let mut solver = FlowSolver::new(grid, boundaries, 1e-3, Communicator::serial()).unwrap();
+        solver.body_force[axis] = -gravity;
+        let dt = 0.01;
+        for _ in 0..20 {
+            solver.step(dt).unwrap();
+        }
+        let speed = max_velocity_error(&solver, |_, _| 0.0);
+        // The pressure gradient between neighbouring cells along the axis.
+        let grid = &solver.grid;
+        let stride = grid.stride(axis);
+        let mut block = grid.cell_block();
+        block.end[axis] -= 1;
+        let mut gradient_error: f64 = 0.0;
+        grid.for_each(&block, |index, _| {
+            let gradient = (solver.pressure[index + stride] - solver.pressure[index]) / h;
+            gradient_error = gradient_error.max((gradient + gravity).abs());
+        });
+        println!(
+            "hydrostatic {dim}D: max |u| / (g dt) {:.2e}, max |dp/dx − g| / g {:.2e}",
+            speed / (gravity * dt),
+            gradient_error / gravity
+        );
+        assert!(speed / (gravity * dt) <= 1e-12, "{speed}");
+        assert!(gradient_error / gravity <= 1e-12, "{gradient_error}");
+    }
+}
