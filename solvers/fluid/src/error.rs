@@ -11,6 +11,8 @@ pub enum FluidError {
     Unstable { cfl: f64, limit: f64 },
     /// A set-up this version does not run.
     Unsupported(String),
+    /// A physical parameter out of its range.
+    Parameter(String),
 }
 
 impl fmt::Display for FluidError {
@@ -23,6 +25,7 @@ impl fmt::Display for FluidError {
                  (reduce dt)"
             ),
             FluidError::Unsupported(message) => write!(f, "fluid: {message}"),
+            FluidError::Parameter(message) => write!(f, "fluid parameter: {message}"),
         }
     }
 }

@@ -108,6 +108,11 @@ impl FlowSolver {
         communicator: Communicator,
     ) -> Result<Self, FluidError> {
         boundaries.validate(&grid)?;
+        if !(viscosity.is_finite() && viscosity >= 0.0) {
+            return Err(FluidError::Parameter(format!(
+                "the kinematic viscosity must be finite and non-negative, got {viscosity}"
+            )));
+        }
         if communicator.size() > 1 {
             // The transforms need whole lines on a rank: distributed
             // pencils and halo exchanges are not there yet.

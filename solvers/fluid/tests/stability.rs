@@ -150,3 +150,20 @@ fn inviscid_convection_conserves_energy_up_to_the_time_error() {
         assert!(observed >= 2.8, "order {observed}");
     }
 }
+
+#[test]
+fn a_negative_or_undefined_viscosity_is_refused() {
+    for viscosity in [-1e-6, f64::NAN, f64::INFINITY] {
+        let grid = Grid::new(Dimension::Two, [4, 4, 1], [0.0; 3], [1.0; 3]);
+        let result = FlowSolver::new(
+            grid,
+            Boundaries::periodic(),
+            viscosity,
+            Communicator::serial(),
+        );
+        assert!(
+            matches!(result, Err(FluidError::Parameter(_))),
+            "{viscosity}"
+        );
+    }
+}
