@@ -11,6 +11,21 @@
 //! - [`transform`]: the 1D transforms that diagonalise the second difference;
 //! - [`poisson`]: direct solvers for `(a I + b L) x = r`;
 //! - [`navier_stokes`]: the time step.
+//!
+//! A flow is a [`Grid`] (cells and corners of the subdomain), its
+//! [`Boundaries`] (per face: periodic, no-slip, free-slip, moving wall) and
+//! a kinematic viscosity, given to [`FlowSolver::new`]; the caller sets the
+//! body force and the mean pressure gradient, an initial velocity
+//! ([`FlowSolver::set_velocity`], then [`FlowSolver::remove_divergence`]),
+//! and calls [`FlowSolver::step`], which returns a [`StepReport`] (kinetic
+//! energy, CFL number, divergence) or refuses a step beyond [`CFL_LIMIT`].
+//!
+//! Limits of this version, each refused or stated where it applies: one
+//! rank (the transforms need whole lines); uniform spacing; wall velocities
+//! constant in time (the viscous solve works on increments with
+//! homogeneous conditions); walls of different kinds on the two faces of
+//! an axis only along the last axis (z in 3D, y in 2D); the pressure after
+//! a step is first order in time, the velocity second order.
 
 // Axis and side loops index several per-axis arrays at once; an index
 // reads closer to the maths than zipped iterators.
