@@ -61,6 +61,8 @@ pub struct StepReport {
 
 /// The incompressible flow on one subdomain and its time stepping.
 pub struct FlowSolver {
+    /// The grid and the walls the solvers were planned for: read them, do
+    /// not change them (build a new solver for another grid or walls).
     pub grid: Grid,
     pub boundaries: Boundaries,
     /// Kinematic viscosity ν (m²/s).
