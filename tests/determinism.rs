@@ -141,3 +141,40 @@ fn a_contact_across_a_periodic_boundary_behaves_as_in_the_interior() {
         "{interior:?} vs {straddling:?}"
     );
 }
+
+/// The flow solver shares the planes of its operators and the lines of its
+/// transforms among threads; each value is computed alone, so a channel
+/// (periodic x and y, no-slip walls in z, a vortex on a stream) gives the
+/// same bits on 1 and 2 threads (the grid is large enough to be split:
+/// several planes and lines per task).
+#[test]
+fn a_flow_gives_the_same_bits_on_one_and_two_threads() {
+    let case = common::load(
+        "taylor_green_3d.toml",
+        &[
+            "fluid.cells=[64, 48, 40]",
+            "domain.periodic=[true, true, false]",
+            "fluid.boundary.z=[\"no_slip\", \"moving\"]",
+            "fluid.boundary.z_upper_velocity=[0.5, 0.2, 0.0]",
+            "fluid.initial={kind=\"uniform\", velocity=[0.3, 0.1, 0.0]}",
+            "fluid.pressure_gradient=[-1.0, 0.0, 0.0]",
+            "analysis.kind=\"channel\"",
+        ],
+    );
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut solver = grainflow::fluid_scene::build(&case).unwrap();
+            for _ in 0..5 {
+                solver.step(0.01).unwrap();
+            }
+            (solver.velocity.clone(), solver.pressure.clone())
+        })
+    };
+    let (one, two) = (run(1), run(2));
+    assert!(one.0.iter().flatten().any(|&u| u != 0.0));
+    assert!(one == two, "the flow differs between 1 and 2 threads");
+}

@@ -16,6 +16,8 @@
 
 use std::ops::Range;
 
+use rayon::prelude::*;
+
 use grainflow_core::Dimension;
 
 /// Where the values of a field sit in a cell.
@@ -176,7 +178,40 @@ impl Grid {
             }
         }
     }
+
+    /// Sets `out[index] = value(index, out[index])` for every padded point
+    /// of `block`, the planes of the slowest active axis (z in 3D, y in 2D)
+    /// shared among threads. Each point is computed alone, so the result
+    /// does not depend on the number of threads.
+    pub fn par_update(
+        &self,
+        block: &Block,
+        out: &mut [f64],
+        value: impl Fn(usize, f64) -> f64 + Sync,
+    ) {
+        let slow = self.dim() - 1;
+        let plane = self.strides[slow];
+        let plane_points: usize = (0..slow).map(|a| block.end[a] - block.start[a]).product();
+        let planes = block.start[slow]..block.end[slow];
+        out[planes.start * plane..planes.end * plane]
+            .par_chunks_mut(plane)
+            .with_min_len(POINTS_PER_TASK.div_ceil(plane_points.max(1)))
+            .enumerate()
+            .for_each(|(offset, values)| {
+                let first = (planes.start + offset) * plane;
+                let mut inner = *block;
+                inner.start[slow] = 0;
+                inner.end[slow] = 1;
+                self.for_each(&inner, |local, _| {
+                    values[local] = value(first + local, values[local]);
+                });
+            });
+    }
 }
+
+/// Smallest number of grid points handed to one thread: below it the
+/// planes of a small grid run on the calling thread.
+const POINTS_PER_TASK: usize = 16_384;
 
 #[cfg(test)]
 mod tests {

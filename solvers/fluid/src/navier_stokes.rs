@@ -247,9 +247,8 @@ impl FlowSolver {
             let previous = &self.previous_tendency[component];
             let forcing = self.body_force[component] - self.mean_pressure_gradient[component];
             let rhs = &mut self.increment[component];
-            grid.for_each(block, |index, _| {
-                rhs[index] =
-                    dt * (gamma * tendency[index] + zeta * previous[index] + alpha * forcing);
+            grid.par_update(block, rhs, |index, _| {
+                dt * (gamma * tendency[index] + zeta * previous[index] + alpha * forcing)
             });
             subtract_gradient(grid, &self.pressure, component, block, alpha * dt, rhs);
             add_laplacian(
@@ -267,9 +266,11 @@ impl FlowSolver {
             let increment = &mut self.increment[component];
             self.velocity_solvers[component].solve_helmholtz(grid, increment, implicit);
             let velocity = &mut self.velocity[component];
-            grid.for_each(&self.velocity_unknowns[component], |index, _| {
-                velocity[index] += increment[index];
-            });
+            grid.par_update(
+                &self.velocity_unknowns[component],
+                velocity,
+                |index, velocity| velocity + increment[index],
+            );
         }
     }
 
@@ -288,7 +289,7 @@ impl FlowSolver {
         let grid = &self.grid;
         let correction = &mut self.correction;
         divergence(grid, &self.velocity, correction);
-        grid.for_each(&grid.cell_block(), |index, _| correction[index] /= scale);
+        grid.par_update(&grid.cell_block(), correction, |_, value| value / scale);
         self.pressure_solver.solve_poisson(grid, correction);
         fill_ghosts(grid, correction, Location::Centre, &self.pressure_ends);
         for component in 0..grid.dim() {
@@ -313,7 +314,9 @@ impl FlowSolver {
         let cells = grid.cell_block();
         let pressure = &mut self.pressure;
         let correction = &self.correction;
-        grid.for_each(&cells, |index, _| pressure[index] += correction[index]);
+        grid.par_update(&cells, pressure, |index, pressure| {
+            pressure + correction[index]
+        });
         add_laplacian(
             grid,
             correction,

@@ -4,7 +4,8 @@
 //! writes only the points of the block it is given. With `D` the
 //! divergence (faces to centres) and `G` the gradient (centres to faces),
 //! `D G` is exactly the cell-centred three-point Laplacian: this is what
-//! makes the projection leave a divergence at round-off.
+//! makes the projection leave a divergence at round-off. Every point is
+//! computed alone ([`Grid::par_update`]), planes shared among threads.
 
 use crate::grid::{Block, Grid};
 
@@ -12,13 +13,13 @@ use crate::grid::{Block, Grid};
 /// `Σ_a (u_a[i] − u_a[i − e_a]) / h_a`.
 pub fn divergence(grid: &Grid, velocity: &[Vec<f64>], divergence: &mut [f64]) {
     let dim = grid.dim();
-    grid.for_each(&grid.cell_block(), |index, _| {
+    grid.par_update(&grid.cell_block(), divergence, |index, _| {
         let mut sum = 0.0;
         for (axis, component) in velocity.iter().enumerate().take(dim) {
             let stride = grid.stride(axis);
             sum += (component[index] - component[index - stride]) / grid.spacing[axis];
         }
-        divergence[index] = sum;
+        sum
     });
 }
 
@@ -34,8 +35,8 @@ pub fn subtract_gradient(
 ) {
     let stride = grid.stride(component);
     let factor = scale / grid.spacing[component];
-    grid.for_each(block, |index, _| {
-        velocity_component[index] -= factor * (scalar[index + stride] - scalar[index]);
+    grid.par_update(block, velocity_component, |index, velocity| {
+        velocity - factor * (scalar[index + stride] - scalar[index])
     });
 }
 
@@ -49,14 +50,14 @@ pub fn add_laplacian(grid: &Grid, field: &[f64], block: &Block, scale: f64, out:
         weights[axis] = scale / (grid.spacing[axis] * grid.spacing[axis]);
         strides[axis] = grid.stride(axis);
     }
-    grid.for_each(block, |index, _| {
+    grid.par_update(block, out, |index, out| {
         let centre = field[index];
         let mut sum = 0.0;
         for axis in 0..dim {
             let s = strides[axis];
             sum += weights[axis] * (field[index + s] - 2.0 * centre + field[index - s]);
         }
-        out[index] += sum;
+        out + sum
     });
 }
 
@@ -80,20 +81,20 @@ pub fn convective_tendency(
     let sc = grid.stride(component);
     // One pass per flux direction keeps the inner loop branch-free.
     let h = grid.spacing[component];
-    grid.for_each(block, |index, _| {
+    grid.par_update(block, tendency, |index, _| {
         let upper = along[index] + along[index + sc];
         let lower = along[index - sc] + along[index];
-        tendency[index] = -0.25 * (upper * upper - lower * lower) / h;
+        -0.25 * (upper * upper - lower * lower) / h
     });
     for axis in (0..grid.dim()).filter(|&axis| axis != component) {
         let across = &velocity[axis];
         let sd = grid.stride(axis);
         let factor = 0.25 / grid.spacing[axis];
-        grid.for_each(block, |index, _| {
+        grid.par_update(block, tendency, |index, tendency| {
             let upper = (along[index] + along[index + sd]) * (across[index] + across[index + sc]);
             let lower =
                 (along[index - sd] + along[index]) * (across[index - sd] + across[index - sd + sc]);
-            tendency[index] -= factor * (upper - lower);
+            tendency - factor * (upper - lower)
         });
     }
 }

@@ -26,6 +26,12 @@ use rustdct::{DctPlanner, Dst1, TransformType2And3};
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
+use rayon::prelude::*;
+
+/// Smallest number of values handed to one thread: the lines of a small
+/// grid are transformed on the calling thread.
+const LINE_VALUES_PER_TASK: usize = 16_384;
+
 /// Which family of modes diagonalises the second difference on a line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TransformKind {
@@ -43,6 +49,7 @@ pub enum TransformKind {
     DirichletFace,
 }
 
+#[derive(Clone)]
 enum Plan {
     Fourier {
         forward: Arc<dyn Fft<f64>>,
@@ -61,6 +68,7 @@ enum Plan {
 }
 
 /// A planned transform of lines of length `len`.
+#[derive(Clone)]
 pub struct AxisTransform {
     kind: TransformKind,
     len: usize,
@@ -228,27 +236,34 @@ impl AxisTransform {
         assert_eq!(shape[axis], self.len, "line length differs from the plan");
         debug_assert_eq!(data.len(), shape.iter().product::<usize>());
         let stride: usize = shape[..axis].iter().product();
-        let outer: usize = shape[axis + 1..].iter().product();
-        let mut line = std::mem::take(&mut self.line);
-        for block in 0..outer {
-            let base = block * stride * self.len;
-            for offset in 0..stride {
-                let start = base + offset;
-                if stride == 1 {
-                    let slice = &mut data[start..start + self.len];
-                    self.apply(slice, direction);
-                    continue;
-                }
-                for (j, value) in line.iter_mut().enumerate() {
-                    *value = data[start + j * stride];
-                }
-                self.apply(&mut line, direction);
-                for (j, value) in line.iter().enumerate() {
-                    data[start + j * stride] = *value;
-                }
-            }
-        }
-        self.line = line;
+        let len = self.len;
+        // Blocks of `stride` interleaved lines, shared among threads, each
+        // with its own work arrays (the plans are shared); every line is
+        // transformed alone, whatever the number of threads.
+        let lines_per_task = LINE_VALUES_PER_TASK.div_ceil(stride * len).max(1);
+        let this = &*self;
+        data.par_chunks_mut(stride * len)
+            .with_min_len(lines_per_task)
+            .for_each_init(
+                || this.clone(),
+                |transform, block| {
+                    if stride == 1 {
+                        transform.apply(block, direction);
+                        return;
+                    }
+                    let mut line = std::mem::take(&mut transform.line);
+                    for offset in 0..stride {
+                        for (j, value) in line.iter_mut().enumerate() {
+                            *value = block[offset + j * stride];
+                        }
+                        transform.apply(&mut line, direction);
+                        for (j, value) in line.iter().enumerate() {
+                            block[offset + j * stride] = *value;
+                        }
+                    }
+                    transform.line = line;
+                },
+            );
     }
 
     fn apply(&mut self, line: &mut [f64], direction: Direction) {
