@@ -6,14 +6,37 @@
 //!
 //! - the velocity component normal to a wall lives on the wall face itself:
 //!   its value there is prescribed (`DirichletFace`);
-//! - a tangential component sits half a cell off the wall: no-slip and a
-//!   moving wall set the ghost so that the linear interpolation to the wall
-//!   equals the wall velocity, `u_ghost = 2 u_wall − u_first`
-//!   (`DirichletCell`); free slip mirrors it, `u_ghost = u_first`
-//!   (`Neumann`, zero shear);
+//! - a tangential component sits half a cell off the wall, at `h/2`,
+//!   `3h/2`, … . No-slip and a moving wall set the ghost (at `−h/2`) so
+//!   that an interpolant through the ghost and the first cells takes the
+//!   wall velocity at the wall:
+//!   - along the last active axis (y in 2D, z in 3D: the wall-normal axis
+//!     of a channel, solved by tridiagonal elimination) the interpolant is
+//!     the parabola through the ghost and the first two cells,
+//!     `u_ghost = (8 u_wall − 6 u_1 + u_2) / 3` (`DirichletCellQuadratic`);
+//!     the ghost is exact for any parabola (third order at the wall), so
+//!     with the three-point Laplacian, exact for parabolas too, a steady
+//!     Poiseuille or open-channel profile is reproduced to round-off;
+//!   - along an axis solved by a transform the interpolant is the line
+//!     through the ghost and the first cell, `u_ghost = 2 u_wall − u_1`
+//!     (`DirichletCell`, second order: for a parabola `u = K y (H − y)` the
+//!     steady discrete profile is the exact one shifted by `K h²/4`). That
+//!     closure is kept there because the sine transform (DST-II) that
+//!     diagonalises the second difference needs the odd reflection
+//!     `u_ghost = −u_1` of the homogeneous condition; the quadratic ghost
+//!     couples a second cell and has no such modes;
+//!
+//!   free slip mirrors the first cell, `u_ghost = u_1` (`Neumann`, zero
+//!   shear), exact for a profile symmetric about the wall;
 //! - pressure (and the projection's correction) has a zero normal
 //!   gradient at every wall (`Neumann`), which with the normal velocity
 //!   fixed on the wall face makes the projection exact.
+//!
+//! Only the viscous term sees the tangential ghost: the explicit Laplacian
+//! reads it and the Helmholtz solver builds the same closure into its
+//! first and last rows. Convection reads it only in the flux through the
+//! wall, where it is multiplied by the normal velocity on the wall face
+//! (zero), and the divergence reads no tangential ghost.
 
 use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
@@ -38,8 +61,15 @@ pub enum EndKind {
     Periodic,
     /// Zero gradient: the ghost equals the first unknown.
     Neumann,
-    /// Value prescribed half a cell beyond the first unknown, by the ghost.
+    /// Value prescribed half a cell beyond the first unknown, by a ghost
+    /// extrapolated linearly: `ghost = 2 value − u_1`.
     DirichletCell,
+    /// Value prescribed half a cell beyond the first unknown, by a ghost
+    /// extrapolated quadratically: `ghost = (8 value − 6 u_1 + u_2) / 3`,
+    /// exact for parabolas. Only along the last active axis, whose lines
+    /// are solved by elimination (it has no transform); a line needs two
+    /// unknowns, which every grid has (at least two cells per axis).
+    DirichletCellQuadratic,
     /// Value prescribed on the boundary face, which is not an unknown.
     DirichletFace,
 }
@@ -116,10 +146,19 @@ impl Boundaries {
         Ok(())
     }
 
-    /// End conditions of velocity component `component`.
+    /// End conditions of velocity component `component`. A component
+    /// tangential to a no-slip or moving wall is closed by the quadratic
+    /// ghost along the last active axis and the linear one along the
+    /// others (see the module documentation).
     pub fn velocity_ends(&self, grid: &Grid, component: usize) -> FieldEnds {
         let mut ends = [[PERIODIC; 2]; 3];
+        let line_axis = grid.dim() - 1;
         for axis in 0..grid.dim() {
+            let wall_cell_kind = if axis == line_axis {
+                EndKind::DirichletCellQuadratic
+            } else {
+                EndKind::DirichletCell
+            };
             for side in 0..2 {
                 ends[axis][side] = match self.faces[axis][side] {
                     BoundaryCondition::Periodic => PERIODIC,
@@ -132,7 +171,7 @@ impl Boundaries {
                         value: 0.0,
                     },
                     condition => EndCondition {
-                        kind: EndKind::DirichletCell,
+                        kind: wall_cell_kind,
                         value: wall_velocity(condition)[component],
                     },
                 };
@@ -210,18 +249,28 @@ pub fn fill_ghosts(grid: &Grid, field: &mut [f64], location: Location, ends: &Fi
         {
             debug_assert_eq!(location, Location::Face(axis));
         }
+        // The quadratic ghost reads the second unknown from the wall; a
+        // grid has at least two cells per axis, so it is never a ghost.
+        debug_assert!(n >= 2);
         grid.for_each(&line_block, |first, _| {
             let at = |i: usize| first + i * stride;
             match lower.kind {
                 EndKind::Periodic => field[at(0)] = field[at(n)],
                 EndKind::Neumann => field[at(0)] = field[at(1)],
                 EndKind::DirichletCell => field[at(0)] = 2.0 * lower.value - field[at(1)],
+                EndKind::DirichletCellQuadratic => {
+                    field[at(0)] = (8.0 * lower.value - 6.0 * field[at(1)] + field[at(2)]) / 3.0
+                }
                 EndKind::DirichletFace => field[at(0)] = lower.value,
             }
             match upper.kind {
                 EndKind::Periodic => field[at(n + 1)] = field[at(1)],
                 EndKind::Neumann => field[at(n + 1)] = field[at(n)],
                 EndKind::DirichletCell => field[at(n + 1)] = 2.0 * upper.value - field[at(n)],
+                EndKind::DirichletCellQuadratic => {
+                    field[at(n + 1)] =
+                        (8.0 * upper.value - 6.0 * field[at(n)] + field[at(n - 1)]) / 3.0
+                }
                 EndKind::DirichletFace => {
                     field[at(n)] = upper.value;
                     // Odd reflection about the wall face; no stencil of an
@@ -249,13 +298,38 @@ mod tests {
         boundaries.validate(&grid).unwrap();
         let u = boundaries.velocity_ends(&grid, 0);
         assert_eq!(u[0][0].kind, EndKind::Periodic);
-        assert_eq!(u[1][0].kind, EndKind::DirichletCell);
+        assert_eq!(u[1][0].kind, EndKind::DirichletCellQuadratic);
+        assert_eq!(u[1][1].kind, EndKind::DirichletCellQuadratic);
         assert_eq!(u[1][1].value, 2.0);
         let v = boundaries.velocity_ends(&grid, 1);
         assert_eq!(v[1][1].kind, EndKind::DirichletFace);
         assert_eq!(v[1][1].value, 0.0);
         assert_eq!(boundaries.pressure_ends(&grid)[1][0].kind, EndKind::Neumann);
         assert_eq!(unknowns(&grid, &v).end, [5, 4, 1]);
+    }
+
+    #[test]
+    fn transformed_axes_keep_the_linear_wall_closure() {
+        let grid = Grid::new(Dimension::Three, [4, 4, 4], [0.0; 3], [1.0; 3]);
+        let boundaries = Boundaries::periodic()
+            .with(0, BoundaryCondition::NoSlip, BoundaryCondition::NoSlip)
+            .with(
+                2,
+                BoundaryCondition::NoSlip,
+                BoundaryCondition::MovingWall([0.0, 1.0, 0.0]),
+            );
+        boundaries.validate(&grid).unwrap();
+        let v = boundaries.velocity_ends(&grid, 1);
+        assert_eq!(
+            v[0],
+            [EndKind::DirichletCell; 2].map(|kind| EndCondition { kind, value: 0.0 })
+        );
+        assert_eq!(v[2][0].kind, EndKind::DirichletCellQuadratic);
+        assert_eq!(v[2][1].kind, EndKind::DirichletCellQuadratic);
+        assert_eq!(v[2][1].value, 1.0);
+        let w = boundaries.velocity_ends(&grid, 2);
+        assert_eq!(w[0][0].kind, EndKind::DirichletCell);
+        assert_eq!(w[2][0].kind, EndKind::DirichletFace);
     }
 
     #[test]
@@ -278,6 +352,13 @@ mod tests {
         assert!(leaking.validate(&grid).is_err());
     }
 
+    /// The value at the wall, half a cell beyond the first unknown, of the
+    /// parabola through the ghost (at −h/2) and the first two unknowns (at
+    /// h/2 and 3h/2): Lagrange weights 3/8, 3/4, −1/8.
+    fn parabola_at_wall(ghost: f64, first: f64, second: f64) -> f64 {
+        0.375 * ghost + 0.75 * first - 0.125 * second
+    }
+
     #[test]
     fn ghosts_interpolate_to_the_wall_value() {
         let grid = Grid::new(Dimension::Two, [3, 4, 1], [0.0; 3], [1.0; 3]);
@@ -289,16 +370,67 @@ mod tests {
         let ends = boundaries.velocity_ends(&grid, 0);
         let mut u = grid.zeros();
         grid.for_each(&grid.cell_block(), |index, [i, j, _]| {
-            u[index] = (i + 10 * j) as f64
+            u[index] = (i + 10 * j) as f64 + 0.7 * (j * j) as f64
         });
         fill_ghosts(&grid, &mut u, Location::Face(0), &ends);
         for i in 0..5 {
-            // Wall value is the mean of ghost and first cell.
-            assert_eq!(0.5 * (u[grid.index(i, 0, 0)] + u[grid.index(i, 1, 0)]), 1.5);
-            assert_eq!(u[grid.index(i, 5, 0)], u[grid.index(i, 4, 0)]);
+            let at = |j: usize| u[grid.index(i, j, 0)];
+            let wall = parabola_at_wall(at(0), at(1), at(2));
+            assert!((wall - 1.5).abs() <= 1e-13, "{wall}");
+            assert_eq!(at(5), at(4));
         }
         // Periodic in x, including the corners.
         assert_eq!(u[grid.index(0, 2, 0)], u[grid.index(3, 2, 0)]);
         assert_eq!(u[grid.index(4, 0, 0)], u[grid.index(1, 0, 0)]);
+    }
+
+    /// Along the last axis the ghost of a parabola that takes the wall
+    /// values is the parabola itself, at both ends; along a transformed
+    /// axis the ghost is the linear one, `2 u_wall − u_1`.
+    #[test]
+    fn the_quadratic_ghost_is_exact_for_a_parabola() {
+        let grid = Grid::new(Dimension::Two, [4, 6, 1], [0.0; 3], [1.0, 1.5, 1.0]);
+        let (lower_speed, upper_speed) = (0.5, -1.0);
+        let boundaries = Boundaries::periodic()
+            .with(0, BoundaryCondition::NoSlip, BoundaryCondition::NoSlip)
+            .with(
+                1,
+                BoundaryCondition::MovingWall([lower_speed, 0.0, 0.0]),
+                BoundaryCondition::MovingWall([upper_speed, 0.0, 0.0]),
+            );
+        boundaries.validate(&grid).unwrap();
+        // The Couette line between the wall velocities plus a Poiseuille bump.
+        let height = 1.5;
+        let parabola = |y: f64| {
+            lower_speed + (upper_speed - lower_speed) * y / height + 3.0 * y * (height - y)
+        };
+        let ends = boundaries.velocity_ends(&grid, 0);
+        let mut u = grid.zeros();
+        grid.for_each(&grid.cell_block(), |index, [i, j, k]| {
+            u[index] = parabola(grid.position(Location::Face(0), i, j, k)[1])
+        });
+        fill_ghosts(&grid, &mut u, Location::Face(0), &ends);
+        for i in 1..4 {
+            for j in [0, 7] {
+                let y = grid.position(Location::Face(0), i, j, 0)[1];
+                let ghost = u[grid.index(i, j, 0)];
+                assert!(
+                    (ghost - parabola(y)).abs() <= 1e-13,
+                    "j = {j}: {ghost} vs {}",
+                    parabola(y)
+                );
+            }
+        }
+        // v is tangential to the x walls, a transformed axis: linear ghost.
+        let ends = boundaries.velocity_ends(&grid, 1);
+        let mut v = grid.zeros();
+        grid.for_each(&grid.cell_block(), |index, [i, j, _]| {
+            v[index] = (i * i + j) as f64
+        });
+        fill_ghosts(&grid, &mut v, Location::Face(1), &ends);
+        for j in 1..6 {
+            assert_eq!(v[grid.index(0, j, 0)], -v[grid.index(1, j, 0)]);
+            assert_eq!(v[grid.index(5, j, 0)], -v[grid.index(4, j, 0)]);
+        }
     }
 }

@@ -13,6 +13,27 @@
 //! slip above) are allowed along the last axis only, where no transform is
 //! needed.
 //!
+//! The end conditions enter the first and last rows of a line through the
+//! ghost they set ([`crate::boundary`]), written with `c = b / h²` for the
+//! homogeneous conditions the solver works on:
+//!
+//! | end                      | ghost              | first row: diagonal shift, upper entry |
+//! |--------------------------|--------------------|-----------------------------------------|
+//! | `Neumann`                | `u_1`              | `+c`, `c`                               |
+//! | `DirichletCell`          | `−u_1`             | `−c`, `c`                               |
+//! | `DirichletCellQuadratic` | `−2 u_1 + u_2 / 3` | `−2c`, `(4/3) c`                        |
+//! | `DirichletFace`          | none (wall face)   | `0`, `c`                                |
+//!
+//! and the mirror at the last row (its lower entry). The quadratic ghost,
+//! the no-slip closure of tangential velocity along this axis, is exact for
+//! parabolas: with it the first row reads
+//! `(a + b Σ λ − 4c) x_1 + (4/3) c x_2 = r_1`. It makes the line operator
+//! non-symmetric but keeps it diagonally dominant for the Helmholtz
+//! equation (`c < 0`) and similar, by a diagonal scaling, to a symmetric
+//! negative definite one: real negative eigenvalues, so Crank–Nicolson
+//! stays unconditionally stable. The transformed axes keep the linear
+//! ghost `−u_1`, the one the sine transform diagonalises.
+//!
 //! The pressure equation `L φ = r` with periodic or zero-gradient ends
 //! everywhere is singular: constants are its null space. For the one mode
 //! where this happens, the mean of the right-hand side is removed (it is
@@ -54,6 +75,12 @@ impl DirectSolver {
         let mut eigenvalues: Vec<Vec<f64>> = Vec::new();
         for (axis, end) in ends.iter().enumerate().take(line_axis) {
             let kind = match (end[0].kind, end[1].kind) {
+                (EndKind::DirichletCellQuadratic, _) | (_, EndKind::DirichletCellQuadratic) => {
+                    return Err(FluidError::Boundary(format!(
+                        "axis {axis} is solved by a transform, which diagonalises only the \
+                         linear wall closure; the quadratic one is for the last axis ({line_axis})"
+                    )))
+                }
                 (EndKind::Periodic, EndKind::Periodic) => TransformKind::Periodic,
                 (EndKind::Neumann, EndKind::Neumann) => TransformKind::Neumann,
                 (EndKind::DirichletCell, EndKind::DirichletCell) => TransformKind::DirichletCell,
@@ -81,6 +108,14 @@ impl DirectSolver {
         if periodic_line[0] != periodic_line[1] {
             return Err(FluidError::Boundary(format!(
                 "axis {line_axis}: periodic on one end only"
+            )));
+        }
+        let quadratic_line = line_ends.contains(&EndKind::DirichletCellQuadratic);
+        if quadratic_line && shape[line_axis] < 2 {
+            return Err(FluidError::Boundary(format!(
+                "axis {line_axis}: the quadratic wall closure reads the second unknown from the \
+                 wall and needs at least 2 unknowns along the line, got {}",
+                shape[line_axis]
             )));
         }
         if periodic_line[0] && shape[line_axis] < 3 {
@@ -170,11 +205,24 @@ impl DirectSolver {
     fn solve_lines(&mut self, identity: f64, laplacian: f64) {
         let length = self.shape[self.line_axis];
         let coupling = laplacian / (self.line_spacing * self.line_spacing);
+        // What each end's ghost adds to the diagonal of its row (see the
+        // module documentation), and the entry coupling that row to its
+        // neighbour inside the line.
         let end_shift = self.line_ends.map(|kind| match kind {
             EndKind::Neumann => coupling,
             EndKind::DirichletCell => -coupling,
+            EndKind::DirichletCellQuadratic => -2.0 * coupling,
             EndKind::DirichletFace | EndKind::Periodic => 0.0,
         });
+        let end_coupling = self.line_ends.map(|kind| match kind {
+            EndKind::DirichletCellQuadratic => 4.0 / 3.0 * coupling,
+            _ => coupling,
+        });
+        let off_diagonals = OffDiagonals {
+            interior: coupling,
+            first_upper: end_coupling[0],
+            last_lower: end_coupling[1],
+        };
         let periodic = self.line_ends[0] == EndKind::Periodic;
         let singular = identity == 0.0
             && self.modal[0] == 0.0
@@ -204,7 +252,7 @@ impl DirectSolver {
         if periodic {
             work.solve_cyclic(&mut self.modes, length, coupling);
         } else {
-            work.sweep(&mut self.modes, length, coupling);
+            work.sweep(&mut self.modes, length, off_diagonals);
         }
         if singular {
             let line = work.solve_singular(length, coupling, end_shift[1]);
@@ -216,9 +264,32 @@ impl DirectSolver {
     }
 }
 
-/// Work arrays of the tridiagonal systems of all modes: off-diagonal
-/// `coupling`, per-mode diagonal `first` (row 0), `interior`, `last` (row
-/// n − 1). Row `j` of mode `m` is at `m + j · modes` in a flat array.
+/// The off-diagonal entries of the line systems, the same for every mode:
+/// `interior` everywhere but the upper entry of the first row and the
+/// lower entry of the last row, which the end closures set (`(4/3) c` next
+/// to a quadratic wall ghost).
+#[derive(Clone, Copy, Debug)]
+struct OffDiagonals {
+    interior: f64,
+    first_upper: f64,
+    last_lower: f64,
+}
+
+impl OffDiagonals {
+    /// The same entry everywhere.
+    fn uniform(coupling: f64) -> Self {
+        OffDiagonals {
+            interior: coupling,
+            first_upper: coupling,
+            last_lower: coupling,
+        }
+    }
+}
+
+/// Work arrays of the tridiagonal systems of all modes: per-mode diagonal
+/// `first` (row 0), `interior`, `last` (row n − 1); the off-diagonals are
+/// [`OffDiagonals`]. Row `j` of mode `m` is at `m + j · modes` in a flat
+/// array.
 struct ModeLines {
     first: Vec<f64>,
     interior: Vec<f64>,
@@ -255,12 +326,12 @@ impl ModeLines {
 
     /// Thomas algorithm on every mode: `rhs` is overwritten with the
     /// solutions.
-    fn sweep(&mut self, rhs: &mut [f64], length: usize, coupling: f64) {
+    fn sweep(&mut self, rhs: &mut [f64], length: usize, off_diagonals: OffDiagonals) {
         thomas(
             rhs,
             &mut self.modified,
             length,
-            coupling,
+            off_diagonals,
             [&self.first[..], &self.interior[..], &self.last[..]],
         );
     }
@@ -282,12 +353,13 @@ impl ModeLines {
             self.last[m] -= coupling * coupling / gamma;
         }
         let diagonals = [&self.first[..], &self.interior[..], &self.last[..]];
-        thomas(rhs, &mut self.modified, length, coupling, diagonals);
+        let off_diagonals = OffDiagonals::uniform(coupling);
+        thomas(rhs, &mut self.modified, length, off_diagonals, diagonals);
         thomas(
             &mut self.correction,
             &mut self.modified,
             length,
-            coupling,
+            off_diagonals,
             diagonals,
         );
         // v·y / (1 + v·z) per mode, kept in `gamma`'s place once used.
@@ -328,7 +400,7 @@ impl ModeLines {
             &mut line[1..],
             &mut modified,
             length - 1,
-            coupling,
+            OffDiagonals::uniform(coupling),
             [&first[..], &interior[..], &last[..]],
         );
         let mean = line.iter().sum::<f64>() / count;
@@ -338,25 +410,33 @@ impl ModeLines {
 }
 
 /// Thomas algorithm for `modes = diagonals[0].len()` independent
-/// tridiagonal systems of `length` rows with off-diagonals `coupling` and
-/// diagonals `[first row, interior rows, last row]` per mode, right-hand
-/// sides in `rhs` (row-major over modes), overwritten with the solutions.
+/// tridiagonal systems of `length` rows with off-diagonals `off_diagonals`
+/// and diagonals `[first row, interior rows, last row]` per mode,
+/// right-hand sides in `rhs` (row-major over modes), overwritten with the
+/// solutions. The end entries are chosen per row, outside the loop over
+/// modes, so the interior sweep is the same as with uniform entries.
 fn thomas(
     rhs: &mut [f64],
     modified: &mut [f64],
     length: usize,
-    coupling: f64,
+    off_diagonals: OffDiagonals,
     diagonals: [&[f64]; 3],
 ) {
     let [first, interior, last] = diagonals;
     let modes = first.len();
     for m in 0..modes {
         let pivot = first[m];
-        modified[m] = coupling / pivot;
+        modified[m] = off_diagonals.first_upper / pivot;
         rhs[m] /= pivot;
     }
+    // The last row has no upper entry: its modified value is never read.
+    let upper = off_diagonals.interior;
     for j in 1..length {
-        let diagonal = if j == length - 1 { last } else { interior };
+        let (diagonal, lower) = if j == length - 1 {
+            (last, off_diagonals.last_lower)
+        } else {
+            (interior, off_diagonals.interior)
+        };
         let (done, rest) = rhs.split_at_mut(j * modes);
         let previous = &done[(j - 1) * modes..];
         let current = &mut rest[..modes];
@@ -364,9 +444,9 @@ fn thomas(
         let previous_modified = &done_modified[(j - 1) * modes..];
         let current_modified = &mut rest_modified[..modes];
         for m in 0..modes {
-            let pivot = diagonal[m] - coupling * previous_modified[m];
-            current_modified[m] = coupling / pivot;
-            current[m] = (current[m] - coupling * previous[m]) / pivot;
+            let pivot = diagonal[m] - lower * previous_modified[m];
+            current_modified[m] = upper / pivot;
+            current[m] = (current[m] - lower * previous[m]) / pivot;
         }
     }
     for j in (0..length - 1).rev() {

@@ -3,11 +3,17 @@
 //! chosen, `r = (a I + b L) x` is formed with the same stencil the flow
 //! solver uses, and the solver must return `x` (up to its mean when the
 //! system is singular). Tolerance: 1e-10 relative in the maximum norm.
+//!
+//! Velocity components tangential to a wall along the last axis are closed
+//! by the quadratic ghost (`Dq`, `u_ghost = (8 u_wall − 6 u_1 + u_2)/3`),
+//! those tangential to a wall along a transformed axis by the linear one
+//! (`Dc`): `r` is formed with the ghosts these closures set, so the solver
+//! must build the same closure into its rows.
 
 use grainflow_core::Dimension;
 use grainflow_fluid::boundary::{fill_ghosts, EndCondition, EndKind, FieldEnds};
 use grainflow_fluid::operators::add_laplacian;
-use grainflow_fluid::{DirectSolver, Grid, Location};
+use grainflow_fluid::{DirectSolver, FluidError, Grid, Location};
 
 const TOLERANCE: f64 = 1e-10;
 
@@ -67,7 +73,10 @@ fn recovery_error(grid: &Grid, kinds: [[EndKind; 2]; 3], identity: f64, laplacia
     error / scale
 }
 
-use EndKind::{DirichletCell as Dc, DirichletFace as Df, Neumann as N, Periodic as P};
+use EndKind::{
+    DirichletCell as Dc, DirichletCellQuadratic as Dq, DirichletFace as Df, Neumann as N,
+    Periodic as P,
+};
 
 #[test]
 fn poisson_2d_periodic_and_neumann() {
@@ -100,19 +109,25 @@ fn poisson_3d_periodic_and_neumann() {
     }
 }
 
+/// The end conditions of the flow's velocity components (the Helmholtz
+/// equation of the viscous step): walls along the last axis (quadratic
+/// ghost for tangential components), along transformed axes (linear
+/// ghost), or both.
 #[test]
 fn helmholtz_with_velocity_end_conditions() {
     let grid_2d = Grid::new(Dimension::Two, [16, 12, 1], [0.0; 3], [2.0, 1.0, 1.0]);
     let grid_3d = Grid::new(Dimension::Three, [8, 10, 12], [0.0; 3], [1.0, 2.0, 3.0]);
     let c = 0.05;
     for (grid, kinds) in [
-        (&grid_2d, [[P, P], [Dc, Dc], [P, P]]),
+        (&grid_2d, [[P, P], [Dq, Dq], [P, P]]),
         (&grid_2d, [[P, P], [Df, Df], [P, P]]),
-        (&grid_2d, [[Dc, Dc], [Dc, N], [P, P]]),
+        (&grid_2d, [[Dc, Dc], [Dq, N], [P, P]]),
         (&grid_2d, [[Df, Df], [P, P], [P, P]]),
-        (&grid_3d, [[P, P], [P, P], [Dc, N]]),
+        (&grid_2d, [[Df, Df], [Dq, Dq], [P, P]]),
+        (&grid_3d, [[P, P], [P, P], [Dq, N]]),
         (&grid_3d, [[Dc, Dc], [N, N], [Df, Df]]),
-        (&grid_3d, [[Df, Df], [P, P], [Dc, Dc]]),
+        (&grid_3d, [[Df, Df], [P, P], [Dq, Dq]]),
+        (&grid_3d, [[P, P], [Dc, Dc], [N, Dq]]),
         (&grid_3d, [[N, N], [Dc, Dc], [P, P]]),
     ] {
         let error = recovery_error(grid, kinds, 1.0, -c);
@@ -124,12 +139,43 @@ fn helmholtz_with_velocity_end_conditions() {
     }
 }
 
+/// The linear ghost is still solved along the last axis, alone or facing
+/// a quadratic one.
+#[test]
+fn helmholtz_with_the_linear_closure_along_the_last_axis() {
+    let grid = Grid::new(Dimension::Three, [8, 10, 12], [0.0; 3], [1.0, 2.0, 3.0]);
+    for kinds in [[[P, P], [N, N], [Dc, Dc]], [[P, P], [P, P], [Dc, Dq]]] {
+        let error = recovery_error(&grid, kinds, 1.0, -0.05);
+        println!("helmholtz 3D {kinds:?}: relative error {error:.2e}");
+        assert!(error <= TOLERANCE, "{kinds:?}: {error}");
+    }
+}
+
+/// The transforms diagonalise the second difference with the linear
+/// ghost only: a quadratic ghost on a transformed axis is refused.
+#[test]
+fn the_quadratic_closure_on_a_transformed_axis_is_refused() {
+    let grid = Grid::new(Dimension::Three, [8, 10, 12], [0.0; 3], [1.0, 2.0, 3.0]);
+    for kinds in [[[Dq, Dq], [P, P], [N, N]], [[P, P], [Dc, Dq], [N, N]]] {
+        let result = DirectSolver::new(&grid, &ends(kinds));
+        assert!(
+            matches!(result, Err(FluidError::Boundary(_))),
+            "{kinds:?} accepted"
+        );
+    }
+}
+
 /// A Poisson problem that is not singular (a Dirichlet end) needs no
 /// mean fixing and is recovered exactly too.
 #[test]
 fn poisson_with_dirichlet_ends() {
     let grid = Grid::new(Dimension::Three, [8, 6, 10], [0.0; 3], [1.0, 1.0, 1.0]);
-    for kinds in [[[P, P], [Dc, Dc], [N, N]], [[N, N], [P, P], [Dc, N]]] {
+    for kinds in [
+        [[P, P], [Dc, Dc], [N, N]],
+        [[N, N], [P, P], [Dc, N]],
+        [[P, P], [N, N], [Dq, Dq]],
+        [[N, N], [P, P], [N, Dq]],
+    ] {
         let error = recovery_error(&grid, kinds, 0.0, 1.0);
         println!("poisson 3D {kinds:?}: relative error {error:.2e}");
         assert!(error <= TOLERANCE, "{kinds:?}: {error}");
@@ -137,8 +183,9 @@ fn poisson_with_dirichlet_ends() {
 }
 
 /// The smallest lines: two cells along the tridiagonal axis (one unknown
-/// between prescribed faces, a singular pair of Neumann cells), three
-/// along a periodic one.
+/// between prescribed faces, a singular pair of Neumann cells, and two
+/// cells whose quadratic wall ghosts each read the cell next to the other
+/// end), three along a periodic one.
 #[test]
 fn two_cells_along_the_last_axis() {
     let grid = Grid::new(Dimension::Two, [6, 2, 1], [0.0; 3], [1.0, 0.5, 1.0]);
@@ -147,6 +194,9 @@ fn two_cells_along_the_last_axis() {
         ([[N, N], [N, N], [P, P]], 0.0, 1.0),
         ([[P, P], [Df, Df], [P, P]], 1.0, -0.1),
         ([[P, P], [Dc, N], [P, P]], 1.0, -0.1),
+        ([[P, P], [Dq, Dq], [P, P]], 1.0, -0.1),
+        ([[P, P], [Dq, Dq], [P, P]], 0.0, 1.0),
+        ([[N, N], [N, Dq], [P, P]], 1.0, -0.1),
     ] {
         let error = recovery_error(&grid, kinds, identity, laplacian);
         println!("two cells {kinds:?}: relative error {error:.2e}");
