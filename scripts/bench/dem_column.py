@@ -12,8 +12,11 @@ k_n, gamma_n, k_t = 0.2 k_n, mu = 0.5, dt = 2e-6 s). Two windows are timed:
 
 grainflow writes the wall-clock time into series.csv at every output; a
 window's cost is the difference of two rows. LAMMPS reports its loop time.
-Prints ns per particle-step for each code and thread count, their ratio,
-and peak memory per particle, and writes the table as JSON.
+LIGGGHTS (Debian's `liggghts` package) runs the same column from
+scripts/bench/liggghts_column.in when it is installed (the dense window
+once, from a single run, as it has no restart here). Prints ns per
+particle-step for each code and thread count, their ratios, and peak memory
+per particle, and writes the table as JSON.
 
 usage: scripts/bench/dem_column.py [--sizes 20000,100000] [--repeats 3]
          [--threads 1,2] [--dense] [--shared ../shared] [--work DIR] [--json FILE]
@@ -162,6 +165,7 @@ def main():
     subprocess.run(["cargo", "build", "--release", "-q"], cwd=root, check=True)
     binary = os.path.join(root, "target/release/grainflow")
     lmp = shutil.which("lmp")
+    liggghts = shutil.which("liggghts")
     os.makedirs(args.work, exist_ok=True)
     shared = os.path.abspath(args.shared)
     inputs = os.path.join(shared, "bench/lammps")
@@ -188,6 +192,24 @@ def main():
             entry["lammps_settling_ns"] = statistics.median(samples)
             entry["lammps_settling_samples"] = samples
             entry["lammps_bytes_per_particle"] = rss / n
+        liggghts_input = os.path.join(root, "scripts/bench/liggghts_column.in")
+        if liggghts:
+            samples = []
+            for _ in range(args.repeats):
+                log, rss = peak_rss_of([liggghts, "-in", liggghts_input, "-var", "datafile", data,
+                                        "-var", "nwarm", "1000", "-var", "nrun", "2000", "-log", "none"],
+                                       cwd=args.work)
+                samples.append(lammps_loop_ns(log, n, 2000))
+            entry["liggghts_settling_ns"] = statistics.median(samples)
+            entry["liggghts_settling_samples"] = samples
+            entry["liggghts_bytes_per_particle"] = rss / n
+        if args.dense and liggghts:
+            # No restart: one run to the dense window, timed once.
+            log, _ = peak_rss_of([liggghts, "-in", liggghts_input, "-var", "datafile", data,
+                                  "-var", "nwarm", "50200", "-var", "nrun", "2000", "-log", "none"],
+                                 cwd=args.work)
+            entry["liggghts_dense_ns"] = lammps_loop_ns(log, n, 2000)
+            entry["liggghts_dense_samples"] = [entry["liggghts_dense_ns"]]
         if args.dense:
             windows = [(50200, 52200), (52200, 54200), (54200, 56200)]
             for t in threads:
@@ -225,6 +247,11 @@ def main():
                 print(f"N={e['particles']:>6} {window:>8} grainflow {t} thread(s): {ours:7.1f} ns{ratio}")
             if peer:
                 print(f"N={e['particles']:>6} {window:>8} LAMMPS 1 rank:         {peer:7.1f} ns")
+            other = e.get(f"liggghts_{window}_ns")
+            if other:
+                ours = e.get(f"grainflow_{window}_ns_t1")
+                print(f"N={e['particles']:>6} {window:>8} LIGGGHTS 1 rank:       {other:7.1f} ns, "
+                      f"LIGGGHTS/grainflow 1 thread = {other / ours:.2f}")
     if args.json:
         json.dump(report, open(args.json, "w"), indent=1)
 
