@@ -189,6 +189,12 @@ impl Grid {
         out: &mut [f64],
         value: impl Fn(usize, f64) -> f64 + Sync,
     ) {
+        if rayon::current_num_threads() == 1 {
+            // No thread to share with: the plain loop, without the
+            // bookkeeping of parallel iterators.
+            self.for_each(block, |index, _| out[index] = value(index, out[index]));
+            return;
+        }
         let slow = self.dim() - 1;
         let plane = self.strides[slow];
         let plane_points: usize = (0..slow).map(|a| block.end[a] - block.start[a]).product();

@@ -240,30 +240,39 @@ impl AxisTransform {
         // Blocks of `stride` interleaved lines, shared among threads, each
         // with its own work arrays (the plans are shared); every line is
         // transformed alone, whatever the number of threads.
+        if rayon::current_num_threads() == 1 {
+            for block in data.chunks_mut(stride * len) {
+                self.apply_to_block(block, stride, direction);
+            }
+            return;
+        }
         let lines_per_task = LINE_VALUES_PER_TASK.div_ceil(stride * len).max(1);
         let this = &*self;
         data.par_chunks_mut(stride * len)
             .with_min_len(lines_per_task)
             .for_each_init(
                 || this.clone(),
-                |transform, block| {
-                    if stride == 1 {
-                        transform.apply(block, direction);
-                        return;
-                    }
-                    let mut line = std::mem::take(&mut transform.line);
-                    for offset in 0..stride {
-                        for (j, value) in line.iter_mut().enumerate() {
-                            *value = block[offset + j * stride];
-                        }
-                        transform.apply(&mut line, direction);
-                        for (j, value) in line.iter().enumerate() {
-                            block[offset + j * stride] = *value;
-                        }
-                    }
-                    transform.line = line;
-                },
+                |transform, block| transform.apply_to_block(block, stride, direction),
             );
+    }
+
+    /// Transforms the `stride` interleaved lines of one block.
+    fn apply_to_block(&mut self, block: &mut [f64], stride: usize, direction: Direction) {
+        if stride == 1 {
+            self.apply(block, direction);
+            return;
+        }
+        let mut line = std::mem::take(&mut self.line);
+        for offset in 0..stride {
+            for (j, value) in line.iter_mut().enumerate() {
+                *value = block[offset + j * stride];
+            }
+            self.apply(&mut line, direction);
+            for (j, value) in line.iter().enumerate() {
+                block[offset + j * stride] = *value;
+            }
+        }
+        self.line = line;
     }
 
     fn apply(&mut self, line: &mut [f64], direction: Direction) {
