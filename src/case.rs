@@ -90,6 +90,14 @@ pub struct FluidSection {
     /// Velocity field at t = 0.
     #[serde(default)]
     pub initial: InitialFlowSection,
+    /// Viscous term: "crank_nicolson" (implicit, no stability limit) or
+    /// "explicit" (no solve; ν Δt Σ 4/h² ≤ 8.61).
+    #[serde(default = "default_viscous_scheme")]
+    pub viscous: String,
+}
+
+fn default_viscous_scheme() -> String {
+    "crank_nicolson".to_string()
 }
 
 /// Face conditions per axis, `[lower, upper]`, each one of "periodic",
@@ -787,6 +795,13 @@ impl Case {
         }
         positive("fluid.density", f.density)?;
         positive("fluid.viscosity", f.viscosity)?;
+        if f.viscous != "crank_nicolson" && f.viscous != "explicit" {
+            return Err(invalid(
+                "fluid.viscous",
+                &f.viscous,
+                "allowed: \"crank_nicolson\" or \"explicit\"",
+            ));
+        }
         if !f.pressure_gradient.is_empty() {
             check_len(
                 "fluid.pressure_gradient",

@@ -4,7 +4,7 @@
 use crate::case::Case;
 use crate::simulation::{check_time_step, time_step};
 use crate::{fluid_scene, scene, stability, RunError};
-use grainflow_fluid::CFL_LIMIT;
+use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
 use std::fmt::Write;
 
 /// Bytes of the DEM state per particle: five vectors and five scalars, the
@@ -180,14 +180,20 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
     }
     let _ = writeln!(out, "time:");
     let convective = solver.time_step_for_cfl(CFL_LIMIT);
-    let viscous = h * h / (2.0 * dim as f64 * nu);
+    let viscous = EXPLICIT_VISCOUS_LIMIT / solver.viscous_number(1.0);
     let _ = writeln!(
         out,
         "  convective limit (CFL sqrt(3), RK3): dt <= {convective:.4e} s on the initial flow"
     );
     let _ = writeln!(
         out,
-        "  viscous limit of an explicit step: dt <= {viscous:.4e} s (lifted here by Crank–Nicolson)"
+        "  viscous limit of an explicit step (nu dt sum 4/h^2 <= {EXPLICIT_VISCOUS_LIMIT:.3}): \
+         dt <= {viscous:.4e} s{}",
+        if solver.viscous_scheme == ViscousScheme::Explicit {
+            " -- applies: fluid.viscous = \"explicit\""
+        } else {
+            " (lifted here by Crank–Nicolson)"
+        }
     );
     match (case.time.dt, case.time.cfl) {
         (Some(dt), _) => {

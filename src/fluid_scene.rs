@@ -6,7 +6,7 @@
 
 use crate::case::{AnalysisSection, Case, FluidSection, InitialFlowSection};
 use grainflow_core::{Communicator, Dimension};
-use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid};
+use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid, ViscousScheme};
 use std::f64::consts::PI;
 
 pub fn fluid_section(case: &Case) -> &FluidSection {
@@ -67,6 +67,9 @@ pub fn build(case: &Case) -> Result<FlowSolver, String> {
         Communicator::serial(),
     )
     .map_err(|e| format!("fluid: {e}"))?;
+    if f.viscous == "explicit" {
+        solver.viscous_scheme = ViscousScheme::Explicit;
+    }
     solver.body_force = axis_values(&case.domain.gravity);
     let gradient = axis_values(&f.pressure_gradient);
     solver.mean_pressure_gradient = gradient.map(|g| g / f.density);

@@ -8,7 +8,7 @@ use crate::case::{AnalysisSection, Case};
 use crate::fluid_scene::{self, ChannelProfile, ExactFlow};
 use crate::simulation::{peak_memory_bytes, Progress, Summary};
 use crate::RunError;
-use grainflow_fluid::{FlowSolver, Location, StepReport, CFL_LIMIT};
+use grainflow_fluid::{FlowSolver, Location, StepReport, ViscousScheme, CFL_LIMIT};
 use grainflow_io::{CsvSeries, FieldFrame, PvdIndex};
 use serde_json::{json, Map, Value};
 use std::fs::File;
@@ -23,10 +23,14 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
     let mut solver = fluid_scene::build(case).map_err(RunError::Case)?;
     let density = fluid_scene::fluid_section(case).density;
     let end = case.time.end;
+    // An adapted step also keeps an explicit viscous term stable.
+    let viscous_cap = viscous_limit(&solver).map_or(f64::INFINITY, |limit| {
+        0.9 * limit / solver.viscous_number(1.0)
+    });
     let step_size = |solver: &FlowSolver| -> f64 {
         match (case.time.dt, case.time.cfl) {
             (Some(dt), _) => dt,
-            (None, Some(cfl)) => solver.time_step_for_cfl(cfl).min(end),
+            (None, Some(cfl)) => solver.time_step_for_cfl(cfl).min(viscous_cap).min(end),
             (None, None) => unreachable!("validated: time.dt or time.cfl"),
         }
     };
@@ -38,6 +42,18 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
              flow, beyond the RK3 limit √3 = {CFL_LIMIT:.3}: use time.dt ≤ {:.3e} s or time.cfl",
             solver.time_step_for_cfl(CFL_LIMIT)
         )));
+    }
+
+    if let Some(limit) = viscous_limit(&solver) {
+        let number = solver.viscous_number(first_dt);
+        if number > limit {
+            return Err(RunError::Case(format!(
+                "time.dt = {first_dt:e} s gives a viscous number ν Δt Σ 4/h² = {number:.3}, beyond \
+                 the limit {limit:.3} of fluid.viscous = \"explicit\": use time.dt ≤ {:.3e} s or \
+                 fluid.viscous = \"crank_nicolson\"",
+                first_dt * limit / number
+            )));
+        }
     }
 
     let mut outputs = FluidOutputs::create(out, case).map_err(RunError::Io)?;
@@ -143,6 +159,11 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         json: summary,
         metrics,
     })
+}
+
+/// The stability limit on the viscous number, if the viscous term is explicit.
+fn viscous_limit(solver: &FlowSolver) -> Option<f64> {
+    (solver.viscous_scheme == ViscousScheme::Explicit).then_some(solver.viscous_limit)
 }
 
 /// `max_divergence` (max |D u| Δx / U after the projections of the last

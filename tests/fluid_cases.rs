@@ -162,3 +162,37 @@ fn a_fluid_run_writes_the_output_contract() {
         "{last:?}"
     );
 }
+
+/// An explicit viscous term: a time step beyond its limit (ν Δt Σ 4/h² =
+/// 12.5 here, limit 8.61) is refused before anything is written; within it
+/// the channel still reaches the exact parabola.
+#[test]
+fn an_explicit_viscous_step_is_refused_beyond_its_limit() {
+    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/channel_poiseuille.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let result = Command::new(env!("CARGO_BIN_EXE_grainflow"))
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args([
+            "--set",
+            "fluid.viscous=\"explicit\"",
+            "--set",
+            "time.dt=3e-3",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_ne!(result.status.code(), Some(0));
+    assert!(stderr.contains("viscous number"), "{stderr}");
+    assert!(!out.exists());
+    let (summary, _dir) = run(
+        "channel_poiseuille.toml",
+        &["fluid.viscous=\"explicit\"", "output.fields=false"],
+    );
+    assert!(metric(&summary, "profile_error") <= 1e-10, "{summary}");
+}

@@ -9,6 +9,8 @@ pub enum FluidError {
     Boundary(String),
     /// A time step beyond the stability limit of the explicit terms.
     Unstable { cfl: f64, limit: f64 },
+    /// An explicit viscous step beyond its stability limit.
+    ViscousUnstable { number: f64, limit: f64 },
     /// A set-up this version does not run.
     Unsupported(String),
     /// A physical parameter out of its range.
@@ -23,6 +25,11 @@ impl fmt::Display for FluidError {
                 f,
                 "fluid time step refused: CFL number {cfl:.3} exceeds the limit {limit:.3} \
                  (reduce dt)"
+            ),
+            FluidError::ViscousUnstable { number, limit } => write!(
+                f,
+                "fluid time step refused: viscous number ν Δt Σ 4/h² = {number:.3} exceeds the \
+                 limit {limit:.3} of the explicit viscous step (reduce dt or use Crank–Nicolson)"
             ),
             FluidError::Unsupported(message) => write!(f, "fluid: {message}"),
             FluidError::Parameter(message) => write!(f, "fluid parameter: {message}"),

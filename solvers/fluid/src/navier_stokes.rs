@@ -27,6 +27,11 @@
 //! staggered grid); the pressure after a step is first order in time (see
 //! [`FlowSolver::pressure`]). After every projection `D u` vanishes to
 //! round-off.
+//!
+//! With [`ViscousScheme::Explicit`] the Helmholtz solve is skipped (the
+//! viscous term is then forward Euler over each stage's `α_k Δt`, first
+//! order, stable up to [`EXPLICIT_VISCOUS_LIMIT`]) and the pressure update
+//! drops its Crank–Nicolson part.
 
 use grainflow_core::Communicator;
 
@@ -47,6 +52,26 @@ const ZETA: [f64; 3] = [0.0, -17.0 / 60.0, -5.0 / 12.0];
 /// `|1 + z + z²/2 + z³/6|` exceeds 1 on the imaginary axis beyond `|z| = √3`.
 /// The viscous term is implicit and sets no limit.
 pub const CFL_LIMIT: f64 = 1.732_050_807_568_877_2;
+
+/// Stability limit of an explicit viscous step, on the viscous number
+/// `ν Δt Σ_a 4/h_a²` (the largest |eigenvalue| of the discrete Laplacian
+/// times ν Δt): each stage advances the viscous term by forward Euler over
+/// `α_k Δt`, so a step multiplies a Laplacian mode by
+/// `G(z) = Π_k (1 + α_k z)`, `α = (8/15, 2/15, 1/3)`, which leaves [−1, 1]
+/// below `z = −8.6148…` (the root of `G(z) = −1`).
+pub const EXPLICIT_VISCOUS_LIMIT: f64 = 8.614_810_406_648_447;
+
+/// How the viscous term is advanced within each Runge–Kutta stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViscousScheme {
+    /// Crank–Nicolson: one Helmholtz solve per component and stage, no
+    /// stability limit from the viscosity.
+    CrankNicolson,
+    /// Explicit (forward Euler over each stage's `α_k Δt`): no solve, but
+    /// the step must keep the viscous number below [`EXPLICIT_VISCOUS_LIMIT`];
+    /// first order in time for the viscous term.
+    Explicit,
+}
 
 /// Diagnostics of the flow after a step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,6 +109,11 @@ pub struct FlowSolver {
     /// A step whose CFL number at its start exceeds this is refused;
     /// [`CFL_LIMIT`] unless set otherwise.
     pub cfl_limit: f64,
+    /// Crank–Nicolson unless set otherwise.
+    pub viscous_scheme: ViscousScheme,
+    /// With the explicit viscous scheme, a step whose viscous number
+    /// exceeds this is refused; [`EXPLICIT_VISCOUS_LIMIT`] unless set otherwise.
+    pub viscous_limit: f64,
     communicator: Communicator,
     velocity_ends: Vec<FieldEnds>,
     pressure_ends: FieldEnds,
@@ -147,6 +177,8 @@ impl FlowSolver {
             pressure: field(),
             time: 0.0,
             cfl_limit: CFL_LIMIT,
+            viscous_scheme: ViscousScheme::CrankNicolson,
+            viscous_limit: EXPLICIT_VISCOUS_LIMIT,
             communicator,
             velocity_ends,
             pressure_ends,
@@ -202,6 +234,13 @@ impl FlowSolver {
                 limit: self.cfl_limit,
             });
         }
+        let viscous_number = self.viscous_number(dt);
+        if self.viscous_scheme == ViscousScheme::Explicit && viscous_number > self.viscous_limit {
+            return Err(FluidError::ViscousUnstable {
+                number: viscous_number,
+                limit: self.viscous_limit,
+            });
+        }
         let mut max_divergence: f64 = 0.0;
         for stage in 0..3 {
             self.predict(stage, dt);
@@ -218,6 +257,18 @@ impl FlowSolver {
         })
     }
 
+    /// `ν Δt Σ_a 4/h_a²`: the viscous number an explicit step must keep
+    /// below [`EXPLICIT_VISCOUS_LIMIT`].
+    pub fn viscous_number(&self, dt: f64) -> f64 {
+        let grid = &self.grid;
+        self.viscosity
+            * dt
+            * grid.spacing[..grid.dim()]
+                .iter()
+                .map(|h| 4.0 / (h * h))
+                .sum::<f64>()
+    }
+
     /// The time step at which the current velocity has CFL number `cfl`
     /// (infinite for a fluid at rest).
     pub fn time_step_for_cfl(&self, cfl: f64) -> f64 {
@@ -226,7 +277,8 @@ impl FlowSolver {
 
     /// Stage `stage` prediction: explicit convection (RK3), body force and
     /// mean pressure gradient, pressure of the previous stage, and
-    /// Crank–Nicolson viscous term through one Helmholtz solve per component.
+    /// viscous term, Crank–Nicolson through one Helmholtz solve per
+    /// component (or explicit, without the solve).
     fn predict(&mut self, stage: usize, dt: f64) {
         let (gamma, zeta) = (GAMMA[stage], ZETA[stage]);
         let alpha = gamma + zeta;
@@ -264,7 +316,9 @@ impl FlowSolver {
         for component in 0..dim {
             let grid = &self.grid;
             let increment = &mut self.increment[component];
-            self.velocity_solvers[component].solve_helmholtz(grid, increment, implicit);
+            if self.viscous_scheme == ViscousScheme::CrankNicolson {
+                self.velocity_solvers[component].solve_helmholtz(grid, increment, implicit);
+            }
             let velocity = &mut self.velocity[component];
             grid.par_update(
                 &self.velocity_unknowns[component],
@@ -317,13 +371,15 @@ impl FlowSolver {
         grid.par_update(&cells, pressure, |index, pressure| {
             pressure + correction[index]
         });
-        add_laplacian(
-            grid,
-            correction,
-            &cells,
-            -0.5 * scale * self.viscosity,
-            pressure,
-        );
+        if self.viscous_scheme == ViscousScheme::CrankNicolson {
+            add_laplacian(
+                grid,
+                correction,
+                &cells,
+                -0.5 * scale * self.viscosity,
+                pressure,
+            );
+        }
     }
 
     /// Ghost values and wall-face values of every velocity component.

@@ -5,15 +5,19 @@
 //! `|1 + z + z²/2 + z³/6|`, `z = i CFL sin(k h)`, which exceeds 1 only
 //! beyond CFL √3. The tests run just below and above that limit, and check
 //! that the solver refuses a step above it. The viscous term is implicit
-//! (Crank–Nicolson): its step is checked stable at any diffusion number,
-//! walls included.
+//! (Crank–Nicolson) by default: its step is checked stable at any
+//! diffusion number, walls included; the explicit viscous step is checked
+//! against its amplification factor on both sides of its limit.
 
 mod common;
 
 use approx::assert_relative_eq;
 
 use grainflow_core::{Communicator, Dimension};
-use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, FluidError, Grid, CFL_LIMIT};
+use grainflow_fluid::{
+    Boundaries, BoundaryCondition, FlowSolver, FluidError, Grid, ViscousScheme, CFL_LIMIT,
+    EXPLICIT_VISCOUS_LIMIT,
+};
 
 /// A rough field with every mode present, of magnitude ≤ 1.
 fn rough(component: usize, position: [f64; 3]) -> f64 {
@@ -213,4 +217,69 @@ fn the_viscous_step_is_stable_at_any_diffusion_number_between_walls() {
         assert!(growth < 1.0, "energy grew by {growth} in a step");
         assert!(last < 1.0, "{last}");
     }
+}
+
+/// The explicit viscous step: the most damped divergence-free mode of a
+/// periodic square, the checkerboard of stream function (−1)^{i+j} (u and
+/// v alternate in x and y, so the Laplacian gives −8/h² exactly), is
+/// multiplied per step by G(z) = Π_k (1 + α_k z), z = −ν Δt 8/h². Returns
+/// the ratio of its energy after to before `steps` steps.
+fn explicit_viscous_growth(viscous_number: f64, steps: usize) -> f64 {
+    let n = 16;
+    let h = 1.0 / n as f64;
+    let grid = Grid::new(Dimension::Two, [n, n, 1], [0.0; 3], [1.0, 1.0, 1.0]);
+    let viscosity = 1e-2;
+    let mut solver = FlowSolver::new(
+        grid,
+        Boundaries::periodic(),
+        viscosity,
+        Communicator::serial(),
+    )
+    .unwrap();
+    solver.viscous_scheme = ViscousScheme::Explicit;
+    solver.viscous_limit = f64::INFINITY;
+    // Amplitude 1e-8: convection, of order ε², stays far below round-off.
+    solver.set_velocity(|component, x| {
+        let (i, j) = ((x[0] / h).floor() as i64, (x[1] / h).floor() as i64);
+        let sign = if (i + j) % 2 == 0 { 1.0 } else { -1.0 };
+        1e-8 * if component == 0 { sign } else { -sign }
+    });
+    let before = solver.kinetic_energy();
+    let dt = viscous_number / (viscosity * 8.0 / (h * h));
+    for _ in 0..steps {
+        solver.step(dt).unwrap();
+    }
+    solver.kinetic_energy() / before
+}
+
+#[test]
+fn the_explicit_viscous_step_breaks_where_its_amplification_leaves_the_unit_disc() {
+    let amplification = |z: f64| (1.0 + 8.0 / 15.0 * z) * (1.0 + 2.0 / 15.0 * z) * (1.0 + z / 3.0);
+    // The limit is the root of G(z) = −1.
+    assert_relative_eq!(
+        amplification(-EXPLICIT_VISCOUS_LIMIT),
+        -1.0,
+        epsilon = 1e-12
+    );
+    for fraction in [0.5, 0.9, 0.98, 1.02, 1.1] {
+        let number = fraction * EXPLICIT_VISCOUS_LIMIT;
+        let measured = explicit_viscous_growth(number, 20);
+        let predicted = amplification(-number).powi(40);
+        eprintln!(
+            "explicit viscous number {fraction} of the limit: energy ratio {measured:.4e} after 20 steps (G^40 = {predicted:.4e})"
+        );
+        assert_relative_eq!(measured, predicted, max_relative = 1e-6);
+        assert_eq!(measured > 1.0, fraction > 1.0);
+    }
+    // At the solver's own limit the step is refused instead.
+    let grid = Grid::new(Dimension::Two, [8, 8, 1], [0.0; 3], [1.0; 3]);
+    let mut solver =
+        FlowSolver::new(grid, Boundaries::periodic(), 1.0, Communicator::serial()).unwrap();
+    solver.viscous_scheme = ViscousScheme::Explicit;
+    let dt = 1.01 * EXPLICIT_VISCOUS_LIMIT / solver.viscous_number(1.0);
+    assert!(matches!(
+        solver.step(dt),
+        Err(FluidError::ViscousUnstable { .. })
+    ));
+    assert!(solver.step(0.99 * dt / 1.01).is_ok());
 }
