@@ -171,7 +171,12 @@ fn a_flow_gives_the_same_bits_on_one_and_two_threads() {
             for _ in 0..5 {
                 solver.step(0.01).unwrap();
             }
-            (solver.velocity.clone(), solver.pressure.clone())
+            (
+                solver.velocity.clone(),
+                solver.pressure.clone(),
+                solver.kinetic_energy().to_bits(),
+                solver.max_cfl(1.0).to_bits(),
+            )
         })
     };
     let (one, two) = (run(1), run(2));

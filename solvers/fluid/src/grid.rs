@@ -215,6 +215,60 @@ impl Grid {
     }
 }
 
+impl Grid {
+    /// `Σ term(index, point)` over `block`: one partial sum per plane of the
+    /// slowest active axis, the planes shared among threads, then the
+    /// partial sums added in plane order, so the result does not depend on
+    /// the number of threads.
+    pub fn par_sum(&self, block: &Block, term: impl Fn(usize, [usize; 3]) -> f64 + Sync) -> f64 {
+        let slow = self.dim() - 1;
+        let plane_points: usize = (0..slow).map(|a| block.end[a] - block.start[a]).product();
+        let plane_sum = |plane: usize| {
+            let mut inner = *block;
+            inner.start[slow] = plane;
+            inner.end[slow] = plane + 1;
+            let mut sum = 0.0;
+            self.for_each(&inner, |index, point| sum += term(index, point));
+            sum
+        };
+        let planes = block.start[slow]..block.end[slow];
+        let partial: Vec<f64> = if rayon::current_num_threads() == 1 {
+            planes.map(plane_sum).collect()
+        } else {
+            planes
+                .into_par_iter()
+                .with_min_len(POINTS_PER_TASK.div_ceil(plane_points.max(1)))
+                .map(plane_sum)
+                .collect()
+        };
+        partial.iter().sum()
+    }
+
+    /// `max value(index)` over `block` (0 for an empty block), the planes
+    /// shared among threads (a maximum does not depend on the order).
+    pub fn par_max(&self, block: &Block, value: impl Fn(usize) -> f64 + Sync) -> f64 {
+        let slow = self.dim() - 1;
+        let plane_points: usize = (0..slow).map(|a| block.end[a] - block.start[a]).product();
+        let plane_max = |plane: usize| {
+            let mut inner = *block;
+            inner.start[slow] = plane;
+            inner.end[slow] = plane + 1;
+            let mut largest: f64 = 0.0;
+            self.for_each(&inner, |index, _| largest = largest.max(value(index)));
+            largest
+        };
+        let planes = block.start[slow]..block.end[slow];
+        if rayon::current_num_threads() == 1 {
+            return planes.map(plane_max).fold(0.0, f64::max);
+        }
+        planes
+            .into_par_iter()
+            .with_min_len(POINTS_PER_TASK.div_ceil(plane_points.max(1)))
+            .map(plane_max)
+            .reduce(|| 0.0, f64::max)
+    }
+}
+
 /// Smallest number of grid points handed to one thread: below it the
 /// planes of a small grid run on the calling thread.
 const POINTS_PER_TASK: usize = 16_384;

@@ -397,10 +397,10 @@ impl FlowSolver {
     /// Largest `|D u|` over the cells of every rank (1/s).
     pub fn max_divergence(&mut self) -> f64 {
         divergence(&self.grid, &self.velocity, &mut self.divergence);
-        let mut largest: f64 = 0.0;
-        self.grid.for_each(&self.grid.cell_block(), |index, _| {
-            largest = largest.max(self.divergence[index].abs());
-        });
+        let divergence = &self.divergence;
+        let largest = self
+            .grid
+            .par_max(&self.grid.cell_block(), |index| divergence[index].abs());
         self.communicator.max(largest)
     }
 
@@ -417,10 +417,10 @@ impl FlowSolver {
                 block.end[component] += 1;
             }
             let (first, last) = (block.start[component], block.end[component] - 1);
-            grid.for_each(&block, |index, point| {
+            sum += grid.par_sum(&block, |index, point| {
                 let on_wall = walls && (point[component] == first || point[component] == last);
                 let weight = if on_wall { 0.5 } else { 1.0 };
-                sum += weight * field[index] * field[index];
+                weight * field[index] * field[index]
             });
         }
         self.communicator.sum(0.5 * sum * grid.cell_volume())
@@ -431,9 +431,8 @@ impl FlowSolver {
         let grid = &self.grid;
         let mut cfl = 0.0;
         for (component, field) in self.velocity.iter().enumerate() {
-            let mut largest: f64 = 0.0;
-            grid.for_each(&self.velocity_unknowns[component], |index, _| {
-                largest = largest.max(field[index].abs());
+            let largest = grid.par_max(&self.velocity_unknowns[component], |index| {
+                field[index].abs()
             });
             cfl += self.communicator.max(largest) * dt / grid.spacing[component];
         }
