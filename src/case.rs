@@ -87,6 +87,10 @@ pub struct FluidSection {
     /// periodic channel: a negative x entry pushes the flow towards +x).
     #[serde(default)]
     pub pressure_gradient: Vec<f64>,
+    /// Bulk velocity held constant along periodic axes [m/s] (a constant
+    /// flow rate, instead of a pressure gradient along that axis).
+    #[serde(default)]
+    pub bulk_velocity: BulkVelocitySection,
     /// Velocity field at t = 0.
     #[serde(default)]
     pub initial: InitialFlowSection,
@@ -98,6 +102,25 @@ pub struct FluidSection {
 
 fn default_viscous_scheme() -> String {
     "crank_nicolson".to_string()
+}
+
+/// Bulk velocity per periodic axis (the mean of that velocity component
+/// over the grid's cells).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BulkVelocitySection {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z: Option<f64>,
+}
+
+impl BulkVelocitySection {
+    pub fn along(&self, axis: usize) -> Option<f64> {
+        [self.x, self.y, self.z][axis]
+    }
 }
 
 /// Face conditions per axis, `[lower, upper]`, each one of "periodic",
@@ -811,6 +834,30 @@ impl Case {
             )?;
         }
         let axes = ["x", "y", "z"];
+        for (axis, name) in axes.iter().enumerate() {
+            let Some(bulk) = f.bulk_velocity.along(axis) else {
+                continue;
+            };
+            let key = format!("fluid.bulk_velocity.{name}");
+            if axis >= dim || !self.domain.periodic.get(axis).copied().unwrap_or(false) {
+                return Err(invalid(
+                    &key,
+                    bulk,
+                    "allowed only along an axis the domain marks periodic",
+                ));
+            }
+            if !bulk.is_finite() {
+                return Err(invalid(&key, bulk, "allowed: a finite velocity [m/s]"));
+            }
+            if f.pressure_gradient.get(axis).is_some_and(|&g| g != 0.0) {
+                return Err(invalid(
+                    &key,
+                    bulk,
+                    "a held bulk velocity sets the pressure gradient along its axis: leave \
+                     fluid.pressure_gradient zero there",
+                ));
+            }
+        }
         for axis in 0..dim {
             let key = format!("fluid.boundary.{}", axes[axis]);
             let domain_periodic = self.domain.periodic.get(axis).copied().unwrap_or(false);

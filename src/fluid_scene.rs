@@ -70,6 +70,7 @@ pub fn build(case: &Case) -> Result<FlowSolver, String> {
     if f.viscous == "explicit" {
         solver.viscous_scheme = ViscousScheme::Explicit;
     }
+    solver.bulk_velocity = [0, 1, 2].map(|axis| f.bulk_velocity.along(axis));
     solver.body_force = axis_values(&case.domain.gravity);
     let gradient = axis_values(&f.pressure_gradient);
     solver.mean_pressure_gradient = gradient.map(|g| g / f.density);
@@ -208,8 +209,8 @@ pub struct ChannelProfile {
     pub wall_axis: usize,
     lower: f64,
     height: f64,
-    /// ∂p/∂x_c / (ρ ν) − g_c / ν.
-    curvature: [f64; 3],
+    /// u_c'' = ∂p/∂x_c / (ρ ν) − g_c / ν, or set by a held bulk velocity.
+    pub curvature: [f64; 3],
     wall_velocity: [[f64; 3]; 2],
 }
 
@@ -228,11 +229,23 @@ impl ChannelProfile {
                 .velocity(wall_axis, side)
                 .map_or([0.0; 3], |v| axis_values(v))
         });
+        let height = case.domain.upper[wall_axis] - case.domain.lower[wall_axis];
+        let spacing = height / f.cells[wall_axis] as f64;
+        let curvature = [0, 1, 2].map(|c| match f.bulk_velocity.along(c) {
+            // The held bulk velocity is the mean over the cells (midpoint
+            // rule), which for this parabola is the exact mean minus
+            // K h²/24: (U_lower + U_upper)/2 − K H²/12 − K h²/24 = U_b.
+            Some(bulk) => {
+                (0.5 * (wall_velocity[0][c] + wall_velocity[1][c]) - bulk)
+                    / (height * height / 12.0 + spacing * spacing / 24.0)
+            }
+            None => (gradient[c] / f.density - gravity[c]) / viscosity,
+        });
         Some(ChannelProfile {
             wall_axis,
             lower: case.domain.lower[wall_axis],
-            height: case.domain.upper[wall_axis] - case.domain.lower[wall_axis],
-            curvature: [0, 1, 2].map(|c| (gradient[c] / f.density - gravity[c]) / viscosity),
+            height,
+            curvature,
             wall_velocity,
         })
     }

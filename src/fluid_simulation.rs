@@ -209,6 +209,18 @@ fn fluid_metrics(case: &Case, solver: &mut FlowSolver, report: &StepReport) -> M
                 });
             }
             metrics.insert("profile_error".into(), json!(error / scale));
+            // The pressure gradient that held a bulk velocity, against the
+            // one the steady profile needs: ρ ν u''.
+            let f = fluid_scene::fluid_section(case);
+            for axis in 0..grid.dim() {
+                if f.bulk_velocity.along(axis).is_some() {
+                    let name = ["x", "y", "z"][axis];
+                    let held = f.density * solver.flow_rate_gradient[axis];
+                    let steady = f.viscosity * profile.curvature[axis];
+                    metrics.insert(format!("pressure_gradient_{name}"), json!(held));
+                    metrics.insert(format!("steady_pressure_gradient_{name}"), json!(steady));
+                }
+            }
         }
         _ => {}
     }

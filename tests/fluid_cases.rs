@@ -196,3 +196,32 @@ fn an_explicit_viscous_step_is_refused_beyond_its_limit() {
     );
     assert!(metric(&summary, "profile_error") <= 1e-10, "{summary}");
 }
+
+/// A channel driven at constant flow rate (bulk velocity 0.5 m/s held
+/// along x) instead of a pressure gradient: the steady profile is the
+/// parabola whose mean over the cells is 0.5 m/s, to 1e-10, and the
+/// pressure gradient that holds it is μ u'' = −12 μ U_b / (H² + h²/2),
+/// to 1e-10 relative; with either viscous scheme.
+#[test]
+fn a_channel_at_constant_flow_rate_reaches_the_parabola_and_its_pressure_gradient() {
+    for viscous in ["crank_nicolson", "explicit"] {
+        let scheme = format!("fluid.viscous=\"{viscous}\"");
+        let (summary, _dir) = run(
+            "channel_poiseuille.toml",
+            &[
+                "fluid.pressure_gradient=[0.0, 0.0]",
+                "fluid.bulk_velocity={x = 0.5}",
+                &scheme,
+                "output.fields=false",
+            ],
+        );
+        assert!(metric(&summary, "profile_error") <= 1e-10, "{summary}");
+        // μ = 1 Pa s, H = 1 m, h = 1/32 m.
+        let expected = -12.0 * 0.5 / (1.0 + 1.0 / (2.0 * 32.0 * 32.0));
+        let held = metric(&summary, "pressure_gradient_x");
+        assert!(
+            ((held - expected) / expected).abs() <= 1e-10,
+            "{held} vs {expected}"
+        );
+    }
+}

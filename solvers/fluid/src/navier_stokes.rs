@@ -97,6 +97,17 @@ pub struct FlowSolver {
     /// Imposed mean pressure gradient per unit density, `∇⟨p⟩/ρ` (m/s²);
     /// a negative x entry drives a flow towards +x.
     pub mean_pressure_gradient: [f64; 3],
+    /// Bulk velocity held constant along each periodic axis that has one
+    /// (m/s): at every stage a uniform forcing `f` enters the prediction
+    /// beside the mean pressure gradient, chosen so that the velocity along
+    /// that axis averages to it after the Helmholtz solve (the projection
+    /// leaves a periodic axis' mean unchanged). Since `f` goes through the
+    /// same implicit solve as a pressure gradient, the steady state is the
+    /// one that pressure gradient would give.
+    pub bulk_velocity: [Option<f64>; 3],
+    /// The mean pressure gradient per unit density (m/s²) that held the
+    /// bulk velocity during the last step, `−Σ_k α_k f_k`.
+    pub flow_rate_gradient: [f64; 3],
     /// Velocity components on the faces: `velocity[a]` is normal to axis `a` (m/s).
     pub velocity: Vec<Vec<f64>>,
     /// Kinematic pressure `p/ρ` at cell centres (m²/s²), zero mean, the
@@ -128,6 +139,8 @@ pub struct FlowSolver {
     increment: Vec<Vec<f64>>,
     /// The projection's potential `φ`.
     correction: Vec<f64>,
+    /// Response of the increment to a unit uniform forcing (bulk velocity).
+    bulk_response: Vec<f64>,
     divergence: Vec<f64>,
 }
 
@@ -173,6 +186,8 @@ impl FlowSolver {
             viscosity,
             body_force: [0.0; 3],
             mean_pressure_gradient: [0.0; 3],
+            bulk_velocity: [None; 3],
+            flow_rate_gradient: [0.0; 3],
             velocity: fields(dim),
             pressure: field(),
             time: 0.0,
@@ -189,6 +204,7 @@ impl FlowSolver {
             previous_tendency: fields(dim),
             increment: fields(dim),
             correction: field(),
+            bulk_response: field(),
             divergence: field(),
             boundaries,
             grid,
@@ -242,6 +258,7 @@ impl FlowSolver {
             });
         }
         let mut max_divergence: f64 = 0.0;
+        self.flow_rate_gradient = [0.0; 3];
         for stage in 0..3 {
             self.predict(stage, dt);
             let alpha = GAMMA[stage] + ZETA[stage];
@@ -318,6 +335,35 @@ impl FlowSolver {
             let increment = &mut self.increment[component];
             if self.viscous_scheme == ViscousScheme::CrankNicolson {
                 self.velocity_solvers[component].solve_helmholtz(grid, increment, implicit);
+            }
+            if let Some(target) = self.bulk_velocity[component] {
+                // The increment's response to a unit uniform forcing,
+                // g = (I − c L)⁻¹ 1 (1 for an explicit viscous term), and
+                // the forcing that brings the mean to the target.
+                let block = &self.velocity_unknowns[component];
+                let response = &mut self.bulk_response;
+                response.iter_mut().for_each(|r| *r = 0.0);
+                grid.par_update(block, response, |_, _| 1.0);
+                if self.viscous_scheme == ViscousScheme::CrankNicolson {
+                    self.velocity_solvers[component].solve_helmholtz(grid, response, implicit);
+                }
+                let velocity = &self.velocity[component];
+                let count: usize = (0..3).map(|a| block.end[a] - block.start[a]).product();
+                let count = self.communicator.sum_count(count) as f64;
+                let mean = self
+                    .communicator
+                    .sum(grid.par_sum(block, |index, _| velocity[index] + increment[index]))
+                    / count;
+                let response_mean = self
+                    .communicator
+                    .sum(grid.par_sum(block, |index, _| response[index]))
+                    / count;
+                let forcing = (target - mean) / (alpha * dt * response_mean);
+                let scale = alpha * dt * forcing;
+                grid.par_update(block, increment, |index, value| {
+                    value + scale * response[index]
+                });
+                self.flow_rate_gradient[component] -= alpha * forcing;
             }
             let velocity = &mut self.velocity[component];
             grid.par_update(
