@@ -489,6 +489,11 @@ impl Case {
         self.contact.as_ref().expect("a scene with grains")
     }
 
+    /// The fluid section of a fluid scene.
+    pub fn fluid_section(&self) -> &FluidSection {
+        self.fluid.as_ref().expect("a fluid scene")
+    }
+
     /// Whether the scene has grains (else it is fluid only).
     pub fn has_grains(&self) -> bool {
         self.particles.is_some()

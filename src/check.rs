@@ -129,7 +129,7 @@ fn bytes_per_cell(dimension: usize) -> usize {
 /// flow, the convective and viscous time-step limits, memory.
 fn fluid_report(case: &Case) -> Result<String, RunError> {
     let solver = fluid_scene::build(case).map_err(RunError::Case)?;
-    let f = fluid_scene::fluid_section(case);
+    let f = case.fluid_section();
     let grid = &solver.grid;
     let dim = grid.dim();
     let cells: usize = grid.cells.iter().product();

@@ -4,14 +4,10 @@
 //! The solver works with the kinematic pressure p/ρ and viscosity ν = μ/ρ;
 //! the case speaks in Pa, Pa/m and Pa s, converted here once.
 
-use crate::case::{AnalysisSection, Case, FluidSection, InitialFlowSection};
+use crate::case::{AnalysisSection, Case, InitialFlowSection};
 use grainflow_core::{Communicator, Dimension};
 use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid, ViscousScheme};
 use std::f64::consts::PI;
-
-pub fn fluid_section(case: &Case) -> &FluidSection {
-    case.fluid.as_ref().expect("a fluid scene")
-}
 
 fn axis_values(values: &[f64]) -> [f64; 3] {
     let mut out = [0.0; 3];
@@ -20,7 +16,7 @@ fn axis_values(values: &[f64]) -> [f64; 3] {
 }
 
 pub fn grid(case: &Case) -> Grid {
-    let f = fluid_section(case);
+    let f = case.fluid_section();
     let dimension = if case.dimension() == 2 {
         Dimension::Two
     } else {
@@ -36,7 +32,7 @@ pub fn grid(case: &Case) -> Grid {
 }
 
 pub fn boundaries(case: &Case) -> Boundaries {
-    let f = fluid_section(case);
+    let f = case.fluid_section();
     let mut boundaries = Boundaries::periodic();
     for axis in 0..case.dimension() {
         let Some(faces) = f.boundary.faces(axis) else {
@@ -58,7 +54,7 @@ pub fn boundaries(case: &Case) -> Boundaries {
 
 /// The flow of the scene at t = 0.
 pub fn build(case: &Case) -> Result<FlowSolver, String> {
-    let f = fluid_section(case);
+    let f = case.fluid_section();
     let grid = grid(case);
     let mut solver = FlowSolver::new(
         grid,
@@ -118,7 +114,7 @@ pub enum ExactFlow {
 impl ExactFlow {
     /// The exact solution the case's initial flow follows, if any.
     pub fn of(case: &Case) -> Option<ExactFlow> {
-        let f = fluid_section(case);
+        let f = case.fluid_section();
         let origin = axis_values(&case.domain.lower);
         let wavenumber = 2.0 * PI / (case.domain.upper[0] - case.domain.lower[0]);
         let viscosity = f.viscosity / f.density;
@@ -149,8 +145,7 @@ impl ExactFlow {
                 origin,
                 viscosity,
             } => {
-                let along_x = k * (x[0] - origin[0] - stream[0] * time);
-                let along_y = k * (x[1] - origin[1] - stream[1] * time);
+                let [along_x, along_y] = carried_phases(k, origin, stream, x, time);
                 let decay = amplitude * (-2.0 * viscosity * k * k * time).exp();
                 stream[component]
                     + match component {
@@ -186,8 +181,7 @@ impl ExactFlow {
                 origin,
                 viscosity,
             } => {
-                let along_x = k * (x[0] - origin[0] - stream[0] * time);
-                let along_y = k * (x[1] - origin[1] - stream[1] * time);
+                let [along_x, along_y] = carried_phases(k, origin, stream, x, time);
                 0.25 * amplitude
                     * amplitude
                     * ((2.0 * along_x).cos() + (2.0 * along_y).cos())
@@ -199,6 +193,12 @@ impl ExactFlow {
             }
         }
     }
+}
+
+/// kX and kY of the Taylor–Green vortex, X = x − x0 − S_x t (the vortex
+/// carried by the stream S).
+fn carried_phases(k: f64, origin: [f64; 3], stream: [f64; 3], x: [f64; 3], time: f64) -> [f64; 2] {
+    [0, 1].map(|axis| k * (x[axis] - origin[axis] - stream[axis] * time))
 }
 
 /// The steady Poiseuille–Couette profile between the walls of the last
@@ -219,7 +219,7 @@ impl ChannelProfile {
         if !matches!(case.analysis, Some(AnalysisSection::Channel)) {
             return None;
         }
-        let f = fluid_section(case);
+        let f = case.fluid_section();
         let wall_axis = case.dimension() - 1;
         let viscosity = f.viscosity / f.density;
         let gradient = axis_values(&f.pressure_gradient);

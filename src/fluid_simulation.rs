@@ -6,14 +6,13 @@
 
 use crate::case::{AnalysisSection, Case};
 use crate::fluid_scene::{self, ChannelProfile, ExactFlow};
+use crate::output::RunDirectory;
 use crate::simulation::{peak_memory_bytes, Progress, Summary};
 use crate::RunError;
 use grainflow_fluid::{FlowSolver, Location, StepReport, ViscousScheme, CFL_LIMIT};
 use grainflow_io::{CsvSeries, FieldFrame, PvdIndex};
 use serde_json::{json, Map, Value};
-use std::fs::File;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// Runs a validated fluid-only case into `out`. Nothing is written if the
@@ -21,7 +20,7 @@ use std::time::Instant;
 pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
     let started = Instant::now();
     let mut solver = fluid_scene::build(case).map_err(RunError::Case)?;
-    let density = fluid_scene::fluid_section(case).density;
+    let density = case.fluid_section().density;
     let end = case.time.end;
     // An adapted step also keeps an explicit viscous term stable.
     let viscous_cap = viscous_limit(&solver).map_or(f64::INFINITY, |limit| {
@@ -59,7 +58,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
     let mut outputs = FluidOutputs::create(out, case).map_err(RunError::Io)?;
     let grid = &solver.grid;
     let cells: usize = grid.cells.iter().product();
-    outputs.log(&format!(
+    outputs.run.log(&format!(
         "grainflow {}: fluid-only scene, {}D staggered grid {:?} ({cells} cells), ν = {:.4e} m²/s, \
          RK3 + Crank–Nicolson, direct pressure solve; no particles",
         env!("CARGO_PKG_VERSION"),
@@ -68,8 +67,8 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         solver.viscosity
     ));
     match case.time.cfl {
-        Some(cfl) => outputs.log(&format!("dt adapted to CFL {cfl}")),
-        None => outputs.log(&format!(
+        Some(cfl) => outputs.run.log(&format!("dt adapted to CFL {cfl}")),
+        None => outputs.run.log(&format!(
             "dt = {first_dt:.4e} s (initial CFL {first_cfl:.3}, limit {CFL_LIMIT:.3})"
         )),
     }
@@ -125,7 +124,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
 
     let wall_seconds = started.elapsed().as_secs_f64();
     let metrics = if failure.is_none() {
-        fluid_metrics(case, &mut solver, &report)
+        fluid_metrics(case, &solver, &report)
     } else {
         Map::new()
     };
@@ -145,13 +144,15 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         "peak_memory_bytes": peak_memory_bytes(),
         "metrics": metrics,
     });
-    outputs.write_summary(&summary).map_err(RunError::Io)?;
+    outputs.run.write_summary(&summary).map_err(RunError::Io)?;
     if let Some(message) = failure {
-        outputs.log(&message);
-        outputs.log("the outputs hold the last good state before the failure");
+        outputs.run.log(&message);
+        outputs
+            .run
+            .log("the outputs hold the last good state before the failure");
         return Err(RunError::Unstable(message));
     }
-    outputs.log(&format!(
+    outputs.run.log(&format!(
         "done: {steps} steps in {wall_seconds:.2} s ({:.3e} cell-steps/s)",
         cell_steps / wall_seconds
     ));
@@ -169,14 +170,15 @@ fn viscous_limit(solver: &FlowSolver) -> Option<f64> {
 /// `max_divergence` (max |D u| Δx / U after the projections of the last
 /// step) for every fluid scene, `l2_error` against the exact decaying flow,
 /// `profile_error` against the steady channel profile.
-fn fluid_metrics(case: &Case, solver: &mut FlowSolver, report: &StepReport) -> Map<String, Value> {
+fn fluid_metrics(case: &Case, solver: &FlowSolver, report: &StepReport) -> Map<String, Value> {
     let mut metrics = Map::new();
-    let grid = solver.grid.clone();
+    let grid = &solver.grid;
     let h = grid.spacing[..grid.dim()]
         .iter()
         .copied()
         .fold(f64::INFINITY, f64::min);
-    let speed = max_speed(solver).max(f64::MIN_POSITIVE);
+    let mut speed = f64::MIN_POSITIVE;
+    for_each_velocity(solver, |_, value, _| speed = speed.max(value.abs()));
     metrics.insert(
         "max_divergence".into(),
         json!(report.max_divergence * h / speed),
@@ -185,33 +187,25 @@ fn fluid_metrics(case: &Case, solver: &mut FlowSolver, report: &StepReport) -> M
         Some(AnalysisSection::ExactDecay) => {
             let exact = ExactFlow::of(case).expect("validated");
             let (mut error_sq, mut norm_sq) = (0.0, 0.0);
-            for component in 0..grid.dim() {
-                let field = &solver.velocity[component];
-                grid.for_each(solver.velocity_unknowns(component), |index, [i, j, k]| {
-                    let x = grid.position(Location::Face(component), i, j, k);
-                    let reference = exact.velocity(component, x, solver.time);
-                    error_sq += (field[index] - reference).powi(2);
-                    norm_sq += reference * reference;
-                });
-            }
+            for_each_velocity(solver, |component, value, x| {
+                let reference = exact.velocity(component, x, solver.time);
+                error_sq += (value - reference).powi(2);
+                norm_sq += reference * reference;
+            });
             metrics.insert("l2_error".into(), json!((error_sq / norm_sq).sqrt()));
         }
         Some(AnalysisSection::Channel) => {
             let profile = ChannelProfile::of(case).expect("validated");
             let (mut error, mut scale): (f64, f64) = (0.0, 0.0);
-            for component in 0..grid.dim() {
-                let field = &solver.velocity[component];
-                grid.for_each(solver.velocity_unknowns(component), |index, [i, j, k]| {
-                    let x = grid.position(Location::Face(component), i, j, k);
-                    let reference = profile.velocity(component, x[profile.wall_axis]);
-                    error = error.max((field[index] - reference).abs());
-                    scale = scale.max(reference.abs());
-                });
-            }
+            for_each_velocity(solver, |component, value, x| {
+                let reference = profile.velocity(component, x[profile.wall_axis]);
+                error = error.max((value - reference).abs());
+                scale = scale.max(reference.abs());
+            });
             metrics.insert("profile_error".into(), json!(error / scale));
             // The pressure gradient that held a bulk velocity, against the
             // one the steady profile needs: ρ ν u''.
-            let f = fluid_scene::fluid_section(case);
+            let f = case.fluid_section();
             for axis in 0..grid.dim() {
                 if f.bulk_velocity.along(axis).is_some() {
                     let name = ["x", "y", "z"][axis];
@@ -228,16 +222,19 @@ fn fluid_metrics(case: &Case, solver: &mut FlowSolver, report: &StepReport) -> M
     metrics
 }
 
-fn max_speed(solver: &FlowSolver) -> f64 {
+/// Calls `visit(component, value, position)` for every velocity unknown.
+fn for_each_velocity(solver: &FlowSolver, mut visit: impl FnMut(usize, f64, [f64; 3])) {
     let grid = &solver.grid;
-    let mut speed: f64 = 0.0;
     for component in 0..grid.dim() {
         let field = &solver.velocity[component];
-        grid.for_each(solver.velocity_unknowns(component), |index, _| {
-            speed = speed.max(field[index].abs());
+        grid.for_each(solver.velocity_unknowns(component), |index, [i, j, k]| {
+            visit(
+                component,
+                field[index],
+                grid.position(Location::Face(component), i, j, k),
+            );
         });
     }
-    speed
 }
 
 /// Cell-centred velocity (mean of a cell's two faces along each axis),
@@ -280,20 +277,19 @@ fn cell_fields(solver: &mut FlowSolver, density: f64) -> (Vec<[f64; 3]>, Vec<f64
     (cell_velocity, pressure, vorticity)
 }
 
+/// A fluid scene's outputs: the files of every run, its series and its
+/// field files.
 struct FluidOutputs {
-    dir: PathBuf,
-    started: Instant,
-    log: File,
+    run: RunDirectory,
     series: CsvSeries,
     fields: Option<PvdIndex>,
     frames: usize,
 }
 
 impl FluidOutputs {
+    /// `tracked.csv` stays empty: a fluid-only scene tracks no particle.
     fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
-        std::fs::create_dir_all(dir)?;
-        std::fs::write(dir.join("case.toml"), case.to_toml())?;
-        let log = File::create(dir.join("log.txt"))?;
+        let run = RunDirectory::create(dir, case)?;
         let series = CsvSeries::create(
             &dir.join("series.csv"),
             &[
@@ -306,11 +302,6 @@ impl FluidOutputs {
                 "wall_seconds",
             ],
         )?;
-        // The contract's file, empty: a fluid-only scene tracks no particle.
-        CsvSeries::create(
-            &dir.join("tracked.csv"),
-            &["t", "id", "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz"],
-        )?;
         let fields = if case.output.fields {
             std::fs::create_dir_all(dir.join("fields"))?;
             Some(PvdIndex::new(dir.join("fields.pvd")))
@@ -318,18 +309,11 @@ impl FluidOutputs {
             None
         };
         Ok(FluidOutputs {
-            dir: dir.to_path_buf(),
-            started: Instant::now(),
-            log,
+            run,
             series,
             fields,
             frames: 0,
         })
-    }
-
-    fn log(&mut self, line: &str) {
-        let _ = writeln!(self.log, "{line}");
-        let _ = self.log.flush();
     }
 
     /// A row of `series.csv` (kinetic energy per unit density) and, if
@@ -349,7 +333,7 @@ impl FluidOutputs {
             report.kinetic_energy,
             report.max_cfl,
             report.max_divergence,
-            self.started.elapsed().as_secs_f64(),
+            self.run.started.elapsed().as_secs_f64(),
         ])?;
         if let Some(index) = &mut self.fields {
             let (velocity, pressure, vorticity) = cell_fields(solver, density);
@@ -362,15 +346,10 @@ impl FluidOutputs {
                 scalars: &[("pressure", &pressure)],
                 vectors: &[("velocity", &velocity), ("vorticity", &vorticity)],
             }
-            .write(&self.dir.join(&name))?;
+            .write(&self.run.dir.join(&name))?;
             index.add(solver.time, &name)?;
         }
         self.frames += 1;
         Ok(())
-    }
-
-    fn write_summary(&self, summary: &Value) -> std::io::Result<()> {
-        let text = serde_json::to_string_pretty(summary).expect("json");
-        std::fs::write(self.dir.join("summary.json"), text + "\n")
     }
 }

@@ -1,6 +1,8 @@
 //! The output directory of a run (DESIGN.md, "Contracts every case follows"):
 //! `case.toml`, `log.txt`, `series.csv`, `tracked.csv`, `particles/*.vtp`
 //! with the ParaView index `particles.pvd`, and `summary.json`.
+//! [`RunDirectory`] holds what every scene writes; [`Outputs`] adds the
+//! particle outputs (a fluid scene adds its fields in `fluid_simulation`).
 
 use crate::case::Case;
 use grainflow_dem::DemSystem;
@@ -9,21 +11,55 @@ use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-pub struct Outputs {
-    dir: PathBuf,
-    started: std::time::Instant,
+/// The files of the output contract every scene writes: the resolved case,
+/// the log, the (possibly empty) `tracked.csv` and the summary.
+pub struct RunDirectory {
+    pub dir: PathBuf,
+    pub started: std::time::Instant,
     log: File,
+    /// `t,id,x,y,z,vx,vy,vz,wx,wy,wz` of the tracked particles.
+    pub tracked: CsvSeries,
+}
+
+impl RunDirectory {
+    pub fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
+        std::fs::create_dir_all(dir)?;
+        std::fs::write(dir.join("case.toml"), case.to_toml())?;
+        let log = File::create(dir.join("log.txt"))?;
+        let tracked = CsvSeries::create(
+            &dir.join("tracked.csv"),
+            &["t", "id", "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz"],
+        )?;
+        Ok(RunDirectory {
+            dir: dir.to_path_buf(),
+            started: std::time::Instant::now(),
+            log,
+            tracked,
+        })
+    }
+
+    /// A line in `log.txt`.
+    pub fn log(&mut self, line: &str) {
+        let _ = writeln!(self.log, "{line}");
+        let _ = self.log.flush();
+    }
+
+    pub fn write_summary(&self, summary: &serde_json::Value) -> std::io::Result<()> {
+        let text = serde_json::to_string_pretty(summary).expect("json");
+        std::fs::write(self.dir.join("summary.json"), text + "\n")
+    }
+}
+
+pub struct Outputs {
+    pub run: RunDirectory,
     series: CsvSeries,
-    tracked: CsvSeries,
     particles: Option<PvdIndex>,
     frames: usize,
 }
 
 impl Outputs {
     pub fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
-        std::fs::create_dir_all(dir)?;
-        std::fs::write(dir.join("case.toml"), case.to_toml())?;
-        let log = File::create(dir.join("log.txt"))?;
+        let run = RunDirectory::create(dir, case)?;
         let series = CsvSeries::create(
             &dir.join("series.csv"),
             &[
@@ -40,10 +76,6 @@ impl Outputs {
                 "wall_seconds",
             ],
         )?;
-        let tracked = CsvSeries::create(
-            &dir.join("tracked.csv"),
-            &["t", "id", "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz"],
-        )?;
         let particles = if case.output.particles {
             std::fs::create_dir_all(dir.join("particles"))?;
             Some(PvdIndex::new(dir.join("particles.pvd")))
@@ -51,20 +83,11 @@ impl Outputs {
             None
         };
         Ok(Outputs {
-            dir: dir.to_path_buf(),
-            started: std::time::Instant::now(),
-            log,
+            run,
             series,
-            tracked,
             particles,
             frames: 0,
         })
-    }
-
-    /// A line in `log.txt`, prefixed with the wall-clock time of the run.
-    pub fn log(&mut self, line: &str) {
-        let _ = writeln!(self.log, "{line}");
-        let _ = self.log.flush();
     }
 
     /// A row of `series.csv` and, if enabled, a particle file.
@@ -82,7 +105,7 @@ impl Outputs {
             last.max_overlap_ratio,
             system.max_speed(),
             system.neighbours.builds as f64,
-            self.started.elapsed().as_secs_f64(),
+            self.run.started.elapsed().as_secs_f64(),
         ])?;
         if let Some(index) = &mut self.particles {
             let p = &system.particles;
@@ -101,7 +124,7 @@ impl Outputs {
                 radius: &p.radius[..n],
                 fixed: &fixed,
             }
-            .write(&self.dir.join(&name))?;
+            .write(&self.run.dir.join(&name))?;
             index.add(system.time, &name)?;
         }
         self.frames += 1;
@@ -114,7 +137,7 @@ impl Outputs {
         for &id in ids {
             if let Some(k) = system.index_of(id) {
                 let (x, v, w) = (p.position[k], p.velocity[k], p.angular_velocity[k]);
-                self.tracked.row(&[
+                self.run.tracked.row(&[
                     system.time,
                     id as f64,
                     x.x,
@@ -130,10 +153,5 @@ impl Outputs {
             }
         }
         Ok(())
-    }
-
-    pub fn write_summary(&self, summary: &serde_json::Value) -> std::io::Result<()> {
-        let text = serde_json::to_string_pretty(summary).expect("json");
-        std::fs::write(self.dir.join("summary.json"), text + "\n")
     }
 }

@@ -88,7 +88,7 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     let warning = check_time_step(dt, contact_time)?;
 
     let mut outputs = Outputs::create(out, case).map_err(RunError::Io)?;
-    outputs.log(&format!(
+    outputs.run.log(&format!(
         "grainflow {}: {} particles ({} glued), {}D soft-sphere DEM, dry scene (no fluid grid)",
         env!("CARGO_PKG_VERSION"),
         system.particles.n_owned,
@@ -97,12 +97,12 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
             .count(),
         system.domain.dimension.count()
     ));
-    outputs.log(&format!(
+    outputs.run.log(&format!(
         "dt = {dt:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s)",
         dt / contact_time
     ));
     if let Some(w) = &warning {
-        outputs.log(w);
+        outputs.run.log(w);
         eprintln!("{w}");
     }
 
@@ -165,7 +165,7 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
             let present = wall.is_present(system.time);
             if present != wall_state[k] {
                 wall_state[k] = present;
-                outputs.log(&format!(
+                outputs.run.log(&format!(
                     "t = {:.6e} s: wall {} removed",
                     system.time, wall.name
                 ));
@@ -205,7 +205,7 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
             logged_decile = decile;
             let elapsed = started.elapsed().as_secs_f64();
             let eta = elapsed * (end - system.time) / system.time;
-            outputs.log(&format!(
+            outputs.run.log(&format!(
                 "step {} t = {:.4e} s ({}%), {:.1} s elapsed, ETA {:.1} s",
                 system.steps,
                 system.time,
@@ -240,13 +240,15 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
         "peak_memory_bytes": peak_memory_bytes(),
         "metrics": metrics,
     });
-    outputs.write_summary(&json).map_err(RunError::Io)?;
+    outputs.run.write_summary(&json).map_err(RunError::Io)?;
     if let Some(message) = failure {
-        outputs.log(&message);
-        outputs.log("the outputs hold the last good state before the failure");
+        outputs.run.log(&message);
+        outputs
+            .run
+            .log("the outputs hold the last good state before the failure");
         return Err(RunError::Unstable(message));
     }
-    outputs.log(&format!(
+    outputs.run.log(&format!(
         "done: {stop_reason}; {} steps in {wall_seconds:.2} s ({:.3e} particle-steps/s)",
         system.steps,
         particle_steps / wall_seconds

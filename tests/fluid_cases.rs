@@ -6,7 +6,6 @@ mod common;
 
 use common::{load, metric, run};
 use grainflow::simulation;
-use std::path::Path;
 use std::process::Command;
 
 /// Relative L2 error of the Taylor–Green vortex (carried by a stream) at
@@ -76,9 +75,28 @@ fn poiseuille_flow_reaches_the_exact_parabola() {
     }
 }
 
+/// `grainflow run` of a case of `cases/` with `--set` overrides into a
+/// fresh directory: (exit code, stderr, whether the directory was written).
+fn run_cli(case: &str, overrides: &[&str]) -> (Option<i32>, String, bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_grainflow"));
+    command.args([
+        "run",
+        common::case_path(case).to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    for assignment in overrides {
+        command.args(["--set", assignment]);
+    }
+    let result = command.output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr).into_owned();
+    (result.status.code(), stderr, out.exists())
+}
+
 #[test]
 fn bad_fluid_tables_are_refused_with_the_key_and_nothing_is_written() {
-    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/channel_poiseuille.toml");
     for (assignment, key) in [
         ("fluid.boundary.y=[\"no_slip\"]", "fluid.boundary.y"),
         (
@@ -95,30 +113,15 @@ fn bad_fluid_tables_are_refused_with_the_key_and_nothing_is_written() {
         ("domain.periodic=[true, true]", "fluid.boundary.y"),
         ("time.dt=10.0", "CFL"),
     ] {
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().join("out");
-        let mut overrides = vec!["--set", assignment];
+        let mut overrides = vec![assignment];
         if assignment.starts_with("time.dt") {
             // A flow to convect: the refused step is the CFL one.
-            overrides.extend([
-                "--set",
-                "fluid.initial={kind=\"uniform\", velocity=[1.0, 0.0]}",
-            ]);
+            overrides.push("fluid.initial={kind=\"uniform\", velocity=[1.0, 0.0]}");
         }
-        let result = Command::new(env!("CARGO_BIN_EXE_grainflow"))
-            .args([
-                "run",
-                case.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-            ])
-            .args(overrides)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&result.stderr);
-        assert_ne!(result.status.code(), Some(0), "{assignment}");
+        let (code, stderr, written) = run_cli("channel_poiseuille.toml", &overrides);
+        assert_ne!(code, Some(0), "{assignment}");
         assert!(stderr.contains(key), "{assignment}: {stderr}");
-        assert!(!out.exists(), "{assignment}: output written");
+        assert!(!written, "{assignment}: output written");
     }
 }
 
@@ -168,28 +171,13 @@ fn a_fluid_run_writes_the_output_contract() {
 /// the channel still reaches the exact parabola.
 #[test]
 fn an_explicit_viscous_step_is_refused_beyond_its_limit() {
-    let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/channel_poiseuille.toml");
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
-    let result = Command::new(env!("CARGO_BIN_EXE_grainflow"))
-        .args([
-            "run",
-            case.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .args([
-            "--set",
-            "fluid.viscous=\"explicit\"",
-            "--set",
-            "time.dt=3e-3",
-        ])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&result.stderr);
-    assert_ne!(result.status.code(), Some(0));
+    let (code, stderr, written) = run_cli(
+        "channel_poiseuille.toml",
+        &["fluid.viscous=\"explicit\"", "time.dt=3e-3"],
+    );
+    assert_ne!(code, Some(0));
     assert!(stderr.contains("viscous number"), "{stderr}");
-    assert!(!out.exists());
+    assert!(!written);
     let (summary, _dir) = run(
         "channel_poiseuille.toml",
         &["fluid.viscous=\"explicit\"", "output.fields=false"],

@@ -12,6 +12,8 @@ usage: scripts/bench/fluid_step.py [--repeats 3] [--steps 10] [--threads 1,2] [-
 """
 import argparse, json, os, statistics, subprocess, tempfile
 
+from dem_column import peak_rss_of
+
 GRIDS = {
     "vortex_64": ("taylor_green_3d", [64, 64, 64], []),
     "vortex_128": ("taylor_green_3d", [128, 128, 128], []),
@@ -24,19 +26,6 @@ GRIDS = {
         "analysis.kind=\"channel\"",
     ]),
 }
-
-
-def peak_rss_run(command):
-    pid = os.fork()
-    if pid == 0:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, 1)
-        os.dup2(devnull, 2)
-        os.execv(command[0], command)
-    _, status, usage = os.wait4(pid, 0)
-    if status != 0:
-        raise SystemExit(f"failed: {' '.join(command)}")
-    return usage.ru_maxrss * 1024
 
 
 def main():
@@ -64,7 +53,7 @@ def main():
                                "--threads", str(threads)]
                     for s in sets:
                         command += ["--set", s]
-                    memory = peak_rss_run(command)
+                    _, memory = peak_rss_of(command, cwd=out)
                     lines = open(os.path.join(out, "series.csv")).read().split()
                     header = lines[0].split(",")
                     rows = [dict(zip(header, map(float, l.split(",")))) for l in lines[1:]]

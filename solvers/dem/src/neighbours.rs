@@ -178,14 +178,6 @@ impl NeighbourList {
         }
     }
 
-    /// Whether the pair of entry e was in contact at the last evaluation.
-    pub fn is_open(&self, e: usize) -> bool {
-        match self.mirror[e] {
-            u32::MAX => self.open[e],
-            upper => self.open[upper as usize],
-        }
-    }
-
     /// Takes the current list out, to carry its open contacts into the next
     /// build (before particles are reordered or ghosts rebuilt).
     pub fn take_previous(&mut self, particles: &Particles) -> PreviousList {

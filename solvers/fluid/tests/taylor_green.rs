@@ -10,7 +10,9 @@ mod common;
 
 use std::f64::consts::PI;
 
-use common::{advance, max_pressure_error, max_velocity_error, order, scientific};
+use common::{
+    advance, max_pressure_error, max_velocity_difference, max_velocity_error, order, scientific,
+};
 use grainflow_core::{Communicator, Dimension};
 use grainflow_fluid::{Boundaries, FlowSolver, Grid, Location};
 
@@ -112,17 +114,7 @@ fn taylor_green_2d_is_second_order_in_time() {
         .iter()
         .map(|&steps| {
             let solver = run_taylor_green(cells, end, steps);
-            let mut error: f64 = 0.0;
-            for component in 0..2 {
-                solver
-                    .grid
-                    .for_each(solver.velocity_unknowns(component), |index, _| {
-                        let difference = solver.velocity[component][index]
-                            - reference.velocity[component][index];
-                        error = error.max(difference.abs());
-                    });
-            }
-            error
+            max_velocity_difference(&solver, &reference)
         })
         .collect();
     let orders = [order(errors[0], errors[1]), order(errors[1], errors[2])];
@@ -252,17 +244,7 @@ fn beltrami_3d_is_second_order_in_time() {
         .iter()
         .map(|&steps| {
             let solver = run(steps);
-            let mut error: f64 = 0.0;
-            for component in 0..3 {
-                solver
-                    .grid
-                    .for_each(solver.velocity_unknowns(component), |index, _| {
-                        let difference = solver.velocity[component][index]
-                            - reference.velocity[component][index];
-                        error = error.max(difference.abs());
-                    });
-            }
-            error
+            max_velocity_difference(&solver, &reference)
         })
         .collect();
     let orders = [order(errors[0], errors[1]), order(errors[1], errors[2])];

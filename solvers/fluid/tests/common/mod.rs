@@ -19,6 +19,19 @@ pub fn max_velocity_error(solver: &FlowSolver, exact: impl Fn(usize, [f64; 3]) -
     error
 }
 
+/// Largest difference of the velocity unknowns of two solvers on the same grid.
+pub fn max_velocity_difference(solver: &FlowSolver, reference: &FlowSolver) -> f64 {
+    let grid = &solver.grid;
+    let mut difference: f64 = 0.0;
+    for component in 0..grid.dim() {
+        grid.for_each(solver.velocity_unknowns(component), |index, _| {
+            let gap = solver.velocity[component][index] - reference.velocity[component][index];
+            difference = difference.max(gap.abs());
+        });
+    }
+    difference
+}
+
 /// Observed order of convergence between two errors at a refinement ratio of 2.
 pub fn order(coarse: f64, fine: f64) -> f64 {
     (coarse / fine).log2()
