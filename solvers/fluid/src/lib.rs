@@ -42,5 +42,8 @@ pub mod transform;
 pub use boundary::{Boundaries, BoundaryCondition};
 pub use error::FluidError;
 pub use grid::{Block, Grid, Location};
-pub use navier_stokes::{FlowSolver, StepReport, ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
+pub use navier_stokes::{
+    stage_fraction, FlowSolver, StepReport, ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT,
+    STAGES,
+};
 pub use poisson::DirectSolver;

@@ -41,10 +41,19 @@ use crate::grid::{Block, Grid, Location};
 use crate::operators::{add_laplacian, convective_tendency, divergence, subtract_gradient};
 use crate::poisson::DirectSolver;
 
+/// Stages of a step.
+pub const STAGES: usize = 3;
+
 /// Wray's low-storage RK3: weight of the explicit terms at the current stage.
 const GAMMA: [f64; 3] = [8.0 / 15.0, 5.0 / 12.0, 3.0 / 4.0];
 /// Weight of the explicit terms of the previous stage.
 const ZETA: [f64; 3] = [0.0, -17.0 / 60.0, -5.0 / 12.0];
+
+/// The fraction `α_k = γ_k + ζ_k` of a step that stage `stage` advances
+/// (8/15, 2/15, 1/3: they add up to 1).
+pub fn stage_fraction(stage: usize) -> f64 {
+    GAMMA[stage] + ZETA[stage]
+}
 
 /// Stability limit of the convective CFL number `Δt Σ_a max|u_a| / h_a`:
 /// central differences put the eigenvalues of convection on the imaginary
@@ -241,7 +250,25 @@ impl FlowSolver {
     /// Advances the flow by `dt` (three RK3 stages) and reports on it.
     /// Refuses, leaving the flow as it was, when the CFL number of the
     /// current velocity exceeds [`FlowSolver::cfl_limit`].
+    ///
+    /// A scene with immersed particles drives the same stages itself
+    /// ([`FlowSolver::begin_step`], then [`FlowSolver::predict`] and
+    /// [`FlowSolver::project`] for each stage, with its forcing between
+    /// them, then [`FlowSolver::end_step`]).
     pub fn step(&mut self, dt: f64) -> Result<StepReport, FluidError> {
+        self.begin_step(dt)?;
+        let mut max_divergence: f64 = 0.0;
+        for stage in 0..STAGES {
+            self.predict(stage, dt);
+            max_divergence = max_divergence.max(self.project(stage, dt));
+        }
+        Ok(self.end_step(dt, max_divergence))
+    }
+
+    /// Checks that a step of `dt` is within the stability limits (CFL
+    /// number, and viscous number for an explicit viscous term) before its
+    /// first stage; refuses it, leaving the flow as it was, otherwise.
+    pub fn begin_step(&mut self, dt: f64) -> Result<(), FluidError> {
         let cfl = self.max_cfl(dt);
         // A NaN velocity is refused too.
         if cfl > self.cfl_limit || cfl.is_nan() {
@@ -257,21 +284,29 @@ impl FlowSolver {
                 limit: self.viscous_limit,
             });
         }
-        let mut max_divergence: f64 = 0.0;
         self.flow_rate_gradient = [0.0; 3];
-        for stage in 0..3 {
-            self.predict(stage, dt);
-            let alpha = GAMMA[stage] + ZETA[stage];
-            self.project(alpha * dt);
-            self.update_pressure(alpha * dt);
-            max_divergence = max_divergence.max(self.max_divergence());
-        }
+        Ok(())
+    }
+
+    /// Stage `stage`'s projection, `L φ = D u* / (α_k Δt)`,
+    /// `u^k = u* − α_k Δt G φ`, and pressure update; returns the largest
+    /// `|D u|` after it (1/s).
+    pub fn project(&mut self, stage: usize, dt: f64) -> f64 {
+        let scale = stage_fraction(stage) * dt;
+        self.project_with_scale(scale);
+        self.update_pressure(scale);
+        self.max_divergence()
+    }
+
+    /// Closes a step of `dt` whose stages have all been run: advances the
+    /// time and reports on the flow (`max_divergence` over the stages).
+    pub fn end_step(&mut self, dt: f64, max_divergence: f64) -> StepReport {
         self.time += dt;
-        Ok(StepReport {
+        StepReport {
             kinetic_energy: self.kinetic_energy(),
             max_cfl: self.max_cfl(dt),
             max_divergence,
-        })
+        }
     }
 
     /// `ν Δt Σ_a 4/h_a²`: the viscous number an explicit step must keep
@@ -292,11 +327,13 @@ impl FlowSolver {
         cfl / self.max_cfl(1.0)
     }
 
-    /// Stage `stage` prediction: explicit convection (RK3), body force and
-    /// mean pressure gradient, pressure of the previous stage, and
+    /// Stage `stage` prediction `u*`: explicit convection (RK3), body force
+    /// and mean pressure gradient, pressure of the previous stage, and
     /// viscous term, Crank–Nicolson through one Helmholtz solve per
-    /// component (or explicit, without the solve).
-    fn predict(&mut self, stage: usize, dt: f64) {
+    /// component (or explicit, without the solve). The predicted velocity
+    /// is left in [`FlowSolver::velocity`] for a forcing to act on before
+    /// [`FlowSolver::project`].
+    pub fn predict(&mut self, stage: usize, dt: f64) {
         let (gamma, zeta) = (GAMMA[stage], ZETA[stage]);
         let alpha = gamma + zeta;
         let dim = self.grid.dim();
@@ -378,13 +415,13 @@ impl FlowSolver {
     /// leaves the pressure alone): for an initial field that is not
     /// discretely divergence free.
     pub fn remove_divergence(&mut self) {
-        self.project(1.0);
+        self.project_with_scale(1.0);
     }
 
     /// Projects the velocity onto discretely divergence-free fields with
     /// the potential `φ` of `L φ = D u / scale`, `u −= scale G φ`; `φ` is
     /// left in `self.correction`. `scale` is `α_k Δt` in a stage.
-    fn project(&mut self, scale: f64) {
+    fn project_with_scale(&mut self, scale: f64) {
         self.fill_velocity_ghosts();
         let grid = &self.grid;
         let correction = &mut self.correction;

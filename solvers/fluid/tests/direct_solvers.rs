@@ -209,3 +209,17 @@ fn two_cells_along_the_last_axis() {
         assert!(error <= TOLERANCE, "{error}");
     }
 }
+
+/// Wall-normal faces along transformed axes with line lengths (29, 39)
+/// where the sine transform's work array must be cleared between lines.
+#[test]
+fn helmholtz_on_longer_lines() {
+    for cells in [[30, 30, 4], [40, 4, 12]] {
+        let grid = Grid::new(Dimension::Three, cells, [0.0; 3], [1.0, 1.0, 1.5]);
+        for kinds in [[[Df, Df], [N, N], [N, N]], [[N, N], [Df, Df], [P, P]]] {
+            let error = recovery_error(&grid, kinds, 1.0, -0.05);
+            println!("helmholtz {cells:?} {kinds:?}: relative error {error:.2e}");
+            assert!(error <= TOLERANCE, "{cells:?} {kinds:?}: {error}");
+        }
+    }
+}
