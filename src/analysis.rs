@@ -35,8 +35,12 @@ impl Analysis {
             Some(AnalysisSection::ColumnCollapse) => {
                 Analysis::ColumnCollapse(ColumnCollapse::new(system))
             }
-            Some(AnalysisSection::ExactDecay | AnalysisSection::Channel) => {
-                unreachable!("validation keeps fluid analyses out of scenes of grains")
+            Some(
+                AnalysisSection::ExactDecay
+                | AnalysisSection::Channel
+                | AnalysisSection::FallingSphere,
+            ) => {
+                unreachable!("validation keeps fluid analyses out of dry scenes")
             }
         }
     }

@@ -48,6 +48,12 @@ pub struct Case {
     pub contact: Option<ContactSection>,
     #[serde(default)]
     pub walls: Vec<WallSection>,
+    /// How grains and fluid exchange momentum (a scene with both).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coupling: Option<CouplingSection>,
+    /// The film force between close grains (a scene with both).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lubrication: Option<LubricationSection>,
     pub time: TimeSection,
     #[serde(default)]
     pub output: OutputSection,
@@ -346,6 +352,42 @@ pub struct WallSection {
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+pub struct CouplingSection {
+    /// "inner_fluid_momentum" (default: the rate of change of the fluid
+    /// momentum inside each grain enters its load; any density ratio) or
+    /// "rigid_inner_fluid" (eq. 5–6 of the paper; unstable as ρ_p/ρ → 1).
+    #[serde(default = "default_formulation")]
+    pub formulation: String,
+}
+
+impl Default for CouplingSection {
+    fn default() -> Self {
+        CouplingSection {
+            formulation: default_formulation(),
+        }
+    }
+}
+
+fn default_formulation() -> String {
+    "inner_fluid_momentum".into()
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LubricationSection {
+    /// Roughness length over the smaller radius of a pair, η/R (eq. 19).
+    pub roughness: f64,
+    /// Largest gap at which the force acts, over the smaller radius.
+    #[serde(default = "default_lubrication_range")]
+    pub range: f64,
+}
+
+fn default_lubrication_range() -> f64 {
+    0.5
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct TimeSection {
     /// Simulated end time [s].
     pub end: f64,
@@ -432,6 +474,10 @@ pub enum AnalysisSection {
     /// last axis, driven by `fluid.pressure_gradient` and moving walls, against
     /// the computed one at the end.
     Channel,
+    /// Grain in a fluid: particle 0 released from rest; its initial
+    /// acceleration against the added-mass estimate (eq. 20) and its
+    /// terminal velocity and Reynolds number against Schiller–Naumann (eq. 21).
+    FallingSphere,
 }
 
 impl Case {
@@ -556,16 +602,9 @@ impl Case {
             (None, None, Some(_)) => {}
         }
         if let Some(fluid) = &self.fluid {
-            if self.particles.is_some() {
-                return Err(invalid(
-                    "fluid",
-                    "(with particles)",
-                    "grains in a fluid (immersed boundaries) are not available yet; allowed now: \
-                     a dry scene ([particles]) or a fluid-only scene ([fluid])",
-                ));
-            }
             self.validate_fluid(fluid)?;
         }
+        self.validate_coupling()?;
         self.validate_walls_time_output()
     }
 
@@ -579,11 +618,18 @@ impl Case {
             return Err(invalid(
                 "analysis.kind",
                 "(a fluid analysis)",
-                "a scene of grains allows \"binary_collision\", \"bouncing\", \"silo\" or \
-                 \"column_collapse\"",
+                "a scene of grains allows \"binary_collision\", \"bouncing\", \"silo\", \
+                 \"column_collapse\" or, in a fluid, \"falling_sphere\"",
             ));
         }
-        if self.time.cfl.is_some() {
+        if self.fluid.is_none() && matches!(self.analysis, Some(AnalysisSection::FallingSphere)) {
+            return Err(invalid(
+                "analysis.kind",
+                "falling_sphere",
+                "needs a [fluid] for the grain to fall in",
+            ));
+        }
+        if self.time.cfl.is_some() && self.fluid.is_none() {
             return Err(invalid(
                 "time.cfl",
                 "(dry scene)",
@@ -1010,14 +1056,82 @@ impl Case {
                     ));
                 }
             }
-            (Some(_), _) => {
+            (Some(_), _) if !self.has_grains() => {
                 return Err(invalid(
                     "analysis.kind",
                     "(a particle analysis)",
                     "a fluid-only scene allows \"exact_decay\" or \"channel\"",
                 ))
             }
-            (None, _) => {}
+            (Some(_), _) | (None, _) => {}
+        }
+        Ok(())
+    }
+
+    /// The tables of a scene with grains in a fluid.
+    fn validate_coupling(&self) -> Result<(), CaseError> {
+        let coupled = self.fluid.is_some() && self.has_grains();
+        if !coupled && self.coupling.is_some() {
+            return Err(invalid(
+                "coupling",
+                "(without grains in a fluid)",
+                "[coupling] needs both [fluid] and [particles]",
+            ));
+        }
+        if !coupled && self.lubrication.is_some() {
+            return Err(invalid(
+                "lubrication",
+                "(without a fluid)",
+                "the lubrication force exists only for grains in a fluid: [lubrication] needs \
+                 both [fluid] and [particles]",
+            ));
+        }
+        if let Some(c) = &self.coupling {
+            if !matches!(
+                c.formulation.as_str(),
+                "inner_fluid_momentum" | "rigid_inner_fluid"
+            ) {
+                return Err(invalid(
+                    "coupling.formulation",
+                    &c.formulation,
+                    "allowed: \"inner_fluid_momentum\" or \"rigid_inner_fluid\"",
+                ));
+            }
+        }
+        if let Some(l) = &self.lubrication {
+            positive("lubrication.roughness", l.roughness)?;
+            if !(l.range > 0.0 && l.range <= 1.0) {
+                return Err(invalid(
+                    "lubrication.range",
+                    l.range,
+                    "allowed: 0 < range ≤ 1 (gap over the smaller radius; the paper uses 0.5)",
+                ));
+            }
+        }
+        if coupled {
+            if !matches!(self.analysis, None | Some(AnalysisSection::FallingSphere)) {
+                return Err(invalid(
+                    "analysis.kind",
+                    "(grains in a fluid)",
+                    "grains in a fluid allow \"falling_sphere\" (or no analysis)",
+                ));
+            }
+            if self.time.cfl.is_some() {
+                return Err(invalid(
+                    "time.cfl",
+                    "(grains in a fluid)",
+                    "grains in a fluid use a fixed fluid step time.dt [s] (the run stops if \
+                     its CFL number passes √3)",
+                ));
+            }
+            if self.time.dt.is_none() {
+                return Err(invalid(
+                    "time.dt",
+                    "(missing)",
+                    "grains in a fluid need the fluid step time.dt [s]; the DEM sub-step is \
+                     time.dt_over_contact_time × t_c (default 0.02)",
+                ));
+            }
         }
         Ok(())
     }
@@ -1058,7 +1172,12 @@ impl Case {
 
         let t = &self.time;
         positive("time.end", t.end)?;
+        let coupled = self.fluid.is_some() && self.has_grains();
         match (t.dt, t.dt_over_contact_time) {
+            (Some(dt), Some(f)) if coupled => {
+                positive("time.dt", dt)?;
+                positive("time.dt_over_contact_time", f)?;
+            }
             (Some(_), Some(_)) => {
                 return Err(invalid(
                     "time.dt",

@@ -5,11 +5,13 @@
 //! run goes case file → [`case::Case`] (typed, validated) → [`scene::build`]
 //! → [`simulation::run`] (time loop, [`output::Outputs`], [`analysis`]); a
 //! fluid-only scene goes through [`fluid_scene::build`] and
-//! [`fluid_simulation::run`].
+//! [`fluid_simulation::run`]; grains in a fluid through
+//! [`coupled_simulation::build`] and [`coupled_simulation::run`].
 
 pub mod analysis;
 pub mod case;
 pub mod check;
+pub mod coupled_simulation;
 pub mod fluid_scene;
 pub mod fluid_simulation;
 pub mod output;

@@ -4,6 +4,7 @@ use crate::case::{BlockSection, Case};
 use grainflow_core::{Dimension, Domain, Vec3};
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
 use grainflow_dem::particles::NewParticle;
+use grainflow_dem::Lubrication;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness, PlaneWall};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
@@ -308,12 +309,25 @@ pub fn skin(case: &Case) -> f64 {
         .unwrap_or(0.2 * case.particles_section().radius)
 }
 
+/// The film force of eq. 19, for grains in a fluid with a `[lubrication]` table.
+pub fn lubrication(case: &Case) -> Option<Lubrication> {
+    let fluid = case.fluid.as_ref()?;
+    let section = case.lubrication.as_ref()?;
+    Some(Lubrication {
+        viscosity: fluid.viscosity,
+        roughness: section.roughness,
+        range: section.range,
+    })
+}
+
 /// The scene's DEM system, with its particles placed.
 pub fn build(case: &Case) -> Result<DemSystem, String> {
     let domain = domain(case);
     let placed = particles(case)?;
     check_inside(&domain, &placed)?;
     let mut system = DemSystem::new(domain, contact_law(case), walls(case), skin(case));
+    // Before the particles: the pair list reaches the lubrication range.
+    system.lubrication = lubrication(case);
     system.add_particles(&placed);
     Ok(system)
 }

@@ -5,7 +5,7 @@ use crate::analysis::Analysis;
 use crate::case::Case;
 use crate::output::Outputs;
 use crate::stability::{self, TimeStepVerdict};
-use crate::{fluid_simulation, scene, RunError};
+use crate::{coupled_simulation, fluid_simulation, scene, RunError};
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
 use std::io::IsTerminal;
@@ -81,6 +81,9 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
 fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
     if !case.has_grains() {
         return fluid_simulation::run(case, out, show_progress);
+    }
+    if case.fluid.is_some() {
+        return coupled_simulation::run(case, out, show_progress);
     }
     let started = Instant::now();
     let mut system = scene::build(case).map_err(RunError::Case)?;

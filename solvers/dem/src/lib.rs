@@ -12,6 +12,7 @@
 //! - [`Particles`]: flat per-particle arrays (SoA), owned then ghosts.
 //! - [`ContactLaw`]: the normal and tangential laws and their calibration.
 //! - [`PlaneWall`]: frictional planes, removable at a given time.
+//! - [`Lubrication`]: the film force of close grains, in a fluid only.
 //! - [`NeighbourList`]: cell binning and the Verlet pair list with the
 //!   tangential displacement history of each contact.
 //! - [`DemSystem`]: the time step (velocity Verlet) tying them together.
@@ -19,6 +20,7 @@
 pub mod contact_law;
 pub mod generate;
 pub mod ghosts;
+pub mod lubrication;
 pub mod neighbours;
 pub mod particles;
 pub mod stress;
@@ -26,6 +28,7 @@ pub mod system;
 pub mod walls;
 
 pub use contact_law::{ContactLaw, NormalCalibration, NormalStiffness};
+pub use lubrication::Lubrication;
 pub use neighbours::NeighbourList;
 pub use particles::Particles;
 pub use system::{Contact, DemSystem, StepDiagnostics};

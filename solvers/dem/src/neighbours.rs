@@ -116,10 +116,21 @@ impl CellBins {
     }
 }
 
+/// [`NeighbourList::state`] bit: the pair overlaps.
+pub const TOUCHING: u8 = 1;
+/// [`NeighbourList::state`] bit: the pair is within the lubrication range.
+pub const LUBRICATED: u8 = 2;
+
 #[derive(Clone, Debug, Default)]
 pub struct NeighbourList {
-    /// Extra distance beyond contact within which pairs are listed.
+    /// Extra distance within which pairs are listed beyond the reach of
+    /// their interaction, so that the list holds until a particle has moved
+    /// half of it.
     pub skin: f64,
+    /// Gap between surfaces up to which a pair interacts without touching
+    /// (the lubrication range in a fluid, zero in a dry scene): pairs are
+    /// listed within `r_i + r_j + gap + skin`.
+    pub gap: f64,
     /// Partners of owned particle i: `partner[offsets[i]..offsets[i + 1]]`,
     /// owned or ghost, in increasing index. Every pair is listed from both
     /// sides (a full list), so each particle sums its own forces.
@@ -135,11 +146,12 @@ pub struct NeighbourList {
     /// (zero when not in contact; lower entries hold zero, their pair's
     /// history is −ξ of the mirror).
     pub history: Vec<Vec3>,
-    /// Whether each upper entry may hold a non-zero history (it was a
-    /// contact at the last force evaluation): the force loop reads this byte
+    /// State of each upper entry at the last force evaluation, a set of
+    /// [`TOUCHING`] (it may hold a non-zero history) and [`LUBRICATED`] (a
+    /// film force acts without contact): the force loop reads this byte
     /// rather than the 24-byte history for the many listed pairs that are
-    /// apart.
-    pub open: Vec<bool>,
+    /// apart, and its second pass collects the pairs whose state is not 0.
+    pub state: Vec<u8>,
     /// Owned positions at the last build.
     pub reference_position: Vec<Vec3>,
     bins: CellBins,
@@ -198,7 +210,7 @@ impl NeighbourList {
     pub fn build(&mut self, particles: &Particles, grid: &CellGrid, previous: &PreviousList) {
         self.bins.fill(grid, &particles.position);
         let n_owned = particles.n_owned;
-        let skin = self.skin;
+        let margin = self.skin + self.gap;
         let bins = &self.bins;
         let two_d = grid.counts[2] == 1;
         let chunks: Vec<(Vec<u32>, Vec<u32>, Vec<Vec3>)> = (0..n_owned)
@@ -229,7 +241,7 @@ impl NeighbourList {
                                     if j == i || (fixed_i && particles.inverse_mass[j] == 0.0) {
                                         continue;
                                     }
-                                    let reach = ri + particles.radius[j] + skin;
+                                    let reach = ri + particles.radius[j] + margin;
                                     if (particles.position[j] - xi).norm_squared() < reach * reach {
                                         partners.push(j as u32);
                                     }
@@ -269,9 +281,12 @@ impl NeighbourList {
             self.partner.extend_from_slice(partners);
             self.history.extend_from_slice(histories);
         }
-        self.open.clear();
-        self.open
-            .extend(self.history.iter().map(|h| *h != Vec3::zeros()));
+        self.state.clear();
+        self.state.extend(
+            self.history
+                .iter()
+                .map(|h| if *h != Vec3::zeros() { TOUCHING } else { 0 }),
+        );
         self.link_pairs(n_owned);
         self.reference_position.clear();
         self.reference_position

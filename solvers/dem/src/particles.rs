@@ -22,6 +22,11 @@ pub struct Particles {
     /// Total force and torque of the last evaluation (ghosts: their source's).
     pub force: Vec<Vec3>,
     pub torque: Vec<Vec3>,
+    /// Force and torque from outside the DEM, held fixed over its steps:
+    /// the hydrodynamic loads of the immersed boundaries in a fluid (zero
+    /// in a dry scene).
+    pub external_force: Vec<Vec3>,
+    pub external_torque: Vec<Vec3>,
 }
 
 /// Mass and moment of inertia of a sphere (3D) or of a disc per unit
@@ -91,6 +96,8 @@ impl Particles {
             .push(if new.fixed { 0.0 } else { 1.0 / inertia });
         self.force.push(Vec3::zeros());
         self.torque.push(Vec3::zeros());
+        self.external_force.push(Vec3::zeros());
+        self.external_torque.push(Vec3::zeros());
         self.n_owned += 1;
     }
 
@@ -107,6 +114,8 @@ impl Particles {
         self.inverse_inertia.truncate(n);
         self.force.truncate(n);
         self.torque.truncate(n);
+        self.external_force.truncate(n);
+        self.external_torque.truncate(n);
     }
 
     /// Appends a ghost copy of particle `source` displaced by `shift`.
@@ -121,6 +130,8 @@ impl Particles {
         self.inverse_inertia.push(self.inverse_inertia[source]);
         self.force.push(self.force[source]);
         self.torque.push(self.torque[source]);
+        self.external_force.push(self.external_force[source]);
+        self.external_torque.push(self.external_torque[source]);
     }
 
     /// Reorders the owned particles by `order` (new index k holds old
@@ -141,6 +152,8 @@ impl Particles {
         apply(&mut self.inverse_inertia, order);
         apply(&mut self.force, order);
         apply(&mut self.torque, order);
+        apply(&mut self.external_force, order);
+        apply(&mut self.external_torque, order);
     }
 
     /// Largest radius among owned particles (0 when empty).

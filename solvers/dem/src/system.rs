@@ -4,14 +4,17 @@
 //! 1. half kick v += Δt/2 F/m, ω += Δt/2 T/I, then drift x += Δt v;
 //! 2. rebuild the neighbour list (migrate, sort, ghosts) if a particle moved
 //!    more than half the skin, else refresh the ghosts;
-//! 3. contact forces (eq. 13–16): each particle evaluates the pairs it
-//!    holds the upper side of, its walls and gravity; then each particle
-//!    collects the pairs evaluated by its partners, in a fixed order;
+//! 3. contact forces (eq. 13–16) and, in a fluid, lubrication (eq. 19):
+//!    each particle evaluates the pairs it holds the upper side of, its
+//!    walls, gravity and the external (hydrodynamic) load; then each
+//!    particle collects the pairs evaluated by its partners, in a fixed
+//!    order;
 //! 4. half kick with the new forces.
 
 use crate::contact_law::{ContactLaw, ContactPoint};
 use crate::ghosts::Ghosts;
-use crate::neighbours::{CellBins, CellGrid, NeighbourList};
+use crate::lubrication::Lubrication;
+use crate::neighbours::{CellBins, CellGrid, NeighbourList, LUBRICATED, TOUCHING};
 use crate::particles::{NewParticle, Particles};
 use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
@@ -54,6 +57,9 @@ pub struct DemSystem {
     pub communicator: Communicator,
     pub particles: Particles,
     pub law: ContactLaw,
+    /// The film force between close grains: only in a scene with a fluid.
+    /// Set it before adding particles (the pair list reaches its range).
+    pub lubrication: Option<Lubrication>,
     pub walls: Vec<PlaneWall>,
     /// Tangential displacement of each owned particle against each wall:
     /// `wall_history[p * wall_stride() + w]`.
@@ -88,6 +94,7 @@ impl DemSystem {
             domain,
             particles: Particles::default(),
             law,
+            lubrication: None,
             walls,
             wall_history: Vec::new(),
             wall_touching: Vec::new(),
@@ -137,7 +144,7 @@ impl DemSystem {
 
     /// Interaction range of a ghost: the largest pair distance in the list.
     fn interaction_range(&self) -> f64 {
-        2.0 * self.particles.max_radius() + self.neighbours.skin
+        2.0 * self.particles.max_radius() + self.neighbours.gap + self.neighbours.skin
     }
 
     fn cell_grid(&self) -> CellGrid {
@@ -158,6 +165,9 @@ impl DemSystem {
         // The old list, with the ids of all particles (owned and ghosts) it
         // refers to, carries the open contacts over to the new one.
         let mut previous = self.neighbours.take_previous(&self.particles);
+        self.neighbours.gap = self
+            .lubrication
+            .map_or(0.0, |law| law.reach(self.particles.max_radius()));
         self.particles.clear_ghosts();
         for x in &mut self.particles.position {
             self.domain.wrap(x);
@@ -190,7 +200,7 @@ impl DemSystem {
     /// next neighbour build.
     fn list_wall_candidates(&mut self) {
         let n = self.particles.n_owned;
-        let skin = self.neighbours.skin;
+        let margin = self.neighbours.skin + self.neighbours.gap;
         let walls = &self.walls;
         let p = &self.particles;
         self.wall_candidates.resize(n, 0);
@@ -202,7 +212,7 @@ impl DemSystem {
                 *candidates = walls
                     .iter()
                     .enumerate()
-                    .filter(|(_, wall)| wall.distance(&p.position[i]) < p.radius[i] + skin)
+                    .filter(|(_, wall)| wall.distance(&p.position[i]) < p.radius[i] + margin)
                     .fold(0, |bits, (w, _)| bits | 1u64 << w);
             });
     }
@@ -221,6 +231,27 @@ impl DemSystem {
         self.steps += 1;
         self.last = diagnostics;
         diagnostics
+    }
+
+    /// Sets the external force and torque of every owned particle (held
+    /// fixed over the following steps), updating the current totals so
+    /// that the next half kick already uses them.
+    pub fn set_external_loads(&mut self, force: &[Vec3], torque: &[Vec3]) {
+        let n = self.particles.n_owned;
+        assert!(
+            force.len() == n && torque.len() == n,
+            "one load per owned particle"
+        );
+        let p = &mut self.particles;
+        for k in 0..n {
+            if p.inverse_mass[k] == 0.0 {
+                continue;
+            }
+            p.force[k] += force[k] - p.external_force[k];
+            p.torque[k] += torque[k] - p.external_torque[k];
+            p.external_force[k] = force[k];
+            p.external_torque[k] = torque[k];
+        }
     }
 
     /// Half kick and drift; returns whether a particle moved more than half
@@ -319,6 +350,7 @@ impl DemSystem {
     ) -> (f64, usize) {
         let n = forces.len();
         let law = self.law;
+        let lubrication = self.lubrication;
         let walls = &self.walls;
         let wall_stride = self.wall_stride();
         let time = self.time;
@@ -329,7 +361,7 @@ impl DemSystem {
             offsets,
             n,
             &mut list.history,
-            &mut list.open,
+            &mut list.state,
             &mut self.pair_force,
             &mut self.pair_partner_torque,
         );
@@ -379,18 +411,38 @@ impl DemSystem {
                             if distance_sq >= reach * reach {
                                 // Most listed partners are apart: touch the
                                 // history only when a contact has just ended.
-                                if entry.open[e] {
-                                    entry.open[e] = false;
+                                if entry.state[e] != 0 {
+                                    entry.state[e] = 0;
                                     entry.history[e] = Vec3::zeros();
+                                }
+                                if let Some(film) = &lubrication {
+                                    let distance = distance_sq.sqrt();
+                                    let normal = branch * (1.0 / distance);
+                                    let force = film.force(
+                                        distance - reach,
+                                        normal,
+                                        vi - p.velocity[j],
+                                        ri,
+                                        rj,
+                                        p.inverse_mass[i] + p.inverse_mass[j],
+                                        dt,
+                                    );
+                                    if force != Vec3::zeros() {
+                                        total_force += force;
+                                        entry.force[e] = force;
+                                        entry.partner_torque[e] = Vec3::zeros();
+                                        entry.state[e] = LUBRICATED;
+                                    }
                                 }
                                 continue;
                             }
-                            entry.open[e] = true;
+                            entry.state[e] = TOUCHING;
                             // Eq. 13–16, normal from j to i.
                             let distance = distance_sq.sqrt();
                             let normal = branch * (1.0 / distance);
                             let overlap = reach - distance;
                             let wj = p.angular_velocity[j];
+                            let inverse_mass_sum = p.inverse_mass[i] + p.inverse_mass[j];
                             let contact = ContactPoint {
                                 overlap,
                                 normal,
@@ -400,11 +452,22 @@ impl DemSystem {
                                 relative_spin: wi - wj,
                                 radius: ri,
                                 partner_radius: rj,
-                                inverse_mass_sum: p.inverse_mass[i] + p.inverse_mass[j],
+                                inverse_mass_sum,
                                 inverse_inertia_sum: p.inverse_inertia[i] + p.inverse_inertia[j],
                                 friction: law.friction,
                             };
-                            let load = law.load(&contact, &mut entry.history[e], dt);
+                            let mut load = law.load(&contact, &mut entry.history[e], dt);
+                            if let Some(film) = &lubrication {
+                                load.force += film.force(
+                                    -overlap,
+                                    normal,
+                                    vi - p.velocity[j],
+                                    ri,
+                                    rj,
+                                    inverse_mass_sum,
+                                    dt,
+                                );
+                            }
                             total_force += load.force;
                             total_torque += load.torque;
                             // Pass 2 hands these to j (a ghost's owner
@@ -431,6 +494,19 @@ impl DemSystem {
                                         wall_history[w] = Vec3::zeros();
                                         touches &= !bit;
                                     }
+                                    if let (Some(film), true) =
+                                        (&lubrication, wall.is_present(time))
+                                    {
+                                        total_force += film.force(
+                                            -overlap,
+                                            wall.normal,
+                                            vi,
+                                            ri,
+                                            f64::INFINITY,
+                                            p.inverse_mass[i],
+                                            dt,
+                                        );
+                                    }
                                     continue;
                                 }
                                 touches |= bit;
@@ -447,12 +523,24 @@ impl DemSystem {
                                 };
                                 let load = law.load(&contact, &mut wall_history[w], dt);
                                 total_force += load.force;
+                                if let Some(film) = &lubrication {
+                                    total_force += film.force(
+                                        -overlap,
+                                        wall.normal,
+                                        vi,
+                                        ri,
+                                        f64::INFINITY,
+                                        p.inverse_mass[i],
+                                        dt,
+                                    );
+                                }
                                 total_torque += load.torque;
                                 max_overlap = max_overlap.max(overlap / ri);
                                 wall_contacts += 1;
                             }
                             touching[local] = touches;
-                            total_force += p.mass[i] * gravity;
+                            total_force += p.mass[i] * gravity + p.external_force[i];
+                            total_torque += p.external_torque[i];
                         }
                         forces[local] = total_force;
                         torques[local] = total_torque;
@@ -482,10 +570,11 @@ impl DemSystem {
                     let lower = list.offsets[i] as usize..list.upper_start[i] as usize;
                     for &upper in &list.mirror[lower] {
                         let upper = upper as usize;
-                        if list.open[upper] {
+                        let state = list.state[upper];
+                        if state != 0 {
                             forces[local] -= pair_force[upper];
                             torques[local] += pair_partner_torque[upper];
-                            counts[local] += 1;
+                            counts[local] += u32::from(state & TOUCHING);
                         }
                     }
                     listed += counts[local] as usize;
@@ -592,7 +681,7 @@ impl DemSystem {
 /// loop writes them for its own particles' entries only).
 struct EntryChunk<'a> {
     history: &'a mut [Vec3],
-    open: &'a mut [bool],
+    state: &'a mut [u8],
     force: &'a mut [Vec3],
     partner_torque: &'a mut [Vec3],
 }
@@ -604,7 +693,7 @@ impl<'a> EntryChunk<'a> {
         offsets: &[u32],
         n: usize,
         mut history: &'a mut [Vec3],
-        mut open: &'a mut [bool],
+        mut state: &'a mut [u8],
         mut force: &'a mut [Vec3],
         mut partner_torque: &'a mut [Vec3],
     ) -> Vec<EntryChunk<'a>> {
@@ -613,17 +702,17 @@ impl<'a> EntryChunk<'a> {
             let end = (start + PARTICLES_PER_TASK).min(n);
             let len = (offsets[end] - offsets[start]) as usize;
             let (history_head, history_tail) = std::mem::take(&mut history).split_at_mut(len);
-            let (open_head, open_tail) = std::mem::take(&mut open).split_at_mut(len);
+            let (state_head, state_tail) = std::mem::take(&mut state).split_at_mut(len);
             let (force_head, force_tail) = std::mem::take(&mut force).split_at_mut(len);
             let (torque_head, torque_tail) = std::mem::take(&mut partner_torque).split_at_mut(len);
             chunks.push(EntryChunk {
                 history: history_head,
-                open: open_head,
+                state: state_head,
                 force: force_head,
                 partner_torque: torque_head,
             });
-            (history, open, force, partner_torque) =
-                (history_tail, open_tail, force_tail, torque_tail);
+            (history, state, force, partner_torque) =
+                (history_tail, state_tail, force_tail, torque_tail);
         }
         chunks
     }

@@ -1,0 +1,385 @@
+//! Direct forcing of the flow by immersed spheres (Izard et al. 2014,
+//! eq. 3–7) and the hydrodynamic loads it implies.
+//!
+//! Within a Runge–Kutta stage of length `h = α_k Δt`, after the prediction
+//! `V` of the flow and before its projection, every face of every velocity
+//! component receives
+//!
+//! ```text
+//! f = Σ_p w_p (U_p − V) / h,      U_p = u_p + ω_p × r,      (eq. 7)
+//! w_p = α_p / max(1, Σ_q α_q),
+//! ```
+//!
+//! with `α_p` the solid fraction of particle `p` at the face (eq. 8–10),
+//! so that `V + h f` moves with the particle where it is solid. Where the
+//! transition layers of touching particles overlap, the weights are scaled
+//! so that they never add up to more than one (the velocity is then the
+//! fraction-weighted mean of the particles' rigid velocities, whatever
+//! their order). The particle receives the opposite of what it gives the
+//! fluid: per unit fluid density,
+//!
+//! ```text
+//! F_p = −Σ_faces w_p (U_p − V) / h dV,      T_p = −Σ_faces r × w_p (U_p − V) / h dV,
+//! ```
+//!
+//! the discrete `−∫ f dϑ` and `−∫ r × f dϑ` of eq. 5–6. The fluid's
+//! momentum inside each particle, `∫ α_p u dV` and `∫ r × α_p u dV`, is
+//! measured on the same faces for the coupling that accounts for it.
+//!
+//! A particle acts through every periodic image whose support reaches the
+//! subdomain, so its forcing region may straddle a periodic edge (and,
+//! with several ranks, a subdomain edge: the owner then adds the partial
+//! loads of the other ranks).
+
+use grainflow_core::{Dimension, Domain, Vec3};
+use grainflow_dem::Particles;
+use grainflow_fluid::{Block, Grid, Location};
+use rayon::prelude::*;
+
+use crate::solid_fraction::{solid_fraction, support, transition_width};
+
+/// Force and torque per particle (owned index), per unit fluid density.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Loads {
+    pub force: Vec<Vec3>,
+    pub torque: Vec<Vec3>,
+}
+
+impl Loads {
+    fn zeros(count: usize) -> Self {
+        Loads {
+            force: vec![Vec3::zeros(); count],
+            torque: vec![Vec3::zeros(); count],
+        }
+    }
+}
+
+/// One particle, or one of its periodic images, as the grid sees it.
+#[derive(Clone, Copy, Debug)]
+struct Body {
+    /// Owned index of the particle.
+    particle: usize,
+    centre: Vec3,
+    velocity: Vec3,
+    angular_velocity: Vec3,
+    radius: f64,
+}
+
+impl Body {
+    /// Rigid velocity `u_p + ω_p × r` at offset `r` from the centre.
+    #[inline]
+    fn velocity_at(&self, offset: &Vec3) -> Vec3 {
+        self.velocity + self.angular_velocity.cross(offset)
+    }
+}
+
+/// The immersed spheres' action on the flow of one subdomain.
+pub struct ImmersedBoundaries {
+    /// `Δ` of eq. 8.
+    pub width: f64,
+    dimension: Dimension,
+    /// Lower corner and lengths of the periodic axes of the whole domain.
+    domain_lower: Vec3,
+    periods: [Option<f64>; 3],
+    /// `Σ_p α_p` on the faces of each component (zero outside the stencils
+    /// between stages).
+    total_fraction: Vec<Vec<f64>>,
+    /// `Σ_p α_p U_p` on the faces of each component.
+    solid_velocity: Vec<Vec<f64>>,
+}
+
+impl ImmersedBoundaries {
+    /// Immersed boundaries on the flow grid `grid` of the scene's `domain`
+    /// (its periodic axes give the images of particles near its edges).
+    pub fn new(grid: &Grid, domain: &Domain) -> Self {
+        let dim = grid.dim();
+        let length = domain.extent();
+        ImmersedBoundaries {
+            width: transition_width(&grid.spacing[..dim]),
+            dimension: grid.dimension,
+            domain_lower: domain.lower,
+            periods: [0, 1, 2].map(|a| (a < dim && domain.periodic[a]).then_some(length[a])),
+            total_fraction: (0..dim).map(|_| grid.zeros()).collect(),
+            solid_velocity: (0..dim).map(|_| grid.zeros()).collect(),
+        }
+    }
+
+    /// `Σ_faces α_p dV` of each owned particle: the volume the grid sees
+    /// (area in 2D), averaged over the components.
+    pub fn grid_volume(&self, grid: &Grid, unknowns: &[Block], particles: &Particles) -> Vec<f64> {
+        let bodies = self.bodies(particles);
+        let dim = grid.dim();
+        let mut volume = vec![0.0; particles.n_owned];
+        for body in &bodies {
+            for component in 0..dim {
+                visit_faces(
+                    self.width,
+                    grid,
+                    &unknowns[component],
+                    component,
+                    body,
+                    |_, _, alpha| {
+                        volume[body.particle] += alpha * grid.cell_volume() / dim as f64;
+                    },
+                );
+            }
+        }
+        volume
+    }
+
+    /// The fluid's momentum and angular momentum (about each centre) inside
+    /// each owned particle, `∫ α_p u dV` and `∫ r × α_p u dV`, per unit density.
+    pub fn inner_momentum(
+        &self,
+        grid: &Grid,
+        unknowns: &[Block],
+        velocity: &[Vec<f64>],
+        particles: &Particles,
+    ) -> Loads {
+        let bodies = self.bodies(particles);
+        let volume = grid.cell_volume();
+        let per_body: Vec<(Vec3, Vec3)> = bodies
+            .par_iter()
+            .map(|body| {
+                let mut momentum = Vec3::zeros();
+                let mut angular = Vec3::zeros();
+                for (component, field) in velocity.iter().enumerate() {
+                    visit_faces(
+                        self.width,
+                        grid,
+                        &unknowns[component],
+                        component,
+                        body,
+                        |index, r, alpha| {
+                            let mut u = Vec3::zeros();
+                            u[component] = alpha * field[index] * volume;
+                            momentum += u;
+                            angular += r.cross(&u);
+                        },
+                    );
+                }
+                (momentum, angular)
+            })
+            .collect();
+        self.gather(particles.n_owned, &bodies, &per_body)
+    }
+
+    /// Applies the direct forcing of a stage of length `stage_dt` to the
+    /// predicted velocity and returns the loads on each owned particle,
+    /// per unit fluid density (eq. 5–7 without the density factors).
+    pub fn apply(
+        &mut self,
+        grid: &Grid,
+        unknowns: &[Block],
+        velocity: &mut [Vec<f64>],
+        particles: &Particles,
+        stage_dt: f64,
+    ) -> Loads {
+        let bodies = self.bodies(particles);
+        let dim = grid.dim();
+        let volume = grid.cell_volume();
+
+        // 1. Fractions and rigid velocities of all bodies on the faces.
+        let mut touched: Vec<Option<Block>> = vec![None; dim];
+        for body in &bodies {
+            for component in 0..dim {
+                let total = &mut self.total_fraction[component];
+                let target = &mut self.solid_velocity[component];
+                let stencil = visit_faces(
+                    self.width,
+                    grid,
+                    &unknowns[component],
+                    component,
+                    body,
+                    |index, r, alpha| {
+                        total[index] += alpha;
+                        target[index] += alpha * body.velocity_at(&r)[component];
+                    },
+                );
+                touched[component] = Some(match touched[component] {
+                    None => stencil,
+                    Some(union) => Block {
+                        start: [0, 1, 2].map(|a| union.start[a].min(stencil.start[a])),
+                        end: [0, 1, 2].map(|a| union.end[a].max(stencil.end[a])),
+                    },
+                });
+            }
+        }
+
+        // 2. Loads, from the velocity before the forcing.
+        let per_body: Vec<(Vec3, Vec3)> = bodies
+            .par_iter()
+            .map(|body| {
+                let mut force = Vec3::zeros();
+                let mut torque = Vec3::zeros();
+                for component in 0..dim {
+                    let total = &self.total_fraction[component];
+                    let field = &velocity[component];
+                    visit_faces(
+                        self.width,
+                        grid,
+                        &unknowns[component],
+                        component,
+                        body,
+                        |index, r, alpha| {
+                            let weight = alpha / total[index].max(1.0);
+                            let mut f = Vec3::zeros();
+                            f[component] = weight
+                                * (body.velocity_at(&r)[component] - field[index])
+                                / stage_dt
+                                * volume;
+                            force -= f;
+                            torque -= r.cross(&f);
+                        },
+                    );
+                }
+                (force, torque)
+            })
+            .collect();
+
+        // 3. The forcing, V += Σ w_p (U_p − V), and the scratch cleared.
+        for component in 0..dim {
+            let Some(block) = touched[component] else {
+                continue;
+            };
+            let total = &self.total_fraction[component];
+            let target = &self.solid_velocity[component];
+            grid.par_update(&block, &mut velocity[component], |index, v| {
+                v + (target[index] - total[index] * v) / total[index].max(1.0)
+            });
+            grid.par_update(&block, &mut self.total_fraction[component], |_, _| 0.0);
+            grid.par_update(&block, &mut self.solid_velocity[component], |_, _| 0.0);
+        }
+        self.gather(particles.n_owned, &bodies, &per_body)
+    }
+
+    /// `Σ_p α_p` capped at 1 at every owned cell centre, in the order of
+    /// [`Grid::for_each`] over the cell block: the solid fraction field for
+    /// output.
+    pub fn cell_solid_fraction(&self, grid: &Grid, particles: &Particles) -> Vec<f64> {
+        let cells = grid.cell_block();
+        let mut field = grid.zeros();
+        for body in self.bodies(particles) {
+            let reach = support(body.radius, self.width);
+            let mut stencil = cells;
+            for axis in 0..grid.dim() {
+                let (h, ghost) = (grid.spacing[axis], grid.ghost(axis) as f64);
+                let index_of = |x: f64| (x - grid.lower[axis]) / h + ghost - 0.5;
+                let first = index_of(body.centre[axis] - reach).ceil().max(0.0) as usize;
+                let last = index_of(body.centre[axis] + reach).floor().max(-1.0) + 1.0;
+                stencil.start[axis] = first.max(cells.start[axis]);
+                stencil.end[axis] = (last as usize)
+                    .min(cells.end[axis])
+                    .max(stencil.start[axis]);
+            }
+            grid.for_each(&stencil, |index, point| {
+                let mut r = [0.0; 3];
+                for axis in 0..grid.dim() {
+                    r[axis] =
+                        grid.coordinate(Location::Centre, axis, point[axis]) - body.centre[axis];
+                }
+                field[index] += solid_fraction(r, body.radius, self.width);
+            });
+        }
+        let mut out = Vec::with_capacity(grid.cells.iter().product());
+        grid.for_each(&cells, |index, _| out.push(field[index].min(1.0)));
+        out
+    }
+
+    /// The owned particles and the periodic images of those whose support
+    /// crosses a periodic edge of the domain.
+    fn bodies(&self, particles: &Particles) -> Vec<Body> {
+        let mut bodies = Vec::with_capacity(particles.n_owned);
+        for p in 0..particles.n_owned {
+            let centre = particles.position[p];
+            let reach = support(particles.radius[p], self.width);
+            let mut shifts = vec![Vec3::zeros()];
+            for (axis, period) in self.periods.iter().enumerate() {
+                let Some(length) = *period else { continue };
+                let lower = self.domain_lower[axis];
+                let mut images = Vec::new();
+                for shift in &shifts {
+                    let x = centre[axis] + shift[axis];
+                    if x - reach < lower {
+                        images.push(shift + length * Vec3::ith(axis, 1.0));
+                    }
+                    if x + reach > lower + length {
+                        images.push(shift - length * Vec3::ith(axis, 1.0));
+                    }
+                }
+                shifts.extend(images);
+            }
+            for shift in shifts {
+                bodies.push(Body {
+                    particle: p,
+                    centre: centre + shift,
+                    velocity: particles.velocity[p],
+                    angular_velocity: particles.angular_velocity[p],
+                    radius: particles.radius[p],
+                });
+            }
+        }
+        bodies
+    }
+
+    /// Adds the per-body results into per-particle loads, in body order.
+    fn gather(&self, count: usize, bodies: &[Body], per_body: &[(Vec3, Vec3)]) -> Loads {
+        let mut loads = Loads::zeros(count);
+        for (body, (force, torque)) in bodies.iter().zip(per_body) {
+            loads.force[body.particle] += force;
+            loads.torque[body.particle] += torque;
+        }
+        if self.dimension == Dimension::Two {
+            // Discs in the plane: no out-of-plane force, no in-plane torque.
+            for (force, torque) in loads.force.iter_mut().zip(&mut loads.torque) {
+                force.z = 0.0;
+                torque.x = 0.0;
+                torque.y = 0.0;
+            }
+        }
+        loads
+    }
+}
+
+/// Calls `visit(index, r, α)` for every face of `component` in `block`
+/// within the support of `body` (r: offset from its centre); returns
+/// the box of faces visited.
+fn visit_faces(
+    width: f64,
+    grid: &Grid,
+    block: &Block,
+    component: usize,
+    body: &Body,
+    mut visit: impl FnMut(usize, Vec3, f64),
+) -> Block {
+    let dim = grid.dim();
+    let reach = support(body.radius, width);
+    let mut stencil = *block;
+    for axis in 0..dim {
+        let (h, ghost) = (grid.spacing[axis], grid.ghost(axis) as f64);
+        let offset = if axis == component { 1.0 } else { 0.5 };
+        // Padded index of coordinate x: (x − lower)/h + ghost − offset.
+        let index_of = |x: f64| (x - grid.lower[axis]) / h + ghost - offset;
+        let first = index_of(body.centre[axis] - reach).ceil().max(0.0) as usize;
+        let last = index_of(body.centre[axis] + reach).floor();
+        stencil.start[axis] = first.max(block.start[axis]);
+        stencil.end[axis] = if last < 0.0 {
+            stencil.start[axis]
+        } else {
+            (last as usize + 1).min(block.end[axis])
+        };
+        stencil.end[axis] = stencil.end[axis].max(stencil.start[axis]);
+    }
+    let location = Location::Face(component);
+    grid.for_each(&stencil, |index, point| {
+        let mut r = Vec3::zeros();
+        for axis in 0..dim {
+            r[axis] = grid.coordinate(location, axis, point[axis]) - body.centre[axis];
+        }
+        let alpha = solid_fraction([r.x, r.y, r.z], body.radius, width);
+        if alpha > 0.0 {
+            visit(index, r, alpha);
+        }
+    });
+    stencil
+}

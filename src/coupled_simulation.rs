@@ -1,0 +1,411 @@
+//! The time loop of grains in a fluid: coupled steps (the flow's three
+//! Runge–Kutta stages, each forcing the flow towards the grains' rigid
+//! motion and advancing the DEM over the stage with the hydrodynamic load
+//! held fixed), with the output contract of every case: `series.csv`,
+//! `tracked.csv`, `particles/*.vtp` and `fields/*.vti` (velocity, pressure,
+//! vorticity and solid fraction) with their `.pvd` indices, `summary.json`.
+
+use crate::case::{AnalysisSection, Case};
+use crate::fluid_simulation::cell_fields;
+use crate::output::Outputs;
+use crate::simulation::{check_time_step, peak_memory_bytes, Progress, Summary};
+use crate::{fluid_scene, scene, stability, RunError};
+use grainflow_core::Vec3;
+use grainflow_ibm::{particle_volume, CoupledSystem, Coupling};
+use grainflow_io::{CsvSeries, FieldFrame, PvdIndex};
+use serde_json::{json, Map, Value};
+use std::path::Path;
+use std::time::Instant;
+
+/// The coupled scene of a validated case with grains and a fluid, and its
+/// DEM sub-step's ratio to the shortest contact time.
+pub fn build(case: &Case) -> Result<(CoupledSystem, f64), String> {
+    let mut flow = fluid_scene::build(case)?;
+    // Gravity acts on the grains, buoyancy through their loads; on the
+    // fluid alone it is balanced by the hydrostatic pressure, which the
+    // kinematic pressure leaves out.
+    flow.body_force = [0.0; 3];
+    let dem = scene::build(case)?;
+    let p = &dem.particles;
+    let lightest = (0..p.n_owned)
+        .filter(|&k| !p.is_fixed(k))
+        .map(|k| p.mass[k])
+        .fold(f64::MAX, f64::min);
+    let contact_time = stability::shortest_contact_time(&dem.law, lightest);
+    let ratio = case.time.dt_over_contact_time.unwrap_or(0.02);
+    let coupling = match case.coupling.as_ref().map(|c| c.formulation.as_str()) {
+        Some("rigid_inner_fluid") => Coupling::RigidInnerFluid,
+        _ => Coupling::InnerFluidMomentum,
+    };
+    let density = case.fluid_section().density;
+    let system = CoupledSystem::new(flow, dem, density, coupling, ratio * contact_time);
+    Ok((system, contact_time))
+}
+
+/// Runs a validated case of grains in a fluid into `out`. Nothing is
+/// written if the scene cannot be built or a time step is refused.
+pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
+    let started = Instant::now();
+    let (mut system, contact_time) = build(case).map_err(RunError::Case)?;
+    let warning = check_time_step(system.dem_dt, contact_time)?;
+    let dt = case
+        .time
+        .dt
+        .expect("validated: a coupled scene has time.dt");
+    let end = case.time.end;
+
+    let mut outputs = CoupledOutputs::create(out, case).map_err(RunError::Io)?;
+    let grid = &system.flow.grid;
+    let cells: usize = grid.cells.iter().product();
+    outputs.particles.run.log(&format!(
+        "grainflow {}: {} grains in a fluid, {}D staggered grid {:?} ({cells} cells), \
+         immersed boundaries ({:?}), soft-sphere DEM sub-cycled in each stage{}",
+        env!("CARGO_PKG_VERSION"),
+        system.dem.particles.n_owned,
+        grid.dim(),
+        &grid.cells[..grid.dim()],
+        system.coupling,
+        if system.dem.lubrication.is_some() {
+            ", lubrication"
+        } else {
+            ""
+        }
+    ));
+    outputs.particles.run.log(&format!(
+        "dt = {dt:.4e} s (fluid), DEM sub-step ≤ {:.4e} s = {:.4} t_c",
+        system.dem_dt,
+        system.dem_dt / contact_time
+    ));
+    if let Some(w) = &warning {
+        outputs.particles.run.log(w);
+        eprintln!("{w}");
+    }
+
+    let mut analysis = FallingSphere::new(case, &system);
+    let interval = case.output.interval.unwrap_or(end / 100.0);
+    let tracked = &case.particles_section().tracked;
+    let mut next_output = interval;
+    let mut steps = 0u64;
+    let mut dem_substeps = 0usize;
+    outputs
+        .write(&mut system, dt, steps, 0.0, case)
+        .map_err(RunError::Io)?;
+    outputs
+        .particles
+        .write_tracked(&system.dem, tracked)
+        .map_err(RunError::Io)?;
+    let progress = Progress::new(
+        show_progress && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        end,
+    );
+    let mut failure = None;
+    let mut max_divergence = 0.0;
+    while system.flow.time < end * (1.0 - 1e-12) {
+        let step_dt = dt.min(end - system.flow.time);
+        match system.step(step_dt) {
+            Ok(report) => {
+                dem_substeps += report.dem_substeps;
+                max_divergence = report.flow.max_divergence;
+                if !report.flow.kinetic_energy.is_finite() || report.dem.non_finite {
+                    failure = Some(format!(
+                        "unstable at t = {:.6e} s (step {steps}): the flow or a grain is not finite",
+                        system.flow.time
+                    ));
+                } else if report.dem.max_overlap_ratio > case.time.overlap_limit {
+                    failure = Some(format!(
+                        "unstable at t = {:.6e} s (step {steps}): overlap of {:.3} radii beyond \
+                         time.overlap_limit = {}; reduce time.dt_over_contact_time",
+                        system.flow.time, report.dem.max_overlap_ratio, case.time.overlap_limit
+                    ));
+                }
+            }
+            Err(e) => {
+                failure = Some(format!(
+                    "unstable at t = {:.6e} s (step {steps}): {e}; reduce time.dt",
+                    system.flow.time
+                ));
+            }
+        }
+        if failure.is_some() {
+            break;
+        }
+        steps += 1;
+        analysis.after_step(&system, step_dt);
+        let at_end = system.flow.time >= end * (1.0 - 1e-12);
+        if system.flow.time >= next_output - 0.5 * dt || at_end {
+            outputs
+                .write(&mut system, step_dt, steps, max_divergence, case)
+                .map_err(RunError::Io)?;
+            outputs
+                .particles
+                .write_tracked(&system.dem, tracked)
+                .map_err(RunError::Io)?;
+            next_output += interval;
+        }
+        progress.update(system.flow.time, steps, (end / dt).ceil() as u64);
+    }
+    progress.finish();
+
+    let wall_seconds = started.elapsed().as_secs_f64();
+    let metrics = if failure.is_none() {
+        analysis.metrics()
+    } else {
+        Map::new()
+    };
+    let t = system.timings;
+    let summary = json!({
+        "analysis": case.analysis,
+        "status": if failure.is_some() { "unstable" } else { "ok" },
+        "stop_reason": failure.clone().unwrap_or_else(|| "end time reached".to_string()),
+        "particles": system.dem.particles.n_owned,
+        "cells": cells,
+        "dimension": system.flow.grid.dim(),
+        "steps": steps,
+        "dem_substeps": dem_substeps,
+        "dt": dt,
+        "dem_dt": system.dem_dt,
+        "simulated_time": system.flow.time,
+        "wall_seconds": wall_seconds,
+        "seconds_per_step": wall_seconds / steps.max(1) as f64,
+        "seconds_flow": t.flow,
+        "seconds_forcing": t.forcing,
+        "seconds_loads": t.loads,
+        "seconds_dem": t.dem,
+        "threads": rayon::current_num_threads(),
+        "peak_memory_bytes": peak_memory_bytes(),
+        "metrics": metrics,
+    });
+    let run = &mut outputs.particles.run;
+    run.write_summary(&summary).map_err(RunError::Io)?;
+    if let Some(message) = failure {
+        run.log(&message);
+        run.log("the outputs hold the last good state before the failure");
+        return Err(RunError::Unstable(message));
+    }
+    run.log(&format!(
+        "done: {steps} steps ({dem_substeps} DEM sub-steps) in {wall_seconds:.2} s: flow {:.2} s, \
+         forcing {:.2} s, loads {:.2} s, DEM {:.2} s",
+        t.flow, t.forcing, t.loads, t.dem
+    ));
+    Ok(Summary {
+        json: summary,
+        metrics,
+    })
+}
+
+/// The outputs of grains in a fluid: the particle outputs of every scene
+/// of grains, the flow's series columns and its field files.
+struct CoupledOutputs {
+    particles: Outputs,
+    flow_series: CsvSeries,
+    fields: Option<PvdIndex>,
+    frames: usize,
+}
+
+impl CoupledOutputs {
+    fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
+        let particles = Outputs::create(dir, case)?;
+        let flow_series = CsvSeries::create(
+            &dir.join("flow_series.csv"),
+            &[
+                "t",
+                "dt",
+                "step",
+                "fluid_kinetic_energy",
+                "max_cfl",
+                "max_divergence",
+                "wall_seconds",
+            ],
+        )?;
+        let fields = if case.output.fields {
+            std::fs::create_dir_all(dir.join("fields"))?;
+            Some(PvdIndex::new(dir.join("fields.pvd")))
+        } else {
+            None
+        };
+        Ok(CoupledOutputs {
+            particles,
+            flow_series,
+            fields,
+            frames: 0,
+        })
+    }
+
+    /// Rows of `series.csv` (grains) and `flow_series.csv` (fluid, energy
+    /// in J, per unit depth in 2D) and, if enabled, particle and field files.
+    fn write(
+        &mut self,
+        system: &mut CoupledSystem,
+        dt: f64,
+        steps: u64,
+        max_divergence: f64,
+        case: &Case,
+    ) -> std::io::Result<()> {
+        self.particles.write_frame(&system.dem, dt)?;
+        let density = system.fluid_density;
+        self.flow_series.row(&[
+            system.flow.time,
+            dt,
+            steps as f64,
+            density * system.flow.kinetic_energy(),
+            system.flow.max_cfl(dt),
+            max_divergence,
+            self.particles.run.started.elapsed().as_secs_f64(),
+        ])?;
+        if let Some(index) = &mut self.fields {
+            let (velocity, pressure, vorticity) = cell_fields(&mut system.flow, density);
+            let solid = system
+                .immersed
+                .cell_solid_fraction(&system.flow.grid, &system.dem.particles);
+            let grid = &system.flow.grid;
+            let name = format!("fields/fields_{:06}.vti", self.frames);
+            FieldFrame {
+                cells: grid.cells,
+                origin: grid.lower,
+                spacing: grid.spacing,
+                scalars: &[("pressure", &pressure), ("solid_fraction", &solid)],
+                vectors: &[("velocity", &velocity), ("vorticity", &vorticity)],
+            }
+            .write(&self.particles.run.dir.join(&name))?;
+            index.add(system.flow.time, &name)?;
+        }
+        let _ = case;
+        self.frames += 1;
+        Ok(())
+    }
+}
+
+/// Section 3.1 of the paper: particle 0 released from rest. Its velocity
+/// along gravity after the first step gives the initial acceleration,
+/// compared with `(ρ_p − ρ) g / (ρ_p + ρ/2)` (eq. 20); its settling speed
+/// at the end the terminal velocity, compared with the balance of
+/// buoyant weight and Schiller–Naumann drag (eq. 21).
+struct FallingSphere {
+    active: bool,
+    /// Unit vector along gravity.
+    down: Vec3,
+    initial_acceleration: Option<f64>,
+    /// (time, settling speed) after every step.
+    history: Vec<(f64, f64)>,
+    density: f64,
+    fluid_density: f64,
+    viscosity: f64,
+    diameter: f64,
+    gravity: f64,
+    three_d: bool,
+}
+
+impl FallingSphere {
+    fn new(case: &Case, system: &CoupledSystem) -> Self {
+        let gravity = system.dem.domain.gravity;
+        let p = &system.dem.particles;
+        let k = system.dem.index_of(0).unwrap_or(0);
+        let volume = particle_volume(system.dem.dimension(), p.radius[k]);
+        FallingSphere {
+            active: matches!(case.analysis, Some(AnalysisSection::FallingSphere)),
+            down: gravity.try_normalize(0.0).unwrap_or_else(Vec3::zeros),
+            initial_acceleration: None,
+            history: Vec::new(),
+            density: p.mass[k] / volume,
+            fluid_density: system.fluid_density,
+            viscosity: case.fluid_section().viscosity,
+            diameter: 2.0 * p.radius[k],
+            gravity: gravity.norm(),
+            three_d: system.dem.dimension() == grainflow_core::Dimension::Three,
+        }
+    }
+
+    fn after_step(&mut self, system: &CoupledSystem, dt: f64) {
+        if !self.active {
+            return;
+        }
+        let Some(k) = system.dem.index_of(0) else {
+            return;
+        };
+        let speed = system.dem.particles.velocity[k].dot(&self.down);
+        if self.initial_acceleration.is_none() {
+            self.initial_acceleration = Some(speed / dt);
+        }
+        self.history.push((system.flow.time, speed));
+    }
+
+    fn metrics(&self) -> Map<String, Value> {
+        let mut metrics = Map::new();
+        if !self.active || self.history.is_empty() {
+            return metrics;
+        }
+        let (rho_p, rho, mu, d, g) = (
+            self.density,
+            self.fluid_density,
+            self.viscosity,
+            self.diameter,
+            self.gravity,
+        );
+        let added_mass = (rho_p - rho) * g / (rho_p + 0.5 * rho);
+        let initial = self.initial_acceleration.unwrap_or(0.0);
+        metrics.insert("initial_acceleration".into(), json!(initial));
+        metrics.insert("initial_acceleration_reference".into(), json!(added_mass));
+        metrics.insert(
+            "initial_acceleration_error".into(),
+            json!(initial / added_mass - 1.0),
+        );
+        // Terminal: the speed over the last tenth of the run, and how much
+        // it still changed there (the run must be long enough to be steady).
+        let (end_time, terminal) = *self.history.last().unwrap();
+        let window_start = self.history[0].0 + 0.9 * (end_time - self.history[0].0);
+        let first_in_window = self
+            .history
+            .iter()
+            .find(|(t, _)| *t >= window_start)
+            .map_or(terminal, |&(_, v)| v);
+        let reynolds = rho * terminal * d / mu;
+        metrics.insert("terminal_velocity".into(), json!(terminal));
+        metrics.insert("terminal_reynolds".into(), json!(reynolds));
+        metrics.insert(
+            "terminal_drift".into(),
+            json!((terminal - first_in_window) / terminal),
+        );
+        if self.three_d {
+            let archimedes = rho * (rho_p - rho) * g * d.powi(3) / (mu * mu);
+            let reference = schiller_naumann_reynolds(archimedes);
+            metrics.insert("archimedes".into(), json!(archimedes));
+            metrics.insert("schiller_naumann_reynolds".into(), json!(reference));
+            metrics.insert(
+                "terminal_reynolds_error".into(),
+                json!(reynolds / reference - 1.0),
+            );
+        }
+        metrics
+    }
+}
+
+/// The terminal Reynolds number of a sphere of Archimedes number `Ar`
+/// with the Schiller–Naumann drag `C_D = 24/Re (1 + 0.15 Re^0.687)`: the
+/// balance of eq. 21, `C_D Re² = 4 Ar / 3`, solved by bisection.
+pub fn schiller_naumann_reynolds(archimedes: f64) -> f64 {
+    let balance = |re: f64| 24.0 * re * (1.0 + 0.15 * re.powf(0.687)) - 4.0 * archimedes / 3.0;
+    let (mut low, mut high) = (0.0, 1e6);
+    for _ in 0..200 {
+        let mid = 0.5 * (low + high);
+        if balance(mid) > 0.0 {
+            high = mid;
+        } else {
+            low = mid;
+        }
+    }
+    0.5 * (low + high)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schiller_naumann_balance() {
+        // Ar = 800: Re ≈ 20.3 (the paper's "Re = 20 approximately").
+        let re = schiller_naumann_reynolds(800.0);
+        let drag = 24.0 / re * (1.0 + 0.15 * re.powf(0.687));
+        assert!((drag * re * re - 4.0 * 800.0 / 3.0).abs() < 1e-9);
+        assert!((re - 20.318).abs() < 1e-3, "{re}");
+    }
+}
