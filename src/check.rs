@@ -2,6 +2,7 @@
 //! derived numbers and the models the scene will run.
 
 use crate::case::Case;
+use crate::coupled_simulation::{self, schiller_naumann_reynolds};
 use crate::simulation::{check_time_step, time_step};
 use crate::{fluid_scene, scene, stability, RunError};
 use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
@@ -21,6 +22,9 @@ fn bytes_per_particle(dimension: usize, walls: usize) -> usize {
 pub fn report(case: &Case) -> Result<String, RunError> {
     if !case.has_grains() {
         return fluid_report(case);
+    }
+    if case.fluid.is_some() {
+        return coupled_report(case);
     }
     let system = scene::build(case).map_err(RunError::Case)?;
     let (dt, contact_time) = time_step(case, &system);
@@ -224,6 +228,126 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
         out,
         "memory estimate: {:.1} MiB",
         (cells * bytes_per_cell(dim)) as f64 / (1 << 20) as f64
+    );
+    Ok(out)
+}
+
+/// `check` of grains in a fluid: the models, the dimensionless numbers of
+/// the lightest grain (density ratio, Archimedes, Schiller–Naumann terminal
+/// Reynolds and Stokes numbers), resolution, the fluid step against the
+/// CFL limit at that terminal velocity, the DEM sub-step, lubrication.
+fn coupled_report(case: &Case) -> Result<String, RunError> {
+    let (system, contact_time) = coupled_simulation::build(case).map_err(RunError::Case)?;
+    let warning = check_time_step(system.dem_dt, contact_time)?;
+    let density_warning = coupled_simulation::check_density_ratio(&system)?;
+    let f = case.fluid_section();
+    let grid = &system.flow.grid;
+    let dim = grid.dim();
+    let cells: usize = grid.cells.iter().product();
+    let p = &system.dem.particles;
+    let n = p.n_owned;
+    let mut out = String::new();
+    let _ = writeln!(out, "models:");
+    let _ = writeln!(
+        out,
+        "  {dim}D incompressible Navier–Stokes, staggered grid, RK3 + Crank–Nicolson, direct \
+         pressure solve"
+    );
+    let _ = writeln!(
+        out,
+        "  immersed boundaries: tanh solid fraction (eq. 8–10), direct forcing at every stage \
+         (eq. 7), loads {:?}",
+        system.coupling
+    );
+    let _ = writeln!(
+        out,
+        "  {dim}D soft-sphere DEM sub-cycled within each stage, hydrodynamic loads held fixed"
+    );
+    match &system.dem.lubrication {
+        Some(l) => {
+            let _ = writeln!(
+                out,
+                "  lubrication (eq. 19): eta/R = {:e}, acting up to gaps of {} R, implicit per pair",
+                l.roughness, l.range
+            );
+        }
+        None => {
+            let _ = writeln!(out, "  no lubrication ([lubrication] absent)");
+        }
+    }
+    let h = grid.spacing[..dim]
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let _ = writeln!(
+        out,
+        "fluid: {:?} cells ({cells}), spacing {:?} m; density {} kg/m3, viscosity {} Pa s",
+        &grid.cells[..dim],
+        &grid.spacing[..dim],
+        f.density,
+        f.viscosity
+    );
+    let _ = writeln!(out, "particles: {n}");
+    let moving: Vec<usize> = (0..n).filter(|&k| !p.is_fixed(k)).collect();
+    let dt = case.time.dt.expect("validated");
+    if let Some(&k) = moving
+        .iter()
+        .min_by(|&&a, &&b| p.mass[a].total_cmp(&p.mass[b]))
+    {
+        let rho = f.density;
+        let diameter = 2.0 * p.radius[k];
+        let rho_p = p.mass[k] / grainflow_ibm::particle_volume(system.dem.dimension(), p.radius[k]);
+        let g = system.dem.domain.gravity.norm();
+        let mu = f.viscosity;
+        let _ = writeln!(
+            out,
+            "  lightest grain: D = {diameter:.4e} m, D/dx = {:.1}, density ratio rho_p/rho = {:.4}",
+            diameter / h,
+            rho_p / rho
+        );
+        if dim == 3 && g > 0.0 && rho_p != rho {
+            let archimedes = rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu);
+            let reynolds = schiller_naumann_reynolds(archimedes);
+            let velocity = reynolds * mu / (rho * diameter);
+            let stokes = (rho_p + 0.5 * rho) * velocity * diameter / (9.0 * mu);
+            let _ = writeln!(
+                out,
+                "  Ar = {archimedes:.4e}; Schiller–Naumann terminal Re = {reynolds:.4}, \
+                 U = {velocity:.4e} m/s, St = {stokes:.4}"
+            );
+            let _ = writeln!(
+                out,
+                "  dt = {dt:.4e} s = {:.4} (D/g)^1/2: CFL at the terminal velocity {:.3} (RK3 \
+                 limit {CFL_LIMIT:.3})",
+                dt / (diameter / g).sqrt(),
+                velocity * dt / h
+            );
+        }
+    }
+    let _ = writeln!(out, "time:");
+    let _ = writeln!(
+        out,
+        "  DEM sub-step <= {:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s): {:.0} sub-steps per fluid step",
+        system.dem_dt,
+        system.dem_dt / contact_time,
+        (dt / system.dem_dt).ceil()
+    );
+    let steps = (case.time.end / dt).ceil();
+    let _ = writeln!(
+        out,
+        "  end = {} s: {steps:.0} fluid steps, {:.3e} cell-steps",
+        case.time.end,
+        steps * cells as f64
+    );
+    for w in warning.iter().chain(&density_warning) {
+        let _ = writeln!(out, "{w}");
+    }
+    let _ = writeln!(
+        out,
+        "memory estimate: {:.1} MiB",
+        ((cells * (bytes_per_cell(dim) + 16 * dim))
+            + n * bytes_per_particle(dim, system.dem.walls.len())) as f64
+            / (1 << 20) as f64
     );
     Ok(out)
 }

@@ -11,7 +11,10 @@ use crate::output::Outputs;
 use crate::simulation::{check_time_step, peak_memory_bytes, Progress, Summary};
 use crate::{fluid_scene, scene, stability, RunError};
 use grainflow_core::Vec3;
-use grainflow_ibm::{particle_volume, CoupledSystem, Coupling};
+use grainflow_ibm::{
+    particle_volume, CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW,
+    RIGID_INNER_FLUID_WARNS_BELOW,
+};
 use grainflow_io::{CsvSeries, FieldFrame, PvdIndex};
 use serde_json::{json, Map, Value};
 use std::path::Path;
@@ -42,12 +45,37 @@ pub fn build(case: &Case) -> Result<(CoupledSystem, f64), String> {
     Ok((system, contact_time))
 }
 
+/// Refuses the paper's rigid-inner-fluid load where it fails (density
+/// ratio below [`RIGID_INNER_FLUID_FAILS_BELOW`]); returns a warning
+/// close to it.
+pub fn check_density_ratio(system: &CoupledSystem) -> Result<Option<String>, RunError> {
+    if system.coupling != Coupling::RigidInnerFluid {
+        return Ok(None);
+    }
+    let ratio = system.smallest_density_ratio();
+    if ratio < RIGID_INNER_FLUID_FAILS_BELOW {
+        return Err(RunError::Case(format!(
+            "coupling.formulation = \"rigid_inner_fluid\" fails at density ratio rho_p/rho = \
+             {ratio:.4}: it blows up below {RIGID_INNER_FLUID_FAILS_BELOW}; allowed: \
+             \"inner_fluid_momentum\" (any density ratio), or grains denser than \
+             {RIGID_INNER_FLUID_FAILS_BELOW} times the fluid"
+        )));
+    }
+    Ok((ratio < RIGID_INNER_FLUID_WARNS_BELOW).then(|| {
+        format!(
+            "warning: density ratio {ratio:.4} is close to where \"rigid_inner_fluid\" fails \
+             ({RIGID_INNER_FLUID_FAILS_BELOW}); \"inner_fluid_momentum\" holds at any ratio"
+        )
+    }))
+}
+
 /// Runs a validated case of grains in a fluid into `out`. Nothing is
 /// written if the scene cannot be built or a time step is refused.
 pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
     let started = Instant::now();
     let (mut system, contact_time) = build(case).map_err(RunError::Case)?;
     let warning = check_time_step(system.dem_dt, contact_time)?;
+    let density_warning = check_density_ratio(&system)?;
     let dt = case
         .time
         .dt
@@ -76,19 +104,21 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         system.dem_dt,
         system.dem_dt / contact_time
     ));
-    if let Some(w) = &warning {
+    for w in warning.iter().chain(&density_warning) {
         outputs.particles.run.log(w);
         eprintln!("{w}");
     }
 
     let mut analysis = FallingSphere::new(case, &system);
     let interval = case.output.interval.unwrap_or(end / 100.0);
+    let tracked_interval = case.output.tracked_interval.unwrap_or(interval);
     let tracked = &case.particles_section().tracked;
     let mut next_output = interval;
+    let mut next_tracked = tracked_interval;
     let mut steps = 0u64;
     let mut dem_substeps = 0usize;
     outputs
-        .write(&mut system, dt, steps, 0.0, case)
+        .write(&mut system, dt, steps, 0.0)
         .map_err(RunError::Io)?;
     outputs
         .particles
@@ -134,13 +164,16 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         let at_end = system.flow.time >= end * (1.0 - 1e-12);
         if system.flow.time >= next_output - 0.5 * dt || at_end {
             outputs
-                .write(&mut system, step_dt, steps, max_divergence, case)
+                .write(&mut system, step_dt, steps, max_divergence)
                 .map_err(RunError::Io)?;
+            next_output += interval;
+        }
+        if system.flow.time >= next_tracked - 0.5 * dt || at_end {
             outputs
                 .particles
                 .write_tracked(&system.dem, tracked)
                 .map_err(RunError::Io)?;
-            next_output += interval;
+            next_tracked += tracked_interval;
         }
         progress.update(system.flow.time, steps, (end / dt).ceil() as u64);
     }
@@ -239,7 +272,6 @@ impl CoupledOutputs {
         dt: f64,
         steps: u64,
         max_divergence: f64,
-        case: &Case,
     ) -> std::io::Result<()> {
         self.particles.write_frame(&system.dem, dt)?;
         let density = system.fluid_density;
@@ -269,7 +301,6 @@ impl CoupledOutputs {
             .write(&self.particles.run.dir.join(&name))?;
             index.add(system.flow.time, &name)?;
         }
-        let _ = case;
         self.frames += 1;
         Ok(())
     }
@@ -277,9 +308,9 @@ impl CoupledOutputs {
 
 /// Section 3.1 of the paper: particle 0 released from rest. Its velocity
 /// along gravity after the first step gives the initial acceleration,
-/// compared with `(ρ_p − ρ) g / (ρ_p + ρ/2)` (eq. 20); its settling speed
-/// at the end the terminal velocity, compared with the balance of
-/// buoyant weight and Schiller–Naumann drag (eq. 21).
+/// compared with `(ρ_p − ρ) g / (ρ_p + ρ/2)` (eq. 20); its largest settling
+/// speed the terminal velocity (before the floor slows it down), compared
+/// with the balance of buoyant weight and Schiller–Naumann drag (eq. 21).
 struct FallingSphere {
     active: bool,
     /// Unit vector along gravity.
@@ -349,15 +380,23 @@ impl FallingSphere {
             "initial_acceleration_error".into(),
             json!(initial / added_mass - 1.0),
         );
-        // Terminal: the speed over the last tenth of the run, and how much
-        // it still changed there (the run must be long enough to be steady).
-        let (end_time, terminal) = *self.history.last().unwrap();
-        let window_start = self.history[0].0 + 0.9 * (end_time - self.history[0].0);
+        // Terminal: the largest speed, and how much the speed changed over
+        // the tenth of the time before it (small once it is a plateau).
+        let (peak_time, terminal) =
+            self.history
+                .iter()
+                .copied()
+                .fold(
+                    (0.0, f64::MIN),
+                    |best, (t, v)| if v > best.1 { (t, v) } else { best },
+                );
+        let window_start = 0.9 * peak_time;
         let first_in_window = self
             .history
             .iter()
             .find(|(t, _)| *t >= window_start)
             .map_or(terminal, |&(_, v)| v);
+        metrics.insert("terminal_time".into(), json!(peak_time));
         let reynolds = rho * terminal * d / mu;
         metrics.insert("terminal_velocity".into(), json!(terminal));
         metrics.insert("terminal_reynolds".into(), json!(reynolds));

@@ -17,5 +17,8 @@ pub mod coupled;
 pub mod forcing;
 pub mod solid_fraction;
 
-pub use coupled::{particle_volume, CoupledReport, CoupledSystem, Coupling, Timings};
+pub use coupled::{
+    particle_volume, CoupledReport, CoupledSystem, Coupling, Timings,
+    RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
+};
 pub use forcing::{ImmersedBoundaries, Loads};

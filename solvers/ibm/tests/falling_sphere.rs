@@ -8,14 +8,18 @@ use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid};
 use grainflow_ibm::{CoupledSystem, Coupling};
 
-/// ρ_p/ρ = 4, Ar = ρ(ρ_p − ρ) g D³/μ² = 800, D = g = ρ = 1.
-fn falling_sphere(
+/// A sphere of diameter 1 and density `density_ratio` (fluid density 1,
+/// g = 1 downwards) at rest 2.5 D below the top of a free-slip box, the
+/// viscosity set by the Archimedes number `Ar = |ρ_p − ρ| g D³ / (ρ ν²)`.
+fn settling_sphere(
     cells_per_diameter: usize,
     extent: [f64; 3],
+    density_ratio: f64,
+    archimedes: f64,
     coupling: Coupling,
 ) -> CoupledSystem {
-    let (diameter, density_ratio, archimedes): (f64, f64, f64) = (1.0, 4.0, 800.0);
-    let viscosity = ((density_ratio - 1.0) * diameter.powi(3) / archimedes).sqrt();
+    let diameter: f64 = 1.0;
+    let viscosity = ((density_ratio - 1.0).abs() * diameter.powi(3) / archimedes).sqrt();
     let cells = extent.map(|e| (e * cells_per_diameter as f64).round() as usize);
     let grid = Grid::new(Dimension::Three, cells, [0.0; 3], extent);
     let slip = BoundaryCondition::FreeSlip;
@@ -32,14 +36,19 @@ fn falling_sphere(
         gravity: Vec3::new(0.0, 0.0, -1.0),
     };
     let law = ContactLaw {
-        normal: NormalStiffness::from_restitution(0.9, 1e-3, NormalCalibration::Exact),
+        normal: NormalStiffness::from_restitution(0.9, 1e-2, NormalCalibration::Exact),
         tangential_ratio: 0.2,
         friction: 0.25,
         rolling_friction: 0.0,
     };
     let mut dem = DemSystem::new(domain, law, Vec::new(), 0.1);
+    let height = if density_ratio > 1.0 {
+        extent[2] - 2.5 * diameter
+    } else {
+        2.5 * diameter
+    };
     dem.add_particles(&[NewParticle {
-        position: Vec3::new(0.5 * extent[0], 0.5 * extent[1], extent[2] - 2.5 * diameter),
+        position: Vec3::new(0.5 * extent[0], 0.5 * extent[1], height),
         velocity: Vec3::zeros(),
         angular_velocity: Vec3::zeros(),
         radius: 0.5 * diameter,
@@ -49,39 +58,90 @@ fn falling_sphere(
     CoupledSystem::new(flow, dem, 1.0, coupling, 1e-3)
 }
 
+/// Section 3.1: a sphere released from rest first accelerates at
+/// `(ρ_p − ρ) g / (ρ_p + ρ/2)` (eq. 20), buoyant weight against the sphere
+/// plus half its volume of fluid. Over the first step the flow around the
+/// sphere is the potential flow of that added mass; the step's mean
+/// acceleration is the same for any Δt (the viscous boundary layer has not
+/// grown yet), so it measures eq. 20 directly. At D/Δx = 16 it is within 3 %.
+/// A box of 5 D leaves 0.5 % of added mass to confinement.
 #[test]
-#[ignore]
-fn probe_terminal() {
-    let cells: usize = std::env::var("CELLS")
-        .map(|c| c.parse().unwrap())
-        .unwrap_or(8);
-    let width: f64 = std::env::var("WIDTH")
-        .map(|c| c.parse().unwrap())
-        .unwrap_or(6.0);
-    let height: f64 = std::env::var("HEIGHT")
-        .map(|c| c.parse().unwrap())
-        .unwrap_or(20.0);
-    let cfl: f64 = std::env::var("CFL")
-        .map(|c| c.parse().unwrap())
-        .unwrap_or(0.5);
-    let mut system = falling_sphere(cells, [width, width, height], Coupling::InnerFluidMomentum);
-    let dt = cfl / (1.25 * cells as f64);
-    let start = std::time::Instant::now();
-    let mut t_print = 0.0;
-    while system.dem.particles.position[0].z > 3.0 {
-        system.step(dt).unwrap();
-        if system.flow.time >= t_print {
-            let v = -system.dem.particles.velocity[0].z;
-            let nu = (3.0f64 / 800.0).sqrt();
-            println!(
-                "t {:.2} z {:.3} v {:.5} Re {:.3} wall {:.1}",
-                system.flow.time,
-                system.dem.particles.position[0].z,
-                v,
-                v / nu,
-                start.elapsed().as_secs_f64()
-            );
-            t_print += 1.0;
+fn initial_acceleration_matches_added_mass_within_3_percent() {
+    let expected = 3.0 / 4.5;
+    let mut system = settling_sphere(
+        16,
+        [5.0, 5.0, 5.0],
+        4.0,
+        800.0,
+        Coupling::InnerFluidMomentum,
+    );
+    let dt = 0.02;
+    system.step(dt).unwrap();
+    let acceleration = -system.dem.particles.velocity[0].z / dt;
+    let error = acceleration / expected - 1.0;
+    println!("initial acceleration {acceleration:.5} against {expected:.5}: error {error:+.4}");
+    assert!(error.abs() < 0.03, "error {error}");
+}
+
+/// Marches a settling (or rising) sphere for `steps` steps of `dt`;
+/// returns its final vertical velocity, or None when the run failed (a
+/// step refused for its CFL number, or a velocity not finite).
+fn settle(density_ratio: f64, coupling: Coupling, dt: f64, steps: usize) -> Option<f64> {
+    let mut system = settling_sphere(8, [3.0, 3.0, 6.0], density_ratio, 100.0, coupling);
+    for _ in 0..steps {
+        system.step(dt).ok()?;
+        let v = system.dem.particles.velocity[0];
+        if !v.norm().is_finite() {
+            return None;
         }
+    }
+    Some(system.dem.particles.velocity[0].z)
+}
+
+/// The density-ratio map of the two couplings (D/Δx = 8, Ar = 100,
+/// Δt (g/D)^½ = 0.05, two time units). The paper's rigid inner fluid
+/// (eq. 5–6) fails below ρ_p/ρ ≈ 1.7 (the run blows up within two time
+/// units; at 1.7 it depends on Δt) and holds at 1.8 and above, which is
+/// what `check` warns and refuses on. Keeping the measured rate of change
+/// of the inner fluid momentum holds from 10 down to 0.5, through
+/// neutral buoyancy: each sphere moves the right way, slower than its
+/// Stokes velocity `|ρ_p − ρ| g D² / (18 μ)` (an upper bound from rest,
+/// since drag at finite Re, added mass and walls only slow it).
+#[test]
+fn density_ratio_map() {
+    let (dt, steps) = (0.05, 40);
+    for ratio in [10.0, 4.0, 1.5, 1.2, 1.05, 0.95, 0.7, 0.5] {
+        let velocity = settle(ratio, Coupling::InnerFluidMomentum, dt, steps)
+            .unwrap_or_else(|| panic!("inner fluid momentum failed at density ratio {ratio}"));
+        let nu = ((ratio - 1.0f64).abs() / 100.0).sqrt();
+        let stokes = (ratio - 1.0) / (18.0 * nu);
+        println!(
+            "inner fluid momentum, ratio {ratio}: w = {velocity:+.4}, Stokes {:+.4}",
+            -stokes
+        );
+        assert!(
+            velocity * stokes < 0.0,
+            "ratio {ratio}: w = {velocity} moves the wrong way"
+        );
+        assert!(
+            velocity.abs() < stokes.abs(),
+            "ratio {ratio}: |w| = {velocity} above Stokes"
+        );
+    }
+    for ratio in [1.8, 2.0, 4.0] {
+        let velocity = settle(ratio, Coupling::RigidInnerFluid, dt, steps);
+        println!("rigid inner fluid, ratio {ratio}: {velocity:?}");
+        assert!(
+            velocity.is_some_and(|w| w < 0.0),
+            "rigid inner fluid failed at {ratio}"
+        );
+    }
+    for ratio in [1.6, 1.3, 1.05, 0.9, 0.5] {
+        let velocity = settle(ratio, Coupling::RigidInnerFluid, dt, steps);
+        println!("rigid inner fluid, ratio {ratio}: {velocity:?}");
+        assert!(
+            velocity.is_none(),
+            "rigid inner fluid expected to fail at {ratio}, got {velocity:?}"
+        );
     }
 }

@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""Falling sphere (Izard et al. 2014, section 3.1) over resolutions, box
+widths and time steps: runs `cases/falling_sphere.toml` through --set and
+writes one CSV row per run with the acceptance figures (initial
+acceleration against eq. 20, terminal Reynolds number against
+Schiller-Naumann) and the cost (wall seconds, seconds per step).
+
+    scripts/falling_sphere_sweep.py --out docs/validation/falling_sphere.csv \
+        --run 8:8:24:1 --run 12:8:24:1 ...
+
+Each --run is D/dx : box width / D : box height / D : dt factor, where the
+dt factor multiplies the paper's dt (g/D)^1/2 = 0.04 scaled to D/dx = 20,
+so that the CFL number stays the same across resolutions.
+"""
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+
+D = 0.01
+G = 9.81
+PAPER_DT = 0.04 * (D / G) ** 0.5  # at D/dx = 20
+
+
+def run(binary, cells_per_d, width, height, dt_factor, end, workdir):
+    n_lateral = round(width * cells_per_d)
+    n_vertical = round(height * cells_per_d)
+    dt = PAPER_DT * 20.0 / cells_per_d * dt_factor
+    name = f"fs_{cells_per_d}_{width}_{height}_{dt_factor}"
+    out = os.path.join(workdir, name)
+    sets = [
+        f"fluid.cells=[{n_lateral},{n_lateral},{n_vertical}]",
+        f"domain.upper=[{width * D},{width * D},{height * D}]",
+        f"particles.block[0].positions=[[{width * D / 2},{width * D / 2},{(height - 2.5) * D}]]",
+        f"time.dt={dt}",
+        f"time.end={end}",
+        "output.interval=0.05",
+        f"output.tracked_interval={dt}",
+    ]
+    command = [binary, "run", "cases/falling_sphere.toml", "--out", out]
+    for s in sets:
+        command += ["--set", s]
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+    with open(os.path.join(out, "summary.json")) as f:
+        summary = json.load(f)
+    m = summary["metrics"]
+    return {
+        "cells_per_diameter": cells_per_d,
+        "box_width_over_d": width,
+        "box_height_over_d": height,
+        "dt": dt,
+        "dt_sqrt_g_over_d": dt / (D / G) ** 0.5,
+        "cells": summary["cells"],
+        "steps": summary["steps"],
+        "initial_acceleration": m["initial_acceleration"],
+        "initial_acceleration_error": m["initial_acceleration_error"],
+        "terminal_velocity": m["terminal_velocity"],
+        "terminal_reynolds": m["terminal_reynolds"],
+        "schiller_naumann_reynolds": m["schiller_naumann_reynolds"],
+        "terminal_reynolds_error": m["terminal_reynolds_error"],
+        "terminal_drift": m["terminal_drift"],
+        "wall_seconds": summary["wall_seconds"],
+        "seconds_per_step": summary["seconds_per_step"],
+        "seconds_flow": summary["seconds_flow"],
+        "seconds_forcing": summary["seconds_forcing"],
+        "seconds_loads": summary["seconds_loads"],
+        "seconds_dem": summary["seconds_dem"],
+        "threads": summary["threads"],
+        "tracked": os.path.join(out, "tracked.csv"),
+    }
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--run", action="append", required=True)
+    parser.add_argument("--end", type=float, default=0.5)
+    parser.add_argument("--binary", default="target/release/grainflow")
+    parser.add_argument("--workdir", default="/tmp/grainflow_falling_sphere")
+    args = parser.parse_args()
+    rows = []
+    exists = os.path.exists(args.out)
+    with open(args.out, "a", newline="") as f:
+        writer = None
+        for spec in args.run:
+            cells, width, height, factor = spec.split(":")
+            row = run(args.binary, int(cells), float(width), float(height), float(factor),
+                      args.end, args.workdir)
+            rows.append(row)
+            if writer is None:
+                writer = csv.DictWriter(f, fieldnames=list(row))
+                if not exists:
+                    writer.writeheader()
+            writer.writerow(row)
+            f.flush()
+            print(json.dumps({k: row[k] for k in ("cells_per_diameter", "box_width_over_d",
+                  "dt_sqrt_g_over_d", "initial_acceleration_error", "terminal_reynolds",
+                  "terminal_reynolds_error", "terminal_drift", "wall_seconds")}), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
