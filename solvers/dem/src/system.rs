@@ -60,6 +60,9 @@ pub struct DemSystem {
     /// The film force between close grains: only in a scene with a fluid.
     /// Set it before adding particles (the pair list reaches its range).
     pub lubrication: Option<Lubrication>,
+    /// The step the film forces of the current totals were made implicit
+    /// for (0 before the first step: explicit).
+    film_dt: f64,
     pub walls: Vec<PlaneWall>,
     /// Tangential displacement of each owned particle against each wall:
     /// `wall_history[p * wall_stride() + w]`.
@@ -95,6 +98,7 @@ impl DemSystem {
             particles: Particles::default(),
             law,
             lubrication: None,
+            film_dt: 0.0,
             walls,
             wall_history: Vec::new(),
             wall_touching: Vec::new(),
@@ -219,6 +223,11 @@ impl DemSystem {
 
     /// Advances the particles by one step of size `dt`.
     pub fn step(&mut self, dt: f64) -> StepDiagnostics {
+        if self.lubrication.is_some() && self.film_dt != dt {
+            // The first half kick must already see the film forces made
+            // implicit for this step, not for another one (or explicit).
+            self.evaluate_forces(0.0, dt);
+        }
         let moved_beyond_skin = self.kick_and_drift(dt);
         self.time += dt;
         if moved_beyond_skin {
@@ -316,6 +325,13 @@ impl DemSystem {
     /// 2. each particle collects the results of its lower entries (−F on it,
     ///    and its own torque), so Newton's third law holds bitwise.
     pub fn compute_forces(&mut self, dt: f64) -> StepDiagnostics {
+        self.evaluate_forces(dt, dt)
+    }
+
+    /// [`DemSystem::compute_forces`] advancing the tangential histories by
+    /// `history_dt` and making the film forces implicit over `film_dt`.
+    fn evaluate_forces(&mut self, history_dt: f64, film_dt: f64) -> StepDiagnostics {
+        self.film_dt = film_dt;
         let n = self.particles.n_owned;
         assert_eq!(self.wall_candidates.len(), n, "wall candidates not built");
         self.contacts.resize(n, 0);
@@ -325,8 +341,12 @@ impl DemSystem {
         let mut force = std::mem::take(&mut self.particles.force);
         let mut torque = std::mem::take(&mut self.particles.torque);
 
-        let (max_overlap_ratio, wall_contacts) =
-            self.evaluate_upper_pairs_and_walls(&mut force[..n], &mut torque[..n], dt);
+        let (max_overlap_ratio, wall_contacts) = self.evaluate_upper_pairs_and_walls(
+            &mut force[..n],
+            &mut torque[..n],
+            history_dt,
+            film_dt,
+        );
         let listed_contacts = self.collect_lower_pairs(&mut force[..n], &mut torque[..n]);
 
         self.particles.force = force;
@@ -347,6 +367,7 @@ impl DemSystem {
         forces: &mut [Vec3],
         torques: &mut [Vec3],
         dt: f64,
+        film_dt: f64,
     ) -> (f64, usize) {
         let n = forces.len();
         let law = self.law;
@@ -425,7 +446,7 @@ impl DemSystem {
                                         ri,
                                         rj,
                                         p.inverse_mass[i] + p.inverse_mass[j],
-                                        dt,
+                                        film_dt,
                                     );
                                     if force != Vec3::zeros() {
                                         total_force += force;
@@ -465,7 +486,7 @@ impl DemSystem {
                                     ri,
                                     rj,
                                     inverse_mass_sum,
-                                    dt,
+                                    film_dt,
                                 );
                             }
                             total_force += load.force;
@@ -504,7 +525,7 @@ impl DemSystem {
                                             ri,
                                             f64::INFINITY,
                                             p.inverse_mass[i],
-                                            dt,
+                                            film_dt,
                                         );
                                     }
                                     continue;
@@ -531,7 +552,7 @@ impl DemSystem {
                                         ri,
                                         f64::INFINITY,
                                         p.inverse_mass[i],
-                                        dt,
+                                        film_dt,
                                     );
                                 }
                                 total_torque += load.torque;
