@@ -42,11 +42,24 @@ def run(binary, cells_per_d, width, height, dt_factor, end, workdir):
     command = [binary, "run", "cases/falling_sphere.toml", "--out", out]
     for s in sets:
         command += ["--set", s]
-    subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
+    finished = subprocess.run(command, stdout=subprocess.DEVNULL)
+    row = {
+        "cells_per_diameter": cells_per_d,
+        "box_width_over_d": width,
+        "box_height_over_d": height,
+        "dt": dt,
+        "dt_sqrt_g_over_d": dt / (D / G) ** 0.5,
+    }
+    if finished.returncode != 0:
+        # A refused or unstable run: its log says why.
+        with open(os.path.join(out, "log.txt")) as f:
+            row["status"] = f.read().strip().splitlines()[-2]
+        return row
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
     m = summary["metrics"]
     return {
+        "status": "ok",
         "cells_per_diameter": cells_per_d,
         "box_width_over_d": width,
         "box_height_over_d": height,
@@ -72,6 +85,15 @@ def run(binary, cells_per_d, width, height, dt_factor, end, workdir):
     }
 
 
+FIELDS = [
+    "status", "cells_per_diameter", "box_width_over_d", "box_height_over_d", "dt",
+    "dt_sqrt_g_over_d", "cells", "steps", "initial_acceleration", "initial_acceleration_error",
+    "terminal_velocity", "terminal_reynolds", "schiller_naumann_reynolds",
+    "terminal_reynolds_error", "terminal_drift", "wall_seconds", "seconds_per_step",
+    "seconds_flow", "seconds_forcing", "seconds_loads", "seconds_dem", "threads", "tracked",
+]
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", required=True)
@@ -90,14 +112,12 @@ def main():
                       args.end, args.workdir)
             rows.append(row)
             if writer is None:
-                writer = csv.DictWriter(f, fieldnames=list(row))
+                writer = csv.DictWriter(f, fieldnames=FIELDS, restval="")
                 if not exists:
                     writer.writeheader()
             writer.writerow(row)
             f.flush()
-            print(json.dumps({k: row[k] for k in ("cells_per_diameter", "box_width_over_d",
-                  "dt_sqrt_g_over_d", "initial_acceleration_error", "terminal_reynolds",
-                  "terminal_reynolds_error", "terminal_drift", "wall_seconds")}), flush=True)
+            print(json.dumps(row), flush=True)
     return 0
 
 

@@ -38,7 +38,8 @@ impl Analysis {
             Some(
                 AnalysisSection::ExactDecay
                 | AnalysisSection::Channel
-                | AnalysisSection::FallingSphere,
+                | AnalysisSection::FallingSphere
+                | AnalysisSection::BouncingSphere,
             ) => {
                 unreachable!("validation keeps fluid analyses out of dry scenes")
             }

@@ -478,6 +478,9 @@ pub enum AnalysisSection {
     /// acceleration against the added-mass estimate (eq. 20) and its
     /// terminal velocity and Reynolds number against Schiller–Naumann (eq. 21).
     FallingSphere,
+    /// Grain in a fluid: particle 0 settling onto a wall; its approach and
+    /// rebound velocities, restitution over e_n and Stokes number (eq. 23).
+    BouncingSphere,
 }
 
 impl Case {
@@ -622,11 +625,16 @@ impl Case {
                  \"column_collapse\" or, in a fluid, \"falling_sphere\"",
             ));
         }
-        if self.fluid.is_none() && matches!(self.analysis, Some(AnalysisSection::FallingSphere)) {
+        if self.fluid.is_none()
+            && matches!(
+                self.analysis,
+                Some(AnalysisSection::FallingSphere | AnalysisSection::BouncingSphere)
+            )
+        {
             return Err(invalid(
                 "analysis.kind",
-                "falling_sphere",
-                "needs a [fluid] for the grain to fall in",
+                "(an analysis of grains in a fluid)",
+                "falling_sphere and bouncing_sphere need a [fluid]",
             ));
         }
         if self.time.cfl.is_some() && self.fluid.is_none() {
@@ -1109,11 +1117,15 @@ impl Case {
             }
         }
         if coupled {
-            if !matches!(self.analysis, None | Some(AnalysisSection::FallingSphere)) {
+            if !matches!(
+                self.analysis,
+                None | Some(AnalysisSection::FallingSphere | AnalysisSection::BouncingSphere)
+            ) {
                 return Err(invalid(
                     "analysis.kind",
                     "(grains in a fluid)",
-                    "grains in a fluid allow \"falling_sphere\" (or no analysis)",
+                    "grains in a fluid allow \"falling_sphere\" or \"bouncing_sphere\" (or no \
+                     analysis)",
                 ));
             }
             if self.time.cfl.is_some() {

@@ -2,7 +2,8 @@
 //! derived numbers and the models the scene will run.
 
 use crate::case::Case;
-use crate::coupled_simulation::{self, schiller_naumann_reynolds};
+use crate::coupled_analysis::schiller_naumann_reynolds;
+use crate::coupled_simulation;
 use crate::simulation::{check_time_step, time_step};
 use crate::{fluid_scene, scene, stability, RunError};
 use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};

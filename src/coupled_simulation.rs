@@ -5,18 +5,17 @@
 //! `tracked.csv`, `particles/*.vtp` and `fields/*.vti` (velocity, pressure,
 //! vorticity and solid fraction) with their `.pvd` indices, `summary.json`.
 
-use crate::case::{AnalysisSection, Case};
+use crate::case::Case;
+use crate::coupled_analysis::SphereInFluid;
 use crate::fluid_simulation::cell_fields;
 use crate::output::Outputs;
 use crate::simulation::{check_time_step, peak_memory_bytes, Progress, Summary};
 use crate::{fluid_scene, scene, stability, RunError};
-use grainflow_core::Vec3;
 use grainflow_ibm::{
-    particle_volume, CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW,
-    RIGID_INNER_FLUID_WARNS_BELOW,
+    CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
 };
 use grainflow_io::{CsvSeries, FieldFrame, PvdIndex};
-use serde_json::{json, Map, Value};
+use serde_json::{json, Map};
 use std::path::Path;
 use std::time::Instant;
 
@@ -109,7 +108,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         eprintln!("{w}");
     }
 
-    let mut analysis = FallingSphere::new(case, &system);
+    let mut analysis = SphereInFluid::new(case, &system);
     let interval = case.output.interval.unwrap_or(end / 100.0);
     let tracked_interval = case.output.tracked_interval.unwrap_or(interval);
     let tracked = &case.particles_section().tracked;
@@ -130,10 +129,12 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
     );
     let mut failure = None;
     let mut max_divergence = 0.0;
+    let mut last_report = None;
     while system.flow.time < end * (1.0 - 1e-12) {
         let step_dt = dt.min(end - system.flow.time);
         match system.step(step_dt) {
             Ok(report) => {
+                last_report = Some(report);
                 dem_substeps += report.dem_substeps;
                 max_divergence = report.flow.max_divergence;
                 if !report.flow.kinetic_energy.is_finite() || report.dem.non_finite {
@@ -160,7 +161,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
             break;
         }
         steps += 1;
-        analysis.after_step(&system, step_dt);
+        analysis.after_step(&system, step_dt, &last_report);
         let at_end = system.flow.time >= end * (1.0 - 1e-12);
         if system.flow.time >= next_output - 0.5 * dt || at_end {
             outputs
@@ -303,148 +304,5 @@ impl CoupledOutputs {
         }
         self.frames += 1;
         Ok(())
-    }
-}
-
-/// Section 3.1 of the paper: particle 0 released from rest. Its velocity
-/// along gravity after the first step gives the initial acceleration,
-/// compared with `(ρ_p − ρ) g / (ρ_p + ρ/2)` (eq. 20); its largest settling
-/// speed the terminal velocity (before the floor slows it down), compared
-/// with the balance of buoyant weight and Schiller–Naumann drag (eq. 21).
-struct FallingSphere {
-    active: bool,
-    /// Unit vector along gravity.
-    down: Vec3,
-    initial_acceleration: Option<f64>,
-    /// (time, settling speed) after every step.
-    history: Vec<(f64, f64)>,
-    density: f64,
-    fluid_density: f64,
-    viscosity: f64,
-    diameter: f64,
-    gravity: f64,
-    three_d: bool,
-}
-
-impl FallingSphere {
-    fn new(case: &Case, system: &CoupledSystem) -> Self {
-        let gravity = system.dem.domain.gravity;
-        let p = &system.dem.particles;
-        let k = system.dem.index_of(0).unwrap_or(0);
-        let volume = particle_volume(system.dem.dimension(), p.radius[k]);
-        FallingSphere {
-            active: matches!(case.analysis, Some(AnalysisSection::FallingSphere)),
-            down: gravity.try_normalize(0.0).unwrap_or_else(Vec3::zeros),
-            initial_acceleration: None,
-            history: Vec::new(),
-            density: p.mass[k] / volume,
-            fluid_density: system.fluid_density,
-            viscosity: case.fluid_section().viscosity,
-            diameter: 2.0 * p.radius[k],
-            gravity: gravity.norm(),
-            three_d: system.dem.dimension() == grainflow_core::Dimension::Three,
-        }
-    }
-
-    fn after_step(&mut self, system: &CoupledSystem, dt: f64) {
-        if !self.active {
-            return;
-        }
-        let Some(k) = system.dem.index_of(0) else {
-            return;
-        };
-        let speed = system.dem.particles.velocity[k].dot(&self.down);
-        if self.initial_acceleration.is_none() {
-            self.initial_acceleration = Some(speed / dt);
-        }
-        self.history.push((system.flow.time, speed));
-    }
-
-    fn metrics(&self) -> Map<String, Value> {
-        let mut metrics = Map::new();
-        if !self.active || self.history.is_empty() {
-            return metrics;
-        }
-        let (rho_p, rho, mu, d, g) = (
-            self.density,
-            self.fluid_density,
-            self.viscosity,
-            self.diameter,
-            self.gravity,
-        );
-        let added_mass = (rho_p - rho) * g / (rho_p + 0.5 * rho);
-        let initial = self.initial_acceleration.unwrap_or(0.0);
-        metrics.insert("initial_acceleration".into(), json!(initial));
-        metrics.insert("initial_acceleration_reference".into(), json!(added_mass));
-        metrics.insert(
-            "initial_acceleration_error".into(),
-            json!(initial / added_mass - 1.0),
-        );
-        // Terminal: the largest speed, and how much the speed changed over
-        // the tenth of the time before it (small once it is a plateau).
-        let (peak_time, terminal) =
-            self.history
-                .iter()
-                .copied()
-                .fold(
-                    (0.0, f64::MIN),
-                    |best, (t, v)| if v > best.1 { (t, v) } else { best },
-                );
-        let window_start = 0.9 * peak_time;
-        let first_in_window = self
-            .history
-            .iter()
-            .find(|(t, _)| *t >= window_start)
-            .map_or(terminal, |&(_, v)| v);
-        metrics.insert("terminal_time".into(), json!(peak_time));
-        let reynolds = rho * terminal * d / mu;
-        metrics.insert("terminal_velocity".into(), json!(terminal));
-        metrics.insert("terminal_reynolds".into(), json!(reynolds));
-        metrics.insert(
-            "terminal_drift".into(),
-            json!((terminal - first_in_window) / terminal),
-        );
-        if self.three_d {
-            let archimedes = rho * (rho_p - rho) * g * d.powi(3) / (mu * mu);
-            let reference = schiller_naumann_reynolds(archimedes);
-            metrics.insert("archimedes".into(), json!(archimedes));
-            metrics.insert("schiller_naumann_reynolds".into(), json!(reference));
-            metrics.insert(
-                "terminal_reynolds_error".into(),
-                json!(reynolds / reference - 1.0),
-            );
-        }
-        metrics
-    }
-}
-
-/// The terminal Reynolds number of a sphere of Archimedes number `Ar`
-/// with the Schiller–Naumann drag `C_D = 24/Re (1 + 0.15 Re^0.687)`: the
-/// balance of eq. 21, `C_D Re² = 4 Ar / 3`, solved by bisection.
-pub fn schiller_naumann_reynolds(archimedes: f64) -> f64 {
-    let balance = |re: f64| 24.0 * re * (1.0 + 0.15 * re.powf(0.687)) - 4.0 * archimedes / 3.0;
-    let (mut low, mut high) = (0.0, 1e6);
-    for _ in 0..200 {
-        let mid = 0.5 * (low + high);
-        if balance(mid) > 0.0 {
-            high = mid;
-        } else {
-            low = mid;
-        }
-    }
-    0.5 * (low + high)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn schiller_naumann_balance() {
-        // Ar = 800: Re ≈ 20.3 (the paper's "Re = 20 approximately").
-        let re = schiller_naumann_reynolds(800.0);
-        let drag = 24.0 / re * (1.0 + 0.15 * re.powf(0.687));
-        assert!((drag * re * re - 4.0 * 800.0 / 3.0).abs() < 1e-9);
-        assert!((re - 20.318).abs() < 1e-3, "{re}");
     }
 }

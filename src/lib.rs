@@ -11,6 +11,7 @@
 pub mod analysis;
 pub mod case;
 pub mod check;
+pub mod coupled_analysis;
 pub mod coupled_simulation;
 pub mod fluid_scene;
 pub mod fluid_simulation;

@@ -76,7 +76,7 @@ pub struct Timings {
 pub struct CoupledReport {
     pub flow: StepReport,
     /// The DEM diagnostics of the step's last sub-step, with the largest
-    /// overlap of all of them.
+    /// overlap of all of them (positive if any contact happened).
     pub dem: StepDiagnostics,
     /// DEM sub-steps taken in the step.
     pub dem_substeps: usize,
@@ -144,6 +144,7 @@ impl CoupledSystem {
         let mut max_divergence: f64 = 0.0;
         let mut substeps = 0;
         let mut dem_report = StepDiagnostics::default();
+        let mut largest_overlap: f64 = 0.0;
         for stage in 0..STAGES {
             let stage_dt = stage_fraction(stage) * dt;
             let unknowns: Vec<_> = (0..self.flow.grid.dim())
@@ -186,18 +187,17 @@ impl CoupledSystem {
             self.dem.set_external_loads(&loads.force, &loads.torque);
             let clock = self.lap(clock, Part::Loads);
             let count = (stage_dt / self.dem_dt).ceil().max(1.0) as usize;
-            let mut largest_overlap: f64 = 0.0;
             for _ in 0..count {
                 dem_report = self.dem.step(stage_dt / count as f64);
                 largest_overlap = largest_overlap.max(dem_report.max_overlap_ratio);
             }
-            dem_report.max_overlap_ratio = largest_overlap;
             substeps += count;
             self.lap(clock, Part::Dem);
         }
         let ids = &self.dem.particles.id[..self.dem.particles.n_owned];
         self.hydrodynamic_force = ids.iter().map(|&id| average_force[id as usize]).collect();
         self.hydrodynamic_torque = ids.iter().map(|&id| average_torque[id as usize]).collect();
+        dem_report.max_overlap_ratio = largest_overlap;
         Ok(CoupledReport {
             flow: self.flow.end_step(dt, max_divergence),
             dem: dem_report,

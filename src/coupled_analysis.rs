@@ -1,0 +1,229 @@
+//! Analyses of one sphere in a fluid (particle 0), from its velocity
+//! along gravity after every coupled step:
+//!
+//! - `falling_sphere` (Izard et al. 2014, section 3.1): released from
+//!   rest, its velocity after the first step gives the initial
+//!   acceleration, compared with `(ρ_p − ρ) g / (ρ_p + ρ/2)` (eq. 20); its
+//!   largest settling speed the terminal velocity (before the floor slows
+//!   it down), compared with the balance of buoyant weight and
+//!   Schiller–Naumann drag (eq. 21).
+//! - `bouncing_sphere` (section 4.1): settling onto a wall, `V_T` its
+//!   largest settling speed before the first contact, `V_R` its largest
+//!   rising speed after it; the restitution `e = V_R / V_T` over the dry
+//!   `e_n` against the Stokes number `St = (ρ_p + ρ/2) V_T D / (9 μ)`
+//!   (eq. 23).
+
+use crate::case::{AnalysisSection, Case};
+use grainflow_core::{Dimension, Vec3};
+use grainflow_ibm::{particle_volume, CoupledReport, CoupledSystem};
+use serde_json::{json, Map, Value};
+
+/// What is recorded after a step.
+#[derive(Clone, Copy, Debug)]
+struct Sample {
+    time: f64,
+    /// Velocity along gravity (positive downwards).
+    speed: f64,
+    /// Whether the sphere touched anything during the step's DEM sub-steps.
+    contact: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    None,
+    Falling,
+    Bouncing,
+}
+
+pub struct SphereInFluid {
+    kind: Kind,
+    /// Unit vector along gravity.
+    down: Vec3,
+    initial_acceleration: Option<f64>,
+    history: Vec<Sample>,
+    density: f64,
+    fluid_density: f64,
+    viscosity: f64,
+    diameter: f64,
+    gravity: f64,
+    restitution: f64,
+    three_d: bool,
+}
+
+impl SphereInFluid {
+    pub fn new(case: &Case, system: &CoupledSystem) -> Self {
+        let gravity = system.dem.domain.gravity;
+        let p = &system.dem.particles;
+        let k = system.dem.index_of(0).unwrap_or(0);
+        let volume = particle_volume(system.dem.dimension(), p.radius[k]);
+        SphereInFluid {
+            kind: match case.analysis {
+                Some(AnalysisSection::FallingSphere) => Kind::Falling,
+                Some(AnalysisSection::BouncingSphere) => Kind::Bouncing,
+                _ => Kind::None,
+            },
+            down: gravity.try_normalize(0.0).unwrap_or_else(Vec3::zeros),
+            initial_acceleration: None,
+            history: Vec::new(),
+            density: p.mass[k] / volume,
+            fluid_density: system.fluid_density,
+            viscosity: case.fluid_section().viscosity,
+            diameter: 2.0 * p.radius[k],
+            gravity: gravity.norm(),
+            restitution: case.contact_section().restitution.unwrap_or(1.0),
+            three_d: system.dem.dimension() == Dimension::Three,
+        }
+    }
+
+    pub fn after_step(&mut self, system: &CoupledSystem, dt: f64, report: &Option<CoupledReport>) {
+        if self.kind == Kind::None {
+            return;
+        }
+        let Some(k) = system.dem.index_of(0) else {
+            return;
+        };
+        let speed = system.dem.particles.velocity[k].dot(&self.down);
+        if self.initial_acceleration.is_none() {
+            self.initial_acceleration = Some(speed / dt);
+        }
+        self.history.push(Sample {
+            time: system.flow.time,
+            speed,
+            contact: report
+                .as_ref()
+                .is_some_and(|r| r.dem.max_overlap_ratio > 0.0),
+        });
+    }
+
+    pub fn metrics(&self) -> Map<String, Value> {
+        match self.kind {
+            _ if self.history.is_empty() => Map::new(),
+            Kind::None => Map::new(),
+            Kind::Falling => self.falling(),
+            Kind::Bouncing => self.bouncing(),
+        }
+    }
+
+    fn falling(&self) -> Map<String, Value> {
+        let mut metrics = Map::new();
+        let (rho_p, rho, mu, d, g) = (
+            self.density,
+            self.fluid_density,
+            self.viscosity,
+            self.diameter,
+            self.gravity,
+        );
+        let added_mass = (rho_p - rho) * g / (rho_p + 0.5 * rho);
+        let initial = self.initial_acceleration.unwrap_or(0.0);
+        metrics.insert("initial_acceleration".into(), json!(initial));
+        metrics.insert("initial_acceleration_reference".into(), json!(added_mass));
+        metrics.insert(
+            "initial_acceleration_error".into(),
+            json!(initial / added_mass - 1.0),
+        );
+        // Terminal: the largest speed, and how much the speed changed over
+        // the tenth of the time before it (small once it is a plateau).
+        let peak = self.peak_speed(&self.history);
+        let window_start = 0.9 * peak.time;
+        let first_in_window = self
+            .history
+            .iter()
+            .find(|s| s.time >= window_start)
+            .map_or(peak.speed, |s| s.speed);
+        let reynolds = rho * peak.speed * d / mu;
+        metrics.insert("terminal_time".into(), json!(peak.time));
+        metrics.insert("terminal_velocity".into(), json!(peak.speed));
+        metrics.insert("terminal_reynolds".into(), json!(reynolds));
+        metrics.insert(
+            "terminal_drift".into(),
+            json!((peak.speed - first_in_window) / peak.speed),
+        );
+        if self.three_d {
+            let archimedes = rho * (rho_p - rho) * g * d.powi(3) / (mu * mu);
+            let reference = schiller_naumann_reynolds(archimedes);
+            metrics.insert("archimedes".into(), json!(archimedes));
+            metrics.insert("schiller_naumann_reynolds".into(), json!(reference));
+            metrics.insert(
+                "terminal_reynolds_error".into(),
+                json!(reynolds / reference - 1.0),
+            );
+        }
+        metrics
+    }
+
+    fn bouncing(&self) -> Map<String, Value> {
+        let mut metrics = Map::new();
+        let (rho_p, rho, mu, d) = (
+            self.density,
+            self.fluid_density,
+            self.viscosity,
+            self.diameter,
+        );
+        let Some(first_contact) = self.history.iter().position(|s| s.contact) else {
+            metrics.insert("contact".into(), json!(false));
+            return metrics;
+        };
+        let approach = self.peak_speed(&self.history[..first_contact.max(1)]);
+        // Rising speeds are negative along gravity.
+        let rebound = self.history[first_contact..]
+            .iter()
+            .map(|s| -s.speed)
+            .fold(0.0, f64::max);
+        let stokes = (rho_p + 0.5 * rho) * approach.speed * d / (9.0 * mu);
+        let restitution = rebound / approach.speed;
+        metrics.insert("contact".into(), json!(true));
+        metrics.insert(
+            "contact_time".into(),
+            json!(self.history[first_contact].time),
+        );
+        metrics.insert("approach_velocity".into(), json!(approach.speed));
+        metrics.insert("rebound_velocity".into(), json!(rebound));
+        metrics.insert("stokes".into(), json!(stokes));
+        metrics.insert("reynolds".into(), json!(rho * approach.speed * d / mu));
+        metrics.insert("restitution".into(), json!(restitution));
+        metrics.insert(
+            "restitution_ratio".into(),
+            json!(restitution / self.restitution),
+        );
+        metrics
+    }
+
+    /// The sample of largest settling speed among `samples`.
+    fn peak_speed(&self, samples: &[Sample]) -> Sample {
+        samples.iter().copied().fold(
+            samples[0],
+            |best, s| if s.speed > best.speed { s } else { best },
+        )
+    }
+}
+
+/// The terminal Reynolds number of a sphere of Archimedes number `Ar`
+/// with the Schiller–Naumann drag `C_D = 24/Re (1 + 0.15 Re^0.687)`: the
+/// balance of eq. 21, `C_D Re² = 4 Ar / 3`, solved by bisection.
+pub fn schiller_naumann_reynolds(archimedes: f64) -> f64 {
+    let balance = |re: f64| 24.0 * re * (1.0 + 0.15 * re.powf(0.687)) - 4.0 * archimedes / 3.0;
+    let (mut low, mut high) = (0.0, 1e6);
+    for _ in 0..200 {
+        let mid = 0.5 * (low + high);
+        if balance(mid) > 0.0 {
+            high = mid;
+        } else {
+            low = mid;
+        }
+    }
+    0.5 * (low + high)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn schiller_naumann_balance() {
+        // Ar = 800: Re ≈ 20.3 (the paper's "Re = 20 approximately").
+        let re = schiller_naumann_reynolds(800.0);
+        let drag = 24.0 / re * (1.0 + 0.15 * re.powf(0.687));
+        assert!((drag * re * re - 4.0 * 800.0 / 3.0).abs() < 1e-9);
+        assert!((re - 20.318).abs() < 1e-3, "{re}");
+    }
+}
