@@ -1128,20 +1128,13 @@ impl Case {
                      analysis)",
                 ));
             }
-            if self.time.cfl.is_some() {
-                return Err(invalid(
-                    "time.cfl",
-                    "(grains in a fluid)",
-                    "grains in a fluid use a fixed fluid step time.dt [s] (the run stops if \
-                     its CFL number passes √3)",
-                ));
-            }
             if self.time.dt.is_none() {
                 return Err(invalid(
                     "time.dt",
                     "(missing)",
-                    "grains in a fluid need the fluid step time.dt [s]; the DEM sub-step is \
-                     time.dt_over_contact_time × t_c (default 0.02)",
+                    "grains in a fluid need the fluid step time.dt [s] (with time.cfl, the \
+                     largest step); the DEM sub-step is time.dt_over_contact_time × t_c \
+                     (default 0.02)",
                 ));
             }
         }
@@ -1212,7 +1205,7 @@ impl Case {
         if let Some(i) = self.output.tracked_interval {
             positive("output.tracked_interval", i)?;
         }
-        if self.time.cfl.is_some() && self.time.dt.is_some() {
+        if self.time.cfl.is_some() && self.time.dt.is_some() && !coupled {
             return Err(invalid(
                 "time.cfl",
                 "(with time.dt)",

@@ -44,6 +44,30 @@ pub fn build(case: &Case) -> Result<(CoupledSystem, f64), String> {
     Ok((system, contact_time))
 }
 
+/// The next fluid step: `time.dt`, or with `time.cfl` the step at which the
+/// flow and the grains (each grain's speed over the smallest cell size)
+/// reach that CFL number, at most `time.dt`.
+fn step_size(system: &CoupledSystem, case: &Case) -> f64 {
+    let largest = case
+        .time
+        .dt
+        .expect("validated: grains in a fluid have time.dt");
+    let Some(cfl) = case.time.cfl else {
+        return largest;
+    };
+    let grid = &system.flow.grid;
+    let h = grid.spacing[..grid.dim()]
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let rate = system.flow.max_cfl(1.0) + system.dem.max_speed() / h;
+    if rate > 0.0 {
+        largest.min(cfl / rate)
+    } else {
+        largest
+    }
+}
+
 /// Refuses the paper's rigid-inner-fluid load where it fails (density
 /// ratio below [`RIGID_INNER_FLUID_FAILS_BELOW`]); returns a warning
 /// close to it.
@@ -131,7 +155,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
     let mut max_divergence = 0.0;
     let mut last_report = None;
     while system.flow.time < end * (1.0 - 1e-12) {
-        let step_dt = dt.min(end - system.flow.time);
+        let step_dt = step_size(&system, case).min(end - system.flow.time);
         match system.step(step_dt) {
             Ok(report) => {
                 last_report = Some(report);
@@ -163,13 +187,13 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         steps += 1;
         analysis.after_step(&system, step_dt, &last_report);
         let at_end = system.flow.time >= end * (1.0 - 1e-12);
-        if system.flow.time >= next_output - 0.5 * dt || at_end {
+        if system.flow.time >= next_output - 0.5 * step_dt || at_end {
             outputs
                 .write(&mut system, step_dt, steps, max_divergence)
                 .map_err(RunError::Io)?;
             next_output += interval;
         }
-        if system.flow.time >= next_tracked - 0.5 * dt || at_end {
+        if system.flow.time >= next_tracked - 0.5 * step_dt || at_end {
             outputs
                 .particles
                 .write_tracked(&system.dem, tracked)
@@ -197,6 +221,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         "steps": steps,
         "dem_substeps": dem_substeps,
         "dt": dt,
+        "cfl": case.time.cfl,
         "dem_dt": system.dem_dt,
         "simulated_time": system.flow.time,
         "wall_seconds": wall_seconds,

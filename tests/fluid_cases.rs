@@ -4,9 +4,8 @@
 
 mod common;
 
-use common::{load, metric, run};
+use common::{load, metric, run, run_cli};
 use grainflow::simulation;
-use std::process::Command;
 
 /// Relative L2 error of the Taylor–Green vortex (carried by a stream) at
 /// t = 1 s on n² cells with Δt ∝ Δx (CFL 0.36 at n = 64).
@@ -73,26 +72,6 @@ fn poiseuille_flow_reaches_the_exact_parabola() {
         eprintln!("Poiseuille {cells} cells: profile error {error:.3e}");
         assert!(error <= 1e-10, "{cells} cells: {summary}");
     }
-}
-
-/// `grainflow run` of a case of `cases/` with `--set` overrides into a
-/// fresh directory: (exit code, stderr, whether the directory was written).
-fn run_cli(case: &str, overrides: &[&str]) -> (Option<i32>, String, bool) {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
-    let mut command = Command::new(env!("CARGO_BIN_EXE_grainflow"));
-    command.args([
-        "run",
-        common::case_path(case).to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    for assignment in overrides {
-        command.args(["--set", assignment]);
-    }
-    let result = command.output().unwrap();
-    let stderr = String::from_utf8_lossy(&result.stderr).into_owned();
-    (result.status.code(), stderr, out.exists())
 }
 
 #[test]

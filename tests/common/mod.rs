@@ -7,6 +7,7 @@ use grainflow::case::Case;
 use grainflow::simulation;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 pub fn case_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -36,4 +37,24 @@ pub fn metric(summary: &Value, name: &str) -> f64 {
 
 pub fn relative_error(value: f64, reference: f64) -> f64 {
     ((value - reference) / reference).abs()
+}
+
+/// `grainflow run` of a case of `cases/` with `--set` overrides into a
+/// fresh directory: (exit code, stderr, whether the directory was written).
+pub fn run_cli(case: &str, overrides: &[&str]) -> (Option<i32>, String, bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_grainflow"));
+    command.args([
+        "run",
+        case_path(case).to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    for assignment in overrides {
+        command.args(["--set", assignment]);
+    }
+    let result = command.output().unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr).into_owned();
+    (result.status.code(), stderr, out.exists())
 }
