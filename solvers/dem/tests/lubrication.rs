@@ -135,3 +135,47 @@ fn stiff_film_stops_the_sphere_without_rebound() {
     );
     assert!(last.abs() < 1e-6 * speed, "{last}");
 }
+
+/// The DEM step against the film's time scale `m η / (6π μ R²)` at
+/// contact: the implicit film stays stable at every ratio (no reversal, no
+/// contact); what grows with the ratio is the overshoot of the stopping
+/// gap, first order in the step (1e-5, 1e-4, 1e-3, 9e-3 of the distance
+/// travelled at 0.1, 1, 10, 100). Here a ratio of 1000 would need a step of
+/// 0.56 t_c, beyond the contacts' own limit (0.3 t_c, refused by `run`):
+/// the contact, not the film, is what breaks first.
+#[test]
+fn film_step_sweep() {
+    let (viscosity, roughness) = (10.0, 1e-4);
+    let eta = roughness * RADIUS;
+    let h0 = 0.5 * RADIUS;
+    let c = damping_per_mass(viscosity);
+    let speed = 0.5 * c * ((h0 + eta) / eta).ln();
+    let stop = (h0 + eta) * (-speed / c).exp() - eta;
+    let mut previous_error = 0.0;
+    println!("c dt / eta | stopping gap | film law | error / travel");
+    for ratio in [0.1, 1.0, 10.0, 100.0] {
+        let dt = ratio * eta / c;
+        assert!(dt < 0.3 * CONTACT_TIME);
+        let mut system = approach(speed, viscosity, roughness);
+        let mut lowest = f64::MAX;
+        let steps = ((20.0 * h0 / speed) / dt).ceil().max(2000.0) as usize;
+        for _ in 0..steps.min(2_000_000) {
+            system.step(dt);
+            lowest = lowest.min(system.particles.position[0].z - RADIUS);
+            assert!(
+                system.particles.velocity[0].z <= 0.0,
+                "ratio {ratio}: reversed"
+            );
+        }
+        let error = (stop - lowest) / (h0 - stop);
+        println!("{ratio:10} | {lowest:.4e} | {stop:.4e} | {error:+.3e}");
+        assert!(lowest > 0.0, "ratio {ratio}: reached the wall");
+        // First order: about 1e-4 of the travel per unit of the ratio.
+        assert!(
+            error.abs() < 1.1e-4 * ratio.max(1.0),
+            "ratio {ratio}: {error}"
+        );
+        assert!(error >= previous_error - 1e-6, "ratio {ratio}: error fell");
+        previous_error = error;
+    }
+}

@@ -1,0 +1,50 @@
+#!/usr/bin/env python3
+"""Restitution over e_n against the Stokes number from
+scripts/bouncing_sphere_sweep.py, with and without lubrication, beside the
+reference band of ../shared/reference/bouncing_e_over_emax_fit_curves.csv
+(fit curves through the experiments of Gondret et al. and Joseph et al.,
+not data points: Legendre's exp(-35/St) and the thin-film 1 - 10/St).
+
+usage: postprocess/plot_bouncing_sphere.py [CSV] [PNG] [REFERENCE_CSV]
+"""
+import csv
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+root = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "docs/validation/bouncing_sphere.csv")
+target = sys.argv[2] if len(sys.argv) > 2 else os.path.join(root, "docs/validation/bouncing_sphere.png")
+reference = sys.argv[3] if len(sys.argv) > 3 else os.path.join(
+    root, "../shared/reference/bouncing_e_over_emax_fit_curves.csv")
+
+fig, ax = plt.subplots(figsize=(6.5, 4.3))
+if os.path.exists(reference):
+    lines = [l for l in open(reference) if not l.startswith("#")]
+    rows = list(csv.DictReader(lines))
+    st = [float(r["St"]) for r in rows]
+    legendre = [float(r["e_over_emax_legendre2006_exp"]) for r in rows]
+    film = [float(r["e_over_emax_linear_Stc10"]) for r in rows]
+    ax.fill_between(st, [max(v - 0.1, 0) for v in legendre], [v + 0.1 for v in legendre],
+                    color="0.85", label="exp(−35/St) ± 0.1 (experiments' spread)")
+    ax.plot(st, legendre, "k-", lw=1)
+    ax.plot(st, film, "k:", lw=1, label="1 − 10/St")
+runs = [r for r in csv.DictReader(open(source)) if r["status"] == "ok" and r["stokes"]]
+for lubricated, marker, label in [("True", "o", "with lubrication"), ("False", "v", "without")]:
+    mine = sorted((float(r["stokes"]), float(r["restitution_ratio"]))
+                  for r in runs if r["lubrication"] == lubricated)
+    if mine:
+        ax.plot(*zip(*mine), marker, ls="-", label=f"grainflow, {label}")
+ax.set_xscale("log")
+ax.set_xlabel("St = (ρp + ρ/2) V_T D / (9 μ)")
+ax.set_ylabel("e / e_n")
+ax.set_ylim(-0.05, 1.1)
+ax.set_title("sphere bouncing on a wall, ρp/ρ = 8")
+ax.legend(fontsize=7)
+fig.tight_layout()
+fig.savefig(target, dpi=120)
+print(f"wrote {target}")

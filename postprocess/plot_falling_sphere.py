@@ -1,0 +1,67 @@
+#!/usr/bin/env python3
+"""Charts of the falling-sphere sweep (scripts/falling_sphere_sweep.py):
+settling velocity against time for each run beside eq. 20 (initial slope)
+and the Schiller-Naumann terminal velocity (eq. 21), and the speed-accuracy
+chart: terminal-Reynolds error against wall time, one point per resolution.
+
+usage: postprocess/plot_falling_sphere.py [CSV] [PNG]
+"""
+import csv
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+root = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "docs/validation/falling_sphere.csv")
+target = sys.argv[2] if len(sys.argv) > 2 else os.path.join(root, "docs/validation/falling_sphere.png")
+rows = [r for r in csv.DictReader(open(source)) if r["status"] == "ok"]
+
+D, G = 0.01, 9.81
+time_unit = (D / G) ** 0.5
+speed_unit = (G * D) ** 0.5
+fig, (history, chart) = plt.subplots(1, 2, figsize=(11, 4.3))
+for r in rows:
+    tracked = r["tracked"]
+    if not os.path.exists(tracked):
+        continue
+    t, w = [], []
+    for line in csv.DictReader(open(tracked)):
+        t.append(float(line["t"]) / time_unit)
+        w.append(-float(line["vz"]) / speed_unit)
+    label = (f"D/Δx = {r['cells_per_diameter']}, box {float(r['box_width_over_d']):g} D, "
+             f"Δt (g/D)^½ = {float(r['dt_sqrt_g_over_d']):.3g}")
+    history.plot(t, w, lw=1, label=label)
+first = rows[0]
+terminal = float(first["schiller_naumann_reynolds"]) / float(first["terminal_reynolds"]) \
+    * float(first["terminal_velocity"]) / speed_unit
+slope = float(first["initial_acceleration"]) / (1 + float(first["initial_acceleration_error"])) / G
+history.axhline(terminal, color="k", ls=":", lw=1, label="Schiller–Naumann (eq. 21)")
+history.plot([0, 1.0], [0, slope * 1.0], "k--", lw=1, label="added mass (eq. 20)")
+history.set_xlabel("t (g/D)^½")
+history.set_ylabel("settling velocity / (g D)^½")
+history.set_title("ρp/ρ = 4, Ar = 800")
+history.legend(fontsize=7)
+
+reference_runs = [r for r in rows if float(r["box_width_over_d"]) == 8.0]
+by_resolution = {}
+for r in reference_runs:
+    key = int(r["cells_per_diameter"])
+    # One point per resolution: the run at the paper's CFL (dt scaled with dx).
+    if abs(float(r["dt_sqrt_g_over_d"]) * key / 20.0 - 0.04) < 1e-6:
+        by_resolution[key] = r
+points = sorted(by_resolution.items())
+seconds = [float(r["wall_seconds"]) for _, r in points]
+error = [abs(float(r["terminal_reynolds_error"])) * 100 for _, r in points]
+chart.loglog(seconds, error, "o-")
+for (n, _), s, e in zip(points, seconds, error):
+    chart.annotate(f"D/Δx = {n}", (s, e), textcoords="offset points", xytext=(5, 5))
+chart.set_xlabel("wall time of the run [s] (2 threads)")
+chart.set_ylabel("|terminal Re error| against Schiller–Naumann [%]")
+chart.set_title("speed against accuracy (box 8 D, paper's CFL)")
+fig.tight_layout()
+fig.savefig(target, dpi=120)
+print(f"wrote {target}")
