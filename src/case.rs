@@ -358,14 +358,24 @@ pub struct CouplingSection {
     /// "rigid_inner_fluid" (eq. 5–6 of the paper; unstable as ρ_p/ρ → 1).
     #[serde(default = "default_formulation")]
     pub formulation: String,
+    /// Gap between surfaces, in fluid cells, at which grains start touching
+    /// (each other or a wall): the forced layers of touching grains must
+    /// not seal the fluid between them.
+    #[serde(default = "default_contact_gap")]
+    pub contact_gap: f64,
 }
 
 impl Default for CouplingSection {
     fn default() -> Self {
         CouplingSection {
             formulation: default_formulation(),
+            contact_gap: default_contact_gap(),
         }
     }
+}
+
+fn default_contact_gap() -> f64 {
+    1.0
 }
 
 fn default_formulation() -> String {
@@ -1103,6 +1113,15 @@ impl Case {
                     "coupling.formulation",
                     &c.formulation,
                     "allowed: \"inner_fluid_momentum\" or \"rigid_inner_fluid\"",
+                ));
+            }
+        }
+        if let Some(c) = &self.coupling {
+            if !(c.contact_gap >= 0.0 && c.contact_gap <= 3.0) {
+                return Err(invalid(
+                    "coupling.contact_gap",
+                    c.contact_gap,
+                    "allowed: 0 ≤ contact_gap ≤ 3 (fluid cells)",
                 ));
             }
         }

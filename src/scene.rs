@@ -320,14 +320,30 @@ pub fn lubrication(case: &Case) -> Option<Lubrication> {
     })
 }
 
+/// Gap at which grains in a fluid start touching: `coupling.contact_gap`
+/// cells of the fluid grid (0 in a dry scene).
+pub fn contact_gap(case: &Case) -> f64 {
+    let Some(fluid) = case.fluid.as_ref() else {
+        return 0.0;
+    };
+    let cells = case.coupling.clone().unwrap_or_default().contact_gap;
+    let dim = case.dimension();
+    let smallest = (0..dim)
+        .map(|a| (case.domain.upper[a] - case.domain.lower[a]) / fluid.cells[a] as f64)
+        .fold(f64::INFINITY, f64::min);
+    cells * smallest
+}
+
 /// The scene's DEM system, with its particles placed.
 pub fn build(case: &Case) -> Result<DemSystem, String> {
     let domain = domain(case);
     let placed = particles(case)?;
     check_inside(&domain, &placed)?;
     let mut system = DemSystem::new(domain, contact_law(case), walls(case), skin(case));
-    // Before the particles: the pair list reaches the lubrication range.
+    // Before the particles: the pair list reaches the lubrication range
+    // and the contact gap.
     system.lubrication = lubrication(case);
+    system.contact_gap = contact_gap(case);
     system.add_particles(&placed);
     Ok(system)
 }

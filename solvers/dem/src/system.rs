@@ -60,6 +60,15 @@ pub struct DemSystem {
     /// The film force between close grains: only in a scene with a fluid.
     /// Set it before adding particles (the pair list reaches its range).
     pub lubrication: Option<Lubrication>,
+    /// Gap between surfaces at which contacts start (0 in a dry scene). In
+    /// a fluid, the immersed boundaries spread each grain's surface over
+    /// about a cell: touching at a gap of the order of a cell keeps the
+    /// forced layers of two grains, or of a grain and a wall, from sealing
+    /// the fluid between them (the projection would answer a grain leaving
+    /// a wall with an inviscid suction the real film does not produce). The
+    /// lubrication force still measures the true gap. Set it before adding
+    /// particles.
+    pub contact_gap: f64,
     /// The step the film forces of the current totals were made implicit
     /// for (0 before the first step: explicit).
     film_dt: f64,
@@ -98,6 +107,7 @@ impl DemSystem {
             particles: Particles::default(),
             law,
             lubrication: None,
+            contact_gap: 0.0,
             film_dt: 0.0,
             walls,
             wall_history: Vec::new(),
@@ -171,7 +181,8 @@ impl DemSystem {
         let mut previous = self.neighbours.take_previous(&self.particles);
         self.neighbours.gap = self
             .lubrication
-            .map_or(0.0, |law| law.reach(self.particles.max_radius()));
+            .map_or(0.0, |law| law.reach(self.particles.max_radius()))
+            .max(self.contact_gap);
         self.particles.clear_ghosts();
         for x in &mut self.particles.position {
             self.domain.wrap(x);
@@ -372,6 +383,7 @@ impl DemSystem {
         let n = forces.len();
         let law = self.law;
         let lubrication = self.lubrication;
+        let contact_gap = self.contact_gap;
         let walls = &self.walls;
         let wall_stride = self.wall_stride();
         let time = self.time;
@@ -427,7 +439,7 @@ impl DemSystem {
                             let j = j as usize;
                             let branch = xi - p.position[j];
                             let rj = p.radius[j];
-                            let reach = ri + rj;
+                            let reach = ri + rj + contact_gap;
                             let distance_sq = branch.norm_squared();
                             if distance_sq >= reach * reach {
                                 // Most listed partners are apart: touch the
@@ -440,7 +452,7 @@ impl DemSystem {
                                     let distance = distance_sq.sqrt();
                                     let normal = branch * (1.0 / distance);
                                     let force = film.force(
-                                        distance - reach,
+                                        distance - ri - rj,
                                         normal,
                                         vi - p.velocity[j],
                                         ri,
@@ -480,7 +492,7 @@ impl DemSystem {
                             let mut load = law.load(&contact, &mut entry.history[e], dt);
                             if let Some(film) = &lubrication {
                                 load.force += film.force(
-                                    -overlap,
+                                    contact_gap - overlap,
                                     normal,
                                     vi - p.velocity[j],
                                     ri,
@@ -509,7 +521,7 @@ impl DemSystem {
                                 near &= near - 1;
                                 let wall = &walls[w];
                                 let bit = 1u64 << w;
-                                let overlap = ri - wall.distance(&xi);
+                                let overlap = ri + contact_gap - wall.distance(&xi);
                                 if overlap <= 0.0 || !wall.is_present(time) {
                                     if touches & bit != 0 {
                                         wall_history[w] = Vec3::zeros();
@@ -519,7 +531,7 @@ impl DemSystem {
                                         (&lubrication, wall.is_present(time))
                                     {
                                         total_force += film.force(
-                                            -overlap,
+                                            contact_gap - overlap,
                                             wall.normal,
                                             vi,
                                             ri,
@@ -546,7 +558,7 @@ impl DemSystem {
                                 total_force += load.force;
                                 if let Some(film) = &lubrication {
                                     total_force += film.force(
-                                        -overlap,
+                                        contact_gap - overlap,
                                         wall.normal,
                                         vi,
                                         ri,
@@ -613,7 +625,7 @@ impl DemSystem {
         for e in self.neighbours.range(i) {
             let j = self.neighbours.partner[e] as usize;
             let branch = p.position[i] - p.position[j];
-            let reach = p.radius[i] + p.radius[j];
+            let reach = p.radius[i] + p.radius[j] + self.contact_gap;
             if branch.norm_squared() >= reach * reach {
                 continue;
             }
@@ -647,7 +659,7 @@ impl DemSystem {
         let p = &self.particles;
         let mut out = Vec::new();
         for (w, wall) in self.walls.iter().enumerate() {
-            let overlap = p.radius[i] - wall.distance(&p.position[i]);
+            let overlap = p.radius[i] + self.contact_gap - wall.distance(&p.position[i]);
             if overlap <= 0.0 || !wall.is_present(self.time) || p.inverse_mass[i] == 0.0 {
                 continue;
             }
