@@ -59,8 +59,9 @@ fn bad_coupled_tables_are_refused_with_the_key_and_nothing_is_written() {
 /// tenth of the time before its peak), whose Reynolds number is within 6 %
 /// of the Schiller–Naumann balance (eq. 21): the coarse grid and the box
 /// each slow it by 2–4 % (docs/validation.md, §7, where D/Δx = 16 comes
-/// within 3 %). Its initial acceleration is within 7 % of eq. 20 (6 % at
-/// this resolution; 3 % at D/Δx = 16, tested in grainflow-ibm).
+/// within 3 %). The step is too coarse for the initial-acceleration fit
+/// (fewer than five steps before 0.2 (D/g)^½), which is then left out;
+/// grainflow-ibm tests it at D/Δx = 16.
 #[test]
 fn falling_sphere_reduced_reaches_the_schiller_naumann_plateau() {
     let (summary, dir) = run(
@@ -74,16 +75,16 @@ fn falling_sphere_reduced_reaches_the_schiller_naumann_plateau() {
     );
     let error = metric(&summary, "terminal_reynolds_error");
     let drift = metric(&summary, "terminal_drift");
-    let initial = metric(&summary, "initial_acceleration_error");
     eprintln!(
         "falling sphere D/dx = 8: Re {:.3} against {:.3} ({error:+.4}), drift {drift:.2e}, \
-         initial acceleration {initial:+.4}",
+         first-step acceleration {:.4} m/s²",
         metric(&summary, "terminal_reynolds"),
-        metric(&summary, "schiller_naumann_reynolds")
+        metric(&summary, "schiller_naumann_reynolds"),
+        metric(&summary, "first_step_acceleration")
     );
     assert!(drift.abs() < 5e-3, "no plateau: {drift}");
     assert!(error.abs() < 0.06, "{summary}");
-    assert!(initial.abs() < 0.07, "{summary}");
+    assert!(summary["metrics"].get("initial_acceleration").is_none());
     for file in [
         "case.toml",
         "log.txt",
