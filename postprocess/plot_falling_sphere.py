@@ -3,8 +3,9 @@
 settling velocity against time for each run beside eq. 20 (initial slope)
 and the Schiller-Naumann terminal velocity (eq. 21), and the speed-accuracy
 chart: terminal-Reynolds error against wall time, one point per resolution.
+The velocity histories are read from TRACKS (run, t, z, vz).
 
-usage: postprocess/plot_falling_sphere.py [CSV] [PNG]
+usage: postprocess/plot_falling_sphere.py [CSV] [TRACKS] [PNG]
 """
 import csv
 import os
@@ -17,30 +18,32 @@ import matplotlib.pyplot as plt
 
 root = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "docs/validation/falling_sphere.csv")
-target = sys.argv[2] if len(sys.argv) > 2 else os.path.join(root, "docs/validation/falling_sphere.png")
+tracks = sys.argv[2] if len(sys.argv) > 2 else os.path.join(root, "docs/validation/falling_sphere_tracks.csv")
+target = sys.argv[3] if len(sys.argv) > 3 else os.path.join(root, "docs/validation/falling_sphere.png")
 rows = [r for r in csv.DictReader(open(source)) if r["status"] == "ok"]
 
 D, G = 0.01, 9.81
 time_unit = (D / G) ** 0.5
 speed_unit = (G * D) ** 0.5
 fig, (history, chart) = plt.subplots(1, 2, figsize=(11, 4.3))
+histories = {}
+for line in csv.DictReader(open(tracks)):
+    t, w = histories.setdefault(line["run"], ([], []))
+    t.append(float(line["t"]) / time_unit)
+    w.append(-float(line["vz"]) / speed_unit)
 for r in rows:
-    tracked = r["tracked"]
-    if not os.path.exists(tracked):
+    if r["run"] not in histories:
         continue
-    t, w = [], []
-    for line in csv.DictReader(open(tracked)):
-        t.append(float(line["t"]) / time_unit)
-        w.append(-float(line["vz"]) / speed_unit)
+    t, w = histories[r["run"]]
     label = (f"D/Δx = {r['cells_per_diameter']}, box {float(r['box_width_over_d']):g} D, "
              f"Δt (g/D)^½ = {float(r['dt_sqrt_g_over_d']):.3g}")
     history.plot(t, w, lw=1, label=label)
 first = rows[0]
 terminal = float(first["schiller_naumann_reynolds"]) / float(first["terminal_reynolds"]) \
     * float(first["terminal_velocity"]) / speed_unit
-slope = float(first["initial_acceleration"]) / (1 + float(first["initial_acceleration_error"])) / G
+slope = (4.0 - 1.0) / (4.0 + 0.5)  # eq. 20 in units of g
 history.axhline(terminal, color="k", ls=":", lw=1, label="Schiller–Naumann (eq. 21)")
-history.plot([0, 1.0], [0, slope * 1.0], "k--", lw=1, label="added mass (eq. 20)")
+history.plot([0, 1.5], [0, slope * 1.5], "k--", lw=1, label="added mass (eq. 20)")
 history.set_xlabel("t (g/D)^½")
 history.set_ylabel("settling velocity / (g D)^½")
 history.set_title("ρp/ρ = 4, Ar = 800")
