@@ -7,14 +7,14 @@
 
 use crate::case::Case;
 use crate::coupled_analysis::SphereInFluid;
-use crate::fluid_simulation::cell_fields;
+use crate::fluid_simulation::FieldFiles;
 use crate::output::Outputs;
 use crate::simulation::{check_time_step, peak_memory_bytes, Progress, Summary};
 use crate::{fluid_scene, scene, stability, RunError};
 use grainflow_ibm::{
     CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
 };
-use grainflow_io::{CsvSeries, FieldFrame, PvdIndex};
+use grainflow_io::CsvSeries;
 use serde_json::{json, Map};
 use std::path::Path;
 use std::time::Instant;
@@ -253,12 +253,12 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
 }
 
 /// The outputs of grains in a fluid: the particle outputs of every scene
-/// of grains, the flow's series columns and its field files.
+/// of grains, the flow's series columns and its field files (with the
+/// solid fraction).
 struct CoupledOutputs {
     particles: Outputs,
     flow_series: CsvSeries,
-    fields: Option<PvdIndex>,
-    frames: usize,
+    fields: Option<FieldFiles>,
 }
 
 impl CoupledOutputs {
@@ -276,17 +276,10 @@ impl CoupledOutputs {
                 "wall_seconds",
             ],
         )?;
-        let fields = if case.output.fields {
-            std::fs::create_dir_all(dir.join("fields"))?;
-            Some(PvdIndex::new(dir.join("fields.pvd")))
-        } else {
-            None
-        };
         Ok(CoupledOutputs {
             particles,
             flow_series,
-            fields,
-            frames: 0,
+            fields: FieldFiles::create(dir, case)?,
         })
     }
 
@@ -310,24 +303,12 @@ impl CoupledOutputs {
             max_divergence,
             self.particles.run.started.elapsed().as_secs_f64(),
         ])?;
-        if let Some(index) = &mut self.fields {
-            let (velocity, pressure, vorticity) = cell_fields(&mut system.flow, density);
+        if let Some(fields) = &mut self.fields {
             let solid = system
                 .immersed
                 .cell_solid_fraction(&system.flow.grid, &system.dem.particles);
-            let grid = &system.flow.grid;
-            let name = format!("fields/fields_{:06}.vti", self.frames);
-            FieldFrame {
-                cells: grid.cells,
-                origin: grid.lower,
-                spacing: grid.spacing,
-                scalars: &[("pressure", &pressure), ("solid_fraction", &solid)],
-                vectors: &[("velocity", &velocity), ("vorticity", &vorticity)],
-            }
-            .write(&self.particles.run.dir.join(&name))?;
-            index.add(system.flow.time, &name)?;
+            fields.write(&mut system.flow, density, &[("solid_fraction", &solid)])?;
         }
-        self.frames += 1;
         Ok(())
     }
 }

@@ -240,10 +240,7 @@ fn for_each_velocity(solver: &FlowSolver, mut visit: impl FnMut(usize, f64, [f64
 /// Cell-centred velocity (mean of a cell's two faces along each axis),
 /// pressure [Pa] and vorticity (the curl on the cell's edges, averaged to
 /// its centre) of the current flow, for ParaView.
-pub(crate) fn cell_fields(
-    solver: &mut FlowSolver,
-    density: f64,
-) -> (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>) {
+fn cell_fields(solver: &mut FlowSolver, density: f64) -> (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>) {
     solver.fill_velocity_ghosts();
     let grid = &solver.grid;
     let dim = grid.dim();
@@ -280,13 +277,61 @@ pub(crate) fn cell_fields(
     (cell_velocity, pressure, vorticity)
 }
 
+/// The field files of a scene with a fluid: `fields/fields_NNNNNN.vti`
+/// (cell-centred velocity, pressure in Pa, vorticity, and any extra
+/// scalars) indexed by `fields.pvd`.
+pub(crate) struct FieldFiles {
+    dir: std::path::PathBuf,
+    index: PvdIndex,
+    frames: usize,
+}
+
+impl FieldFiles {
+    /// The field files in `dir`, if `output.fields` asks for them.
+    pub(crate) fn create(dir: &Path, case: &Case) -> std::io::Result<Option<Self>> {
+        if !case.output.fields {
+            return Ok(None);
+        }
+        std::fs::create_dir_all(dir.join("fields"))?;
+        Ok(Some(FieldFiles {
+            dir: dir.to_path_buf(),
+            index: PvdIndex::new(dir.join("fields.pvd")),
+            frames: 0,
+        }))
+    }
+
+    /// A field file of the current flow with `extra` cell scalars.
+    pub(crate) fn write(
+        &mut self,
+        solver: &mut FlowSolver,
+        density: f64,
+        extra: &[(&str, &[f64])],
+    ) -> std::io::Result<()> {
+        let (velocity, pressure, vorticity) = cell_fields(solver, density);
+        let grid = &solver.grid;
+        let name = format!("fields/fields_{:06}.vti", self.frames);
+        let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", &pressure)];
+        scalars.extend_from_slice(extra);
+        FieldFrame {
+            cells: grid.cells,
+            origin: grid.lower,
+            spacing: grid.spacing,
+            scalars: &scalars,
+            vectors: &[("velocity", &velocity), ("vorticity", &vorticity)],
+        }
+        .write(&self.dir.join(&name))?;
+        self.index.add(solver.time, &name)?;
+        self.frames += 1;
+        Ok(())
+    }
+}
+
 /// A fluid scene's outputs: the files of every run, its series and its
 /// field files.
 struct FluidOutputs {
     run: RunDirectory,
     series: CsvSeries,
-    fields: Option<PvdIndex>,
-    frames: usize,
+    fields: Option<FieldFiles>,
 }
 
 impl FluidOutputs {
@@ -305,17 +350,10 @@ impl FluidOutputs {
                 "wall_seconds",
             ],
         )?;
-        let fields = if case.output.fields {
-            std::fs::create_dir_all(dir.join("fields"))?;
-            Some(PvdIndex::new(dir.join("fields.pvd")))
-        } else {
-            None
-        };
         Ok(FluidOutputs {
             run,
             series,
-            fields,
-            frames: 0,
+            fields: FieldFiles::create(dir, case)?,
         })
     }
 
@@ -338,21 +376,9 @@ impl FluidOutputs {
             report.max_divergence,
             self.run.started.elapsed().as_secs_f64(),
         ])?;
-        if let Some(index) = &mut self.fields {
-            let (velocity, pressure, vorticity) = cell_fields(solver, density);
-            let grid = &solver.grid;
-            let name = format!("fields/fields_{:06}.vti", self.frames);
-            FieldFrame {
-                cells: grid.cells,
-                origin: grid.lower,
-                spacing: grid.spacing,
-                scalars: &[("pressure", &pressure)],
-                vectors: &[("velocity", &velocity), ("vorticity", &vorticity)],
-            }
-            .write(&self.run.dir.join(&name))?;
-            index.add(solver.time, &name)?;
+        if let Some(fields) = &mut self.fields {
+            fields.write(solver, density, &[])?;
         }
-        self.frames += 1;
         Ok(())
     }
 }

@@ -521,24 +521,25 @@ impl DemSystem {
                                 near &= near - 1;
                                 let wall = &walls[w];
                                 let bit = 1u64 << w;
-                                let overlap = ri + contact_gap - wall.distance(&xi);
-                                if overlap <= 0.0 || !wall.is_present(time) {
+                                let distance = wall.distance(&xi);
+                                let present = wall.is_present(time);
+                                if let (Some(film), true) = (&lubrication, present) {
+                                    // Eq. 19 against a wall: the true gap.
+                                    total_force += film.force(
+                                        distance - ri,
+                                        wall.normal,
+                                        vi,
+                                        ri,
+                                        f64::INFINITY,
+                                        p.inverse_mass[i],
+                                        film_dt,
+                                    );
+                                }
+                                let overlap = ri + contact_gap - distance;
+                                if overlap <= 0.0 || !present {
                                     if touches & bit != 0 {
                                         wall_history[w] = Vec3::zeros();
                                         touches &= !bit;
-                                    }
-                                    if let (Some(film), true) =
-                                        (&lubrication, wall.is_present(time))
-                                    {
-                                        total_force += film.force(
-                                            contact_gap - overlap,
-                                            wall.normal,
-                                            vi,
-                                            ri,
-                                            f64::INFINITY,
-                                            p.inverse_mass[i],
-                                            film_dt,
-                                        );
                                     }
                                     continue;
                                 }
@@ -556,17 +557,6 @@ impl DemSystem {
                                 };
                                 let load = law.load(&contact, &mut wall_history[w], dt);
                                 total_force += load.force;
-                                if let Some(film) = &lubrication {
-                                    total_force += film.force(
-                                        contact_gap - overlap,
-                                        wall.normal,
-                                        vi,
-                                        ri,
-                                        f64::INFINITY,
-                                        p.inverse_mass[i],
-                                        film_dt,
-                                    );
-                                }
                                 total_torque += load.torque;
                                 max_overlap = max_overlap.max(overlap / ri);
                                 wall_contacts += 1;
