@@ -359,8 +359,7 @@ pub struct CouplingSection {
     #[serde(default = "default_formulation")]
     pub formulation: String,
     /// Gap between surfaces, in fluid cells, at which grains start touching
-    /// (each other or a wall): the forced layers of touching grains must
-    /// not seal the fluid between them.
+    /// (each other or a wall); 0, the paper's choice, unless set.
     #[serde(default = "default_contact_gap")]
     pub contact_gap: f64,
 }
@@ -375,7 +374,7 @@ impl Default for CouplingSection {
 }
 
 fn default_contact_gap() -> f64 {
-    1.0
+    0.0
 }
 
 fn default_formulation() -> String {

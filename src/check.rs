@@ -323,6 +323,9 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
                 dt / (diameter / g).sqrt(),
                 velocity * dt / h
             );
+            if let Some(w) = coupled_simulation::forcing_step_warning(velocity * dt / h) {
+                let _ = writeln!(out, "{w}");
+            }
         }
     }
     let _ = writeln!(out, "time:");
