@@ -34,11 +34,13 @@ if os.path.exists(reference):
     ax.plot(st, legendre, "k-", lw=1)
     ax.plot(st, film, "k:", lw=1, label="1 − 10/St")
 runs = [r for r in csv.DictReader(open(source)) if r["status"] == "ok" and r["stokes"]]
-for lubricated, marker, label in [("True", "o", "with lubrication"), ("False", "v", "without")]:
-    mine = sorted((float(r["stokes"]), float(r["restitution_ratio"]))
-                  for r in runs if r["lubrication"] == lubricated)
-    if mine:
-        ax.plot(*zip(*mine), marker, ls="-", label=f"grainflow, {label}")
+for gap, marker in [("0", "o"), ("1", "s")]:
+    for lubricated, label in [("True", "with lubrication"), ("False", "without")]:
+        mine = sorted((float(r["stokes"]), float(r["restitution_ratio"])) for r in runs
+                      if r["lubrication"] == lubricated and r.get("contact_gap_cells", "0") == gap)
+        if mine:
+            ax.plot(*zip(*mine), marker, ls="-",
+                    label=f"grainflow, {label}, contact gap {gap} cell")
 ax.set_xscale("log")
 ax.set_xlabel("St = (ρp + ρ/2) V_T D / (9 μ)")
 ax.set_ylabel("e / e_n")

@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """The settling sphere of ten Cate et al. (2002), E1-E4: gap over D and
-velocity against time from scripts/ten_cate_runs.py beside the measured
-curves (digitized, ../shared/reference/tencate2002; read there, not copied).
+velocity against time (TRACKS: case, t, z, vz, from the runs of
+scripts/ten_cate_runs.py) beside the measured curves (digitized,
+../shared/reference/tencate2002; read there, not copied).
 
-usage: postprocess/plot_ten_cate.py [CSV] [PNG] [REFERENCE_DIR]
+usage: postprocess/plot_ten_cate.py [TRACKS] [PNG] [REFERENCE_DIR]
 """
 import csv
 import os
@@ -15,7 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 root = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "docs/validation/ten_cate.csv")
+source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "docs/validation/ten_cate_tracks.csv")
 target = sys.argv[2] if len(sys.argv) > 2 else os.path.join(root, "docs/validation/ten_cate.png")
 reference = sys.argv[3] if len(sys.argv) > 3 else os.path.join(root, "../shared/reference/tencate2002")
 names = {"E1": "Re1_5", "E2": "Re4_1", "E3": "Re11_6", "E4": "Re32_2"}
@@ -33,14 +34,14 @@ def pairs(path):
 
 fig, (gap, velocity) = plt.subplots(1, 2, figsize=(11, 4.3))
 colours = dict(zip(names, ["C0", "C1", "C2", "C3"]))
-for row in csv.DictReader(open(source)):
-    case = row["case"]
+runs = {}
+for line in csv.DictReader(open(source)):
+    t, g, w = runs.setdefault(line["case"], ([], [], []))
+    t.append(float(line["t"]))
+    g.append((float(line["z"]) - D / 2) / D)
+    w.append(float(line["vz"]))
+for case, (t, g, w) in sorted(runs.items()):
     c = colours[case]
-    t, g, w = [], [], []
-    for line in csv.DictReader(open(row["tracked"])):
-        t.append(float(line["t"]))
-        g.append((float(line["z"]) - D / 2) / D)
-        w.append(float(line["vz"]))
     gap.plot(t, g, color=c, label=f"{case} grainflow")
     velocity.plot(t, w, color=c, label=f"{case} grainflow")
     measured_gap = pairs(os.path.join(reference, f"tencate_{names[case]}.csv"))
