@@ -61,29 +61,40 @@ fn settling_sphere(
 /// Section 3.1: a sphere released from rest first accelerates at
 /// `(ρ_p − ρ) g / (ρ_p + ρ/2)` (eq. 20), buoyant weight against the sphere
 /// plus half its volume of fluid; the history (Basset) force then slows it
-/// as `√t`. The early velocity is `v = a₀ t − b t^{3/2}`: fitted over the
-/// first ten steps (t ≤ 0.2 (D/g)^½), `a₀` is within 3 % of eq. 20 at
-/// D/Δx = 16. A box of 5 D leaves 0.5 % of added mass to confinement.
+/// as `√t`. The early velocity is `v = a₀ t − b t^{3/2}`: fitted over
+/// t ≤ 0.2 (D/g)^½, `a₀` is within 3 % of eq. 20 at D/Δx = 16 with
+/// Δt = 0.02 (D/g)^½. A box of 5 D leaves 0.5 % of added mass to
+/// confinement.
+///
+/// The limit this also shows: the direct forcing pulls the transition
+/// layer towards the sphere at every stage, so a shorter step makes the
+/// sphere look larger, with more added mass: at Δt = 0.005 (D/g)^½ the
+/// same fit is 5 % low (measured −5.0 %; −2.3 % at 0.01).
 #[test]
-fn initial_acceleration_matches_added_mass_within_3_percent() {
+fn initial_acceleration_matches_added_mass_and_depends_on_the_step() {
     let expected = 3.0 / 4.5;
-    let mut system = settling_sphere(
-        16,
-        [5.0, 5.0, 5.0],
-        4.0,
-        800.0,
-        Coupling::InnerFluidMomentum,
+    let error_at = |dt: f64| {
+        let mut system = settling_sphere(
+            16,
+            [5.0, 5.0, 5.0],
+            4.0,
+            800.0,
+            Coupling::InnerFluidMomentum,
+        );
+        let mut samples = Vec::new();
+        for _ in 0..(0.2 / dt).round() as usize {
+            system.step(dt).unwrap();
+            samples.push((system.flow.time, -system.dem.particles.velocity[0].z));
+        }
+        early_acceleration(&samples) / expected - 1.0
+    };
+    let (coarse, fine) = (error_at(0.02), error_at(0.005));
+    println!("initial acceleration error: {coarse:+.4} at dt 0.02, {fine:+.4} at dt 0.005");
+    assert!(coarse.abs() < 0.03, "{coarse}");
+    assert!(
+        fine < -0.03,
+        "the step dependence is gone ({fine}): update docs/validation.md §7"
     );
-    let dt = 0.02;
-    let mut samples = Vec::new();
-    for _ in 0..10 {
-        system.step(dt).unwrap();
-        samples.push((system.flow.time, -system.dem.particles.velocity[0].z));
-    }
-    let acceleration = early_acceleration(&samples);
-    let error = acceleration / expected - 1.0;
-    println!("initial acceleration {acceleration:.5} against {expected:.5}: error {error:+.4}");
-    assert!(error.abs() < 0.03, "error {error}");
 }
 
 /// Least-squares `a₀` of `v = a₀ t + c t^{3/2}` through `(t, v)` samples.
