@@ -141,24 +141,13 @@ impl ImmersedBoundaries {
         let per_body: Vec<(Vec3, Vec3)> = bodies
             .par_iter()
             .map(|body| {
-                let mut momentum = Vec3::zeros();
-                let mut angular = Vec3::zeros();
-                for (component, field) in velocity.iter().enumerate() {
-                    visit_faces(
-                        self.width,
-                        grid,
-                        &unknowns[component],
-                        component,
-                        body,
-                        |index, r, alpha| {
-                            let mut u = Vec3::zeros();
-                            u[component] = alpha * field[index] * volume;
-                            momentum += u;
-                            angular += r.cross(&u);
-                        },
-                    );
-                }
-                (momentum, angular)
+                moments(
+                    self.width,
+                    grid,
+                    unknowns,
+                    body,
+                    |component, index, _, alpha| alpha * velocity[component][index] * volume,
+                )
             })
             .collect();
         self.gather(particles.n_owned, &bodies, &per_body)
@@ -207,33 +196,22 @@ impl ImmersedBoundaries {
         }
 
         // 2. Loads, from the velocity before the forcing.
+        let total = &self.total_fraction;
         let per_body: Vec<(Vec3, Vec3)> = bodies
             .par_iter()
             .map(|body| {
-                let mut force = Vec3::zeros();
-                let mut torque = Vec3::zeros();
-                for component in 0..dim {
-                    let total = &self.total_fraction[component];
-                    let field = &velocity[component];
-                    visit_faces(
-                        self.width,
-                        grid,
-                        &unknowns[component],
-                        component,
-                        body,
-                        |index, r, alpha| {
-                            let weight = alpha / total[index].max(1.0);
-                            let mut f = Vec3::zeros();
-                            f[component] = weight
-                                * (body.velocity_at(&r)[component] - field[index])
-                                / stage_dt
-                                * volume;
-                            force -= f;
-                            torque -= r.cross(&f);
-                        },
-                    );
-                }
-                (force, torque)
+                // The particle receives −f: the opposite of what it gives.
+                moments(
+                    self.width,
+                    grid,
+                    unknowns,
+                    body,
+                    |component, index, r, alpha| {
+                        let weight = alpha / total[component][index].max(1.0);
+                        let slip = body.velocity_at(&r)[component] - velocity[component][index];
+                        -weight * slip / stage_dt * volume
+                    },
+                )
             })
             .collect();
 
@@ -339,6 +317,29 @@ impl ImmersedBoundaries {
         }
         loads
     }
+}
+
+/// `(Σ q e_c, Σ r × q e_c)` over the faces of every component `c` within
+/// the support of `body`, with `q = value(c, index, r, α)`: a vector
+/// integral over a particle and its moment about the centre.
+fn moments(
+    width: f64,
+    grid: &Grid,
+    unknowns: &[Block],
+    body: &Body,
+    mut value: impl FnMut(usize, usize, Vec3, f64) -> f64,
+) -> (Vec3, Vec3) {
+    let mut sum = Vec3::zeros();
+    let mut moment = Vec3::zeros();
+    for (component, block) in unknowns.iter().enumerate() {
+        visit_faces(width, grid, block, component, body, |index, r, alpha| {
+            let mut q = Vec3::zeros();
+            q[component] = value(component, index, r, alpha);
+            sum += q;
+            moment += r.cross(&q);
+        });
+    }
+    (sum, moment)
 }
 
 /// Calls `visit(index, r, α)` for every face of `component` in `block`
