@@ -239,7 +239,7 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
 /// CFL limit at that terminal velocity, the DEM sub-step, lubrication.
 fn coupled_report(case: &Case) -> Result<String, RunError> {
     let (system, contact_time) = coupled_simulation::build(case).map_err(RunError::Case)?;
-    let warning = check_time_step(system.dem_dt, contact_time)?;
+    let warning = coupled_simulation::check_dem_substep(&system, contact_time)?;
     let density_warning = coupled_simulation::check_density_ratio(&system)?;
     let f = case.fluid_section();
     let grid = &system.flow.grid;

@@ -9,7 +9,8 @@ use crate::case::Case;
 use crate::coupled_analysis::SphereInFluid;
 use crate::fluid_simulation::FieldFiles;
 use crate::output::Outputs;
-use crate::simulation::{check_time_step, peak_memory_bytes, Progress, Summary};
+use crate::simulation::{peak_memory_bytes, Progress, Summary};
+use crate::stability::TimeStepVerdict;
 use crate::{fluid_scene, scene, stability, RunError};
 use grainflow_ibm::{
     CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
@@ -68,6 +69,34 @@ fn step_size(system: &CoupledSystem, case: &Case) -> f64 {
     }
 }
 
+/// Refuses a DEM sub-step past the stability limit of the contacts
+/// (before anything is written); returns a warning past the accuracy limit.
+/// In a fluid the sub-step is set by `time.dt_over_contact_time` alone
+/// (`time.dt` is the fluid's step).
+pub fn check_dem_substep(
+    system: &CoupledSystem,
+    contact_time: f64,
+) -> Result<Option<String>, RunError> {
+    let ratio = system.dem_dt / contact_time;
+    match stability::verdict(ratio) {
+        TimeStepVerdict::Unstable => Err(RunError::Case(format!(
+            "time.dt_over_contact_time = {ratio:.3}: the DEM sub-step {:.3e} s is past the \
+             stability limit {} t_c of the explicit contact integration (t_c = {contact_time:.3e} \
+             s); allowed: time.dt_over_contact_time ≤ {} (default 0.02)",
+            system.dem_dt,
+            stability::STABLE_DT_OVER_TC,
+            stability::STABLE_DT_OVER_TC
+        ))),
+        TimeStepVerdict::Inaccurate => Ok(Some(format!(
+            "warning: the DEM sub-step is {ratio:.3} t_c, past {}: restitution errors above 1 % \
+             (time.dt_over_contact_time ≤ {})",
+            stability::ACCURATE_DT_OVER_TC,
+            stability::ACCURATE_DT_OVER_TC
+        ))),
+        TimeStepVerdict::Accurate => Ok(None),
+    }
+}
+
 /// Below this CFL number at a grain's settling velocity the forced layer
 /// around it, pulled towards its velocity at every stage, thickens the
 /// grain noticeably: at D/Δx = 8 the falling sphere settles 4 % slow at
@@ -116,7 +145,7 @@ pub fn check_density_ratio(system: &CoupledSystem) -> Result<Option<String>, Run
 pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
     let started = Instant::now();
     let (mut system, contact_time) = build(case).map_err(RunError::Case)?;
-    let warning = check_time_step(system.dem_dt, contact_time)?;
+    let warning = check_dem_substep(&system, contact_time)?;
     let density_warning = check_density_ratio(&system)?;
     let dt = case
         .time

@@ -35,6 +35,12 @@ fn bad_coupled_tables_are_refused_with_the_key_and_nothing_is_written() {
             "coupling.formulation=\"rigid_inner_fluid\"",
             "rigid_inner_fluid",
         ),
+        // A DEM sub-step past the contacts' stability limit.
+        (
+            "bouncing_sphere.toml",
+            "time.dt_over_contact_time=0.35",
+            "time.dt_over_contact_time",
+        ),
         // No fluid: lubrication has nothing to act in.
         (
             "bouncing_dry.toml",
