@@ -2,11 +2,11 @@
 //! derived numbers and the models the scene will run.
 
 use crate::case::Case;
-use crate::coupled_analysis::schiller_naumann_reynolds;
 use crate::coupled_simulation;
 use crate::simulation::{check_time_step, time_step};
 use crate::{fluid_scene, scene, stability, RunError};
 use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
+use grainflow_ibm::settling::schiller_naumann_reynolds;
 use std::fmt::Write;
 
 /// Bytes of the DEM state per particle: five vectors and five scalars, the

@@ -17,6 +17,7 @@
 
 use crate::case::{AnalysisSection, Case};
 use grainflow_core::{Dimension, Vec3};
+use grainflow_ibm::settling::{early_acceleration, schiller_naumann_reynolds};
 use grainflow_ibm::{particle_volume, CoupledReport, CoupledSystem};
 use serde_json::{json, Map, Value};
 
@@ -211,52 +212,5 @@ impl SphereInFluid {
             samples[0],
             |best, s| if s.speed > best.speed { s } else { best },
         )
-    }
-}
-
-/// Least-squares `a₀` of `v = a₀ t + c t^{3/2}` through `(t, v)` samples:
-/// the early-time motion from rest under a constant force, added mass
-/// and the leading history (Basset) term.
-fn early_acceleration(samples: &[(f64, f64)]) -> f64 {
-    let (mut s11, mut s12, mut s22, mut r1, mut r2) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for &(t, v) in samples {
-        let (f1, f2) = (t, t.powf(1.5));
-        s11 += f1 * f1;
-        s12 += f1 * f2;
-        s22 += f2 * f2;
-        r1 += f1 * v;
-        r2 += f2 * v;
-    }
-    (r1 * s22 - r2 * s12) / (s11 * s22 - s12 * s12)
-}
-
-/// The terminal Reynolds number of a sphere of Archimedes number `Ar`
-/// with the Schiller–Naumann drag `C_D = 24/Re (1 + 0.15 Re^0.687)`: the
-/// balance of eq. 21, `C_D Re² = 4 Ar / 3`, solved by bisection.
-pub fn schiller_naumann_reynolds(archimedes: f64) -> f64 {
-    let balance = |re: f64| 24.0 * re * (1.0 + 0.15 * re.powf(0.687)) - 4.0 * archimedes / 3.0;
-    let (mut low, mut high) = (0.0, 1e6);
-    for _ in 0..200 {
-        let mid = 0.5 * (low + high);
-        if balance(mid) > 0.0 {
-            high = mid;
-        } else {
-            low = mid;
-        }
-    }
-    0.5 * (low + high)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn schiller_naumann_balance() {
-        // Ar = 800: Re ≈ 20.3 (the paper's "Re = 20 approximately").
-        let re = schiller_naumann_reynolds(800.0);
-        let drag = 24.0 / re * (1.0 + 0.15 * re.powf(0.687));
-        assert!((drag * re * re - 4.0 * 800.0 / 3.0).abs() < 1e-9);
-        assert!((re - 20.318).abs() < 1e-3, "{re}");
     }
 }

@@ -9,7 +9,7 @@ use crate::case::Case;
 use crate::coupled_analysis::SphereInFluid;
 use crate::fluid_simulation::FieldFiles;
 use crate::output::Outputs;
-use crate::simulation::{peak_memory_bytes, Progress, Summary};
+use crate::simulation::{peak_memory_bytes, shortest_contact_time, Progress, Summary};
 use crate::stability::TimeStepVerdict;
 use crate::{fluid_scene, scene, stability, RunError};
 use grainflow_ibm::{
@@ -29,12 +29,7 @@ pub fn build(case: &Case) -> Result<(CoupledSystem, f64), String> {
     // kinematic pressure leaves out.
     flow.body_force = [0.0; 3];
     let dem = scene::build(case)?;
-    let p = &dem.particles;
-    let lightest = (0..p.n_owned)
-        .filter(|&k| !p.is_fixed(k))
-        .map(|k| p.mass[k])
-        .fold(f64::MAX, f64::min);
-    let contact_time = stability::shortest_contact_time(&dem.law, lightest);
+    let contact_time = shortest_contact_time(&dem);
     let ratio = case.time.dt_over_contact_time.unwrap_or(0.02);
     let coupling = match case.coupling.as_ref().map(|c| c.formulation.as_str()) {
         Some("rigid_inner_fluid") => Coupling::RigidInnerFluid,
@@ -307,17 +302,15 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         "metrics": metrics,
     });
     let run = &mut outputs.particles.run;
-    run.write_summary(&summary).map_err(RunError::Io)?;
-    if let Some(message) = failure {
-        run.log(&message);
-        run.log("the outputs hold the last good state before the failure");
-        return Err(RunError::Unstable(message));
-    }
-    run.log(&format!(
-        "done: {steps} steps ({dem_substeps} DEM sub-steps) in {wall_seconds:.2} s: flow {:.2} s, \
-         forcing {:.2} s, loads {:.2} s, DEM {:.2} s",
-        t.flow, t.forcing, t.loads, t.dem
-    ));
+    run.finish(
+        &summary,
+        failure,
+        &format!(
+            "done: {steps} steps ({dem_substeps} DEM sub-steps) in {wall_seconds:.2} s: flow \
+             {:.2} s, forcing {:.2} s, loads {:.2} s, DEM {:.2} s",
+            t.flow, t.forcing, t.loads, t.dem
+        ),
+    )?;
     Ok(Summary {
         json: summary,
         metrics,
@@ -376,9 +369,10 @@ impl CoupledOutputs {
             self.particles.run.started.elapsed().as_secs_f64(),
         ])?;
         if let Some(fields) = &mut self.fields {
-            let solid = system
-                .immersed
-                .cell_solid_fraction(&system.flow.grid, &system.dem.particles);
+            let solid = system.immersed.cell_solid_fraction(
+                &system.flow.grid,
+                &system.immersed.bodies(&system.dem.particles),
+            );
             fields.write(&mut system.flow, density, &[("solid_fraction", &solid)])?;
         }
         Ok(())

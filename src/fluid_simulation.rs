@@ -144,18 +144,14 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         "peak_memory_bytes": peak_memory_bytes(),
         "metrics": metrics,
     });
-    outputs.run.write_summary(&summary).map_err(RunError::Io)?;
-    if let Some(message) = failure {
-        outputs.run.log(&message);
-        outputs
-            .run
-            .log("the outputs hold the last good state before the failure");
-        return Err(RunError::Unstable(message));
-    }
-    outputs.run.log(&format!(
-        "done: {steps} steps in {wall_seconds:.2} s ({:.3e} cell-steps/s)",
-        cell_steps / wall_seconds
-    ));
+    outputs.run.finish(
+        &summary,
+        failure,
+        &format!(
+            "done: {steps} steps in {wall_seconds:.2} s ({:.3e} cell-steps/s)",
+            cell_steps / wall_seconds
+        ),
+    )?;
     Ok(Summary {
         json: summary,
         metrics,

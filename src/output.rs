@@ -5,6 +5,7 @@
 //! particle outputs (a fluid scene adds its fields in `fluid_simulation`).
 
 use crate::case::Case;
+use crate::RunError;
 use grainflow_dem::DemSystem;
 use grainflow_io::{CsvSeries, ParticleFrame, PvdIndex};
 use std::fs::File;
@@ -47,6 +48,25 @@ impl RunDirectory {
     pub fn write_summary(&self, summary: &serde_json::Value) -> std::io::Result<()> {
         let text = serde_json::to_string_pretty(summary).expect("json");
         std::fs::write(self.dir.join("summary.json"), text + "\n")
+    }
+
+    /// The end of every run: the summary, then either the diagnosis of a
+    /// failure (the run's error; the outputs keep the last good state) or
+    /// the `done` line.
+    pub fn finish(
+        &mut self,
+        summary: &serde_json::Value,
+        failure: Option<String>,
+        done: &str,
+    ) -> Result<(), RunError> {
+        self.write_summary(summary).map_err(RunError::Io)?;
+        if let Some(message) = failure {
+            self.log(&message);
+            self.log("the outputs hold the last good state before the failure");
+            return Err(RunError::Unstable(message));
+        }
+        self.log(done);
+        Ok(())
     }
 }
 

@@ -19,8 +19,9 @@ pub struct Summary {
     pub metrics: Map<String, Value>,
 }
 
-/// The time step of a case and the scene's shortest contact time.
-pub fn time_step(case: &Case, system: &DemSystem) -> (f64, f64) {
+/// The shortest binary contact time of the scene: that of the lightest
+/// moving pair (the lightest particle of all if none moves).
+pub fn shortest_contact_time(system: &DemSystem) -> f64 {
     let p = &system.particles;
     let lightest = (0..p.n_owned)
         .filter(|&k| !p.is_fixed(k))
@@ -31,7 +32,12 @@ pub fn time_step(case: &Case, system: &DemSystem) -> (f64, f64) {
     } else {
         lightest
     };
-    let contact_time = stability::shortest_contact_time(&system.law, lightest);
+    stability::shortest_contact_time(&system.law, lightest)
+}
+
+/// The time step of a case and the scene's shortest contact time.
+pub fn time_step(case: &Case, system: &DemSystem) -> (f64, f64) {
+    let contact_time = shortest_contact_time(system);
     let dt = match (case.time.dt, case.time.dt_over_contact_time) {
         (Some(dt), _) => dt,
         (None, Some(f)) => f * contact_time,
@@ -243,19 +249,15 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
         "peak_memory_bytes": peak_memory_bytes(),
         "metrics": metrics,
     });
-    outputs.run.write_summary(&json).map_err(RunError::Io)?;
-    if let Some(message) = failure {
-        outputs.run.log(&message);
-        outputs
-            .run
-            .log("the outputs hold the last good state before the failure");
-        return Err(RunError::Unstable(message));
-    }
-    outputs.run.log(&format!(
-        "done: {stop_reason}; {} steps in {wall_seconds:.2} s ({:.3e} particle-steps/s)",
-        system.steps,
-        particle_steps / wall_seconds
-    ));
+    outputs.run.finish(
+        &json,
+        failure,
+        &format!(
+            "done: {stop_reason}; {} steps in {wall_seconds:.2} s ({:.3e} particle-steps/s)",
+            system.steps,
+            particle_steps / wall_seconds
+        ),
+    )?;
     Ok(Summary { json, metrics })
 }
 

@@ -37,12 +37,17 @@ const FALLING_PACKING: &str = r#"
     end = 0.1
 "#;
 
-fn run_with_threads(threads: usize, steps: usize) -> DemSystem {
-    let pool = rayon::ThreadPoolBuilder::new()
+/// `work` run on a pool of `threads` threads.
+fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .unwrap();
-    pool.install(|| {
+        .unwrap()
+        .install(work)
+}
+
+fn run_with_threads(threads: usize, steps: usize) -> DemSystem {
+    on_threads(threads, || {
         let case = Case::from_text(FALLING_PACKING, "packing", &[]).unwrap();
         let mut system = scene::build(&case).unwrap();
         for _ in 0..steps {
@@ -162,11 +167,7 @@ fn a_flow_gives_the_same_bits_on_one_and_two_threads() {
         ],
     );
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let mut solver = grainflow::fluid_scene::build(&case).unwrap();
             for _ in 0..5 {
                 solver.step(0.01).unwrap();
@@ -201,11 +202,7 @@ fn grains_in_a_fluid_give_the_same_bits_on_one_and_two_threads() {
         ],
     );
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let (mut system, _) = grainflow::coupled_simulation::build(&case).unwrap();
             let mut overlap: f64 = 0.0;
             for _ in 0..20 {

@@ -179,17 +179,19 @@ impl CoupledSystem {
         let mut substeps = 0;
         let mut dem_report = StepDiagnostics::default();
         let mut largest_overlap: f64 = 0.0;
+        let unknowns: Vec<_> = (0..self.flow.grid.dim())
+            .map(|c| *self.flow.velocity_unknowns(c))
+            .collect();
         for stage in 0..STAGES {
             let stage_dt = stage_fraction(stage) * dt;
-            let unknowns: Vec<_> = (0..self.flow.grid.dim())
-                .map(|c| *self.flow.velocity_unknowns(c))
-                .collect();
             let clock = Instant::now();
+            // The particles stand still until the DEM runs.
+            let bodies = self.immersed.bodies(&self.dem.particles);
             let before = self.immersed.inner_momentum(
                 &self.flow.grid,
                 &unknowns,
                 &self.flow.velocity,
-                &self.dem.particles,
+                &bodies,
             );
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);
@@ -198,7 +200,7 @@ impl CoupledSystem {
                 &self.flow.grid,
                 &unknowns,
                 &mut self.flow.velocity,
-                &self.dem.particles,
+                &bodies,
                 stage_dt,
             );
             let clock = self.lap(clock, Part::Forcing);
@@ -208,7 +210,7 @@ impl CoupledSystem {
                 &self.flow.grid,
                 &unknowns,
                 &self.flow.velocity,
-                &self.dem.particles,
+                &bodies,
             );
             let loads = self.hydrodynamic_loads(&forcing, &before, &after, stage_dt);
             for (k, &id) in self.dem.particles.id[..loads.force.len()]

@@ -73,6 +73,16 @@ impl Body {
     }
 }
 
+/// The particles of a subdomain as the grid sees them: every owned
+/// particle and the periodic images of those whose support crosses a
+/// periodic edge. Built once per stage ([`ImmersedBoundaries::bodies`]), while
+/// the particles stand still.
+pub struct Bodies {
+    /// Owned particles (the loads have one entry each).
+    count: usize,
+    list: Vec<Body>,
+}
+
 /// The immersed spheres' action on the flow of one subdomain.
 pub struct ImmersedBoundaries {
     /// `Δ` of eq. 8.
@@ -106,11 +116,10 @@ impl ImmersedBoundaries {
 
     /// `Σ_faces α_p dV` of each owned particle: the volume the grid sees
     /// (area in 2D), averaged over the components.
-    pub fn grid_volume(&self, grid: &Grid, unknowns: &[Block], particles: &Particles) -> Vec<f64> {
-        let bodies = self.bodies(particles);
+    pub fn grid_volume(&self, grid: &Grid, unknowns: &[Block], bodies: &Bodies) -> Vec<f64> {
         let dim = grid.dim();
-        let mut volume = vec![0.0; particles.n_owned];
-        for body in &bodies {
+        let mut volume = vec![0.0; bodies.count];
+        for body in &bodies.list {
             for component in 0..dim {
                 visit_faces(
                     self.width,
@@ -134,11 +143,11 @@ impl ImmersedBoundaries {
         grid: &Grid,
         unknowns: &[Block],
         velocity: &[Vec<f64>],
-        particles: &Particles,
+        bodies: &Bodies,
     ) -> Loads {
-        let bodies = self.bodies(particles);
         let volume = grid.cell_volume();
         let per_body: Vec<(Vec3, Vec3)> = bodies
+            .list
             .par_iter()
             .map(|body| {
                 moments(
@@ -150,7 +159,7 @@ impl ImmersedBoundaries {
                 )
             })
             .collect();
-        self.gather(particles.n_owned, &bodies, &per_body)
+        self.gather(bodies, &per_body)
     }
 
     /// Applies the direct forcing of a stage of length `stage_dt` to the
@@ -161,16 +170,15 @@ impl ImmersedBoundaries {
         grid: &Grid,
         unknowns: &[Block],
         velocity: &mut [Vec<f64>],
-        particles: &Particles,
+        bodies: &Bodies,
         stage_dt: f64,
     ) -> Loads {
-        let bodies = self.bodies(particles);
         let dim = grid.dim();
         let volume = grid.cell_volume();
 
         // 1. Fractions and rigid velocities of all bodies on the faces.
         let mut touched: Vec<Option<Block>> = vec![None; dim];
-        for body in &bodies {
+        for body in &bodies.list {
             for component in 0..dim {
                 let total = &mut self.total_fraction[component];
                 let target = &mut self.solid_velocity[component];
@@ -198,6 +206,7 @@ impl ImmersedBoundaries {
         // 2. Loads, from the velocity before the forcing.
         let total = &self.total_fraction;
         let per_body: Vec<(Vec3, Vec3)> = bodies
+            .list
             .par_iter()
             .map(|body| {
                 // The particle receives −f: the opposite of what it gives.
@@ -228,16 +237,16 @@ impl ImmersedBoundaries {
             grid.par_update(&block, &mut self.total_fraction[component], |_, _| 0.0);
             grid.par_update(&block, &mut self.solid_velocity[component], |_, _| 0.0);
         }
-        self.gather(particles.n_owned, &bodies, &per_body)
+        self.gather(bodies, &per_body)
     }
 
     /// `Σ_p α_p` capped at 1 at every owned cell centre, in the order of
     /// [`Grid::for_each`] over the cell block: the solid fraction field for
     /// output.
-    pub fn cell_solid_fraction(&self, grid: &Grid, particles: &Particles) -> Vec<f64> {
+    pub fn cell_solid_fraction(&self, grid: &Grid, bodies: &Bodies) -> Vec<f64> {
         let cells = grid.cell_block();
         let mut field = grid.zeros();
-        for body in self.bodies(particles) {
+        for body in &bodies.list {
             let reach = support(body.radius, self.width);
             let mut stencil = cells;
             for axis in 0..grid.dim() {
@@ -266,44 +275,51 @@ impl ImmersedBoundaries {
 
     /// The owned particles and the periodic images of those whose support
     /// crosses a periodic edge of the domain.
-    fn bodies(&self, particles: &Particles) -> Vec<Body> {
-        let mut bodies = Vec::with_capacity(particles.n_owned);
+    pub fn bodies(&self, particles: &Particles) -> Bodies {
+        let mut list = Vec::with_capacity(particles.n_owned);
         for p in 0..particles.n_owned {
             let centre = particles.position[p];
             let reach = support(particles.radius[p], self.width);
-            let mut shifts = vec![Vec3::zeros()];
+            // Per axis, the periods to shift by: 0, and ±1 where the
+            // support crosses the lower or upper edge.
+            let mut periods = [[0.0; 3]; 3];
+            let mut counts = [1; 3];
             for (axis, period) in self.periods.iter().enumerate() {
                 let Some(length) = *period else { continue };
                 let lower = self.domain_lower[axis];
-                let mut images = Vec::new();
-                for shift in &shifts {
-                    let x = centre[axis] + shift[axis];
-                    if x - reach < lower {
-                        images.push(shift + length * Vec3::ith(axis, 1.0));
-                    }
-                    if x + reach > lower + length {
-                        images.push(shift - length * Vec3::ith(axis, 1.0));
+                if centre[axis] - reach < lower {
+                    periods[axis][counts[axis]] = length;
+                    counts[axis] += 1;
+                }
+                if centre[axis] + reach > lower + length {
+                    periods[axis][counts[axis]] = -length;
+                    counts[axis] += 1;
+                }
+            }
+            for &x in &periods[0][..counts[0]] {
+                for &y in &periods[1][..counts[1]] {
+                    for &z in &periods[2][..counts[2]] {
+                        list.push(Body {
+                            particle: p,
+                            centre: centre + Vec3::new(x, y, z),
+                            velocity: particles.velocity[p],
+                            angular_velocity: particles.angular_velocity[p],
+                            radius: particles.radius[p],
+                        });
                     }
                 }
-                shifts.extend(images);
-            }
-            for shift in shifts {
-                bodies.push(Body {
-                    particle: p,
-                    centre: centre + shift,
-                    velocity: particles.velocity[p],
-                    angular_velocity: particles.angular_velocity[p],
-                    radius: particles.radius[p],
-                });
             }
         }
-        bodies
+        Bodies {
+            count: particles.n_owned,
+            list,
+        }
     }
 
     /// Adds the per-body results into per-particle loads, in body order.
-    fn gather(&self, count: usize, bodies: &[Body], per_body: &[(Vec3, Vec3)]) -> Loads {
-        let mut loads = Loads::zeros(count);
-        for (body, (force, torque)) in bodies.iter().zip(per_body) {
+    fn gather(&self, bodies: &Bodies, per_body: &[(Vec3, Vec3)]) -> Loads {
+        let mut loads = Loads::zeros(bodies.count);
+        for (body, (force, torque)) in bodies.list.iter().zip(per_body) {
             loads.force[body.particle] += force;
             loads.torque[body.particle] += torque;
         }

@@ -7,7 +7,9 @@
 //!   staggered faces and the loads it gives the particles (eq. 5–6);
 //! - [`coupled`]: the coupled step — forcing at every Runge–Kutta stage,
 //!   the DEM sub-cycled within each stage with the hydrodynamic loads held
-//!   fixed, contacts and lubrication from the DEM.
+//!   fixed, contacts and lubrication from the DEM;
+//! - [`settling`]: what a settling sphere should do (Schiller–Naumann
+//!   terminal velocity, the early-time fit of its velocity from rest).
 
 // Component loops index several per-component arrays at once; an index
 // reads closer to the maths than zipped iterators.
@@ -15,10 +17,11 @@
 
 pub mod coupled;
 pub mod forcing;
+pub mod settling;
 pub mod solid_fraction;
 
 pub use coupled::{
     particle_volume, CoupledReport, CoupledSystem, Coupling, Timings,
     RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
 };
-pub use forcing::{ImmersedBoundaries, Loads};
+pub use forcing::{Bodies, ImmersedBoundaries, Loads};

@@ -6,6 +6,7 @@ use grainflow_core::{Communicator, Dimension, Domain, Vec3};
 use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid};
+use grainflow_ibm::settling::early_acceleration;
 use grainflow_ibm::{CoupledSystem, Coupling};
 
 /// A sphere of diameter 1 and density `density_ratio` (fluid density 1,
@@ -95,20 +96,6 @@ fn initial_acceleration_matches_added_mass_and_depends_on_the_step() {
         fine < -0.03,
         "the step dependence is gone ({fine}): update docs/validation.md §7"
     );
-}
-
-/// Least-squares `a₀` of `v = a₀ t + c t^{3/2}` through `(t, v)` samples.
-fn early_acceleration(samples: &[(f64, f64)]) -> f64 {
-    let (mut s11, mut s12, mut s22, mut r1, mut r2) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for &(t, v) in samples {
-        let (f1, f2) = (t, t.powf(1.5));
-        s11 += f1 * f1;
-        s12 += f1 * f2;
-        s22 += f2 * f2;
-        r1 += f1 * v;
-        r2 += f2 * v;
-    }
-    (r1 * s22 - r2 * s12) / (s11 * s22 - s12 * s12)
 }
 
 /// Marches a settling (or rising) sphere for `steps` steps of `dt`;

@@ -53,8 +53,9 @@ fn a_sphere_across_periodic_edges_acts_like_one_inside() {
         let mut immersed = ImmersedBoundaries::new(&grid, &domain);
         let particles = one_particle(centre);
         let unknowns: Vec<_> = (0..3).map(|c| *flow.velocity_unknowns(c)).collect();
-        let volume = immersed.grid_volume(&grid, &unknowns, &particles)[0];
-        let loads = immersed.apply(&grid, &unknowns, &mut flow.velocity, &particles, 0.1);
+        let bodies = immersed.bodies(&particles);
+        let volume = immersed.grid_volume(&grid, &unknowns, &bodies)[0];
+        let loads = immersed.apply(&grid, &unknowns, &mut flow.velocity, &bodies, 0.1);
         let momentum: Vec<f64> = (0..3)
             .map(|c| {
                 let field = &flow.velocity[c];
