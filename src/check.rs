@@ -9,15 +9,16 @@ use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
 use grainflow_ibm::settling::schiller_naumann_reynolds;
 use std::fmt::Write;
 
-/// Bytes of the DEM state per particle: five vectors and five scalars, the
-/// reference position, the coordination, the wall marks and the cell bins
-/// (~240 B), 24 B of tangential history per wall, and per listed partner
-/// 81 B: index and mirror (8 B), history (24 B), an open flag, and the
+/// Bytes of the DEM state per particle: seven vectors (with the external
+/// force and torque) and five scalars, the reference position, the
+/// coordination, the wall marks and the cell bins (~290 B), 24 B of
+/// tangential history per wall, and per listed partner 81 B: index and
+/// mirror (8 B), history (24 B), a state byte, and the
 /// pair's force and partner torque handed between the two passes of the
 /// force loop (48 B). A dense 3D packing lists about 13 partners.
 fn bytes_per_particle(dimension: usize, walls: usize) -> usize {
     let partners = if dimension == 3 { 13 } else { 6 };
-    240 + 24 * walls.max(1) + partners * 81
+    290 + 24 * walls.max(1) + partners * 81
 }
 
 pub fn report(case: &Case) -> Result<String, RunError> {
