@@ -178,6 +178,20 @@ pub struct PairLoad {
 }
 
 impl ContactLaw {
+    /// The law a hard-contact scene carries: Coulomb friction between
+    /// grains and no spring (its steps never evaluate the soft law).
+    pub fn rigid(friction: f64) -> ContactLaw {
+        ContactLaw {
+            normal: NormalStiffness::Fixed {
+                stiffness: 0.0,
+                damping: 0.0,
+            },
+            tangential_ratio: 0.0,
+            friction,
+            rolling_friction: 0.0,
+        }
+    }
+
     /// Contact force on i from the overlap `overlap` > 0 along the unit
     /// normal `normal` (pointing from the partner to i), the relative velocity
     /// of i's contact point `relative_velocity`, the pair's 1/m_i + 1/m_j

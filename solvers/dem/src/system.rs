@@ -69,6 +69,9 @@ pub struct DemSystem {
     /// lubrication force still measures the true gap. Set it before adding
     /// particles.
     pub contact_gap: f64,
+    /// Gap below which pairs are listed for hard contact (its candidate
+    /// threshold D, Martin et al. 2022 section 3.3); 0 with soft contact.
+    pub listing_gap: f64,
     /// The step the film forces of the current totals were made implicit
     /// for (0 before the first step: explicit).
     film_dt: f64,
@@ -108,6 +111,7 @@ impl DemSystem {
             law,
             lubrication: None,
             contact_gap: 0.0,
+            listing_gap: 0.0,
             film_dt: 0.0,
             walls,
             wall_history: Vec::new(),
@@ -182,7 +186,8 @@ impl DemSystem {
         self.neighbours.gap = self
             .lubrication
             .map_or(0.0, |law| law.reach(self.particles.max_radius()))
-            .max(self.contact_gap);
+            .max(self.contact_gap)
+            .max(self.listing_gap);
         self.particles.clear_ghosts();
         for x in &mut self.particles.position {
             self.domain.wrap(x);
@@ -251,6 +256,58 @@ impl DemSystem {
         self.steps += 1;
         self.last = diagnostics;
         diagnostics
+    }
+
+    /// Hard contact's position update x ← x + Δt v with the end-of-step
+    /// velocities (Martin et al. 2022, below eq. 9), then the list and the
+    /// ghosts; returns whether a position or velocity is not finite.
+    pub fn drift(&mut self, dt: f64) -> bool {
+        let n = self.particles.n_owned;
+        let limit_sq = (0.5 * self.neighbours.skin).powi(2);
+        let reference = &self.neighbours.reference_position;
+        let stale = reference.len() != n;
+        let p = &mut self.particles;
+        let (moved_beyond_skin, non_finite) = p.position[..n]
+            .par_iter_mut()
+            .zip(p.velocity[..n].par_iter())
+            .zip(p.angular_velocity[..n].par_iter())
+            .enumerate()
+            .with_min_len(PARTICLES_PER_TASK)
+            .map(|(k, ((x, v), w))| {
+                *x += dt * v;
+                let moved = stale || (*x - reference[k]).norm_squared() > limit_sq;
+                let finite = x
+                    .iter()
+                    .chain(v.iter())
+                    .chain(w.iter())
+                    .all(|c| c.is_finite());
+                (moved, !finite)
+            })
+            .reduce(|| (false, false), |a, b| (a.0 || b.0, a.1 || b.1));
+        self.time += dt;
+        self.steps += 1;
+        if non_finite {
+            return true;
+        }
+        if moved_beyond_skin {
+            self.rebuild();
+        } else {
+            self.ghosts.refresh(&mut self.particles);
+        }
+        false
+    }
+
+    /// The owned particle a ghost (index ≥ n_owned) copies.
+    pub fn ghost_source(&self, ghost: usize) -> usize {
+        self.ghosts.source[ghost - self.particles.n_owned]
+    }
+
+    /// Records the contacts a hard-contact step closed: the particle count
+    /// of each owned particle and its walls as bits (what `contacts` and
+    /// `touches_a_wall` report).
+    pub fn record_contacts(&mut self, particle_contacts: Vec<u32>, walls_touched: Vec<u64>) {
+        self.contacts = particle_contacts;
+        self.wall_touching = walls_touched;
     }
 
     /// Sets the external force and torque of every owned particle (held

@@ -1,0 +1,306 @@
+//! COCD: one conic program per step (Martin et al. 2022, eq. 10 and 13),
+//! solved by Clarabel's primal–dual interior-point method.
+//!
+//! In the units of [`Scales`] (ũ = v/V for translations, ω L/V for
+//! rotations; masses over m̄, inertias over m̄ L²; κ = VΔt/L) the program
+//! reads
+//!
+//!   min ½ ũᵀM̃ũ − ũᵀM̃Ũ   subject to   s_α = (D_α/L + κ n·A_α ũ, κ μ T_α A_α ũ) ∈ K_α,
+//!
+//! with T_α the tangent basis and K_α the second-order cone {(y, x): |x| ≤ y}
+//! of eq. 13 (the epigraph variable of eq. 13 is not needed: Clarabel takes
+//! the quadratic objective directly). In 2D the cone {|x| ≤ y} is the two
+//! half-planes y + x ≥ 0, y − x ≥ 0; a frictionless contact keeps only
+//! y ≥ 0. Clarabel's form is min ½xᵀPx + qᵀx, Ax + s = b, s ∈ K, here with
+//! P = M̃, q = −M̃Ũ, A = −H̃, b = (D_α/d̄, 0).
+//!
+//! Its optimality conditions M̃(ũ − Ũ) = H̃ᵀz are eq. 5 with the impulses
+//! Δt f_α = (z_n n + μ T_αᵀ z_t) m̄ V κ: the dual z_α = (f_n, f_t/μ) lies in
+//! the (self-dual) cone, which is Coulomb's |f_t| ≤ μ f_n, and z_α·s_α = 0
+//! is eq. 6–8 (section 2.3).
+
+use crate::contacts::{tangents, Bodies, ContactSet, Scales, STATIC};
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
+use grainflow_core::{Dimension, Vec3};
+
+/// End-of-step velocities of the bodies and the impulses of the contacts.
+#[derive(Clone, Debug, Default)]
+pub struct Solution {
+    pub velocity: Vec<Vec3>,
+    pub spin: Vec<Vec3>,
+    /// Normal impulse Δt f_n and tangential impulse Δt f_t of each contact.
+    pub normal_impulse: Vec<f64>,
+    pub tangential_impulse: Vec<Vec3>,
+    pub iterations: u32,
+    /// Whether the solver stopped at reduced accuracy.
+    pub reduced_accuracy: bool,
+}
+
+/// The rows a contact contributes and the cone they form.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Rows {
+    /// y ≥ 0 (frictionless).
+    Normal,
+    /// y + x ≥ 0, y − x ≥ 0 (2D, frictional).
+    HalfPlanes,
+    /// (y, x1, x2) in the second-order cone (3D, frictional).
+    Cone,
+}
+
+impl Rows {
+    fn of(dimension: Dimension, friction: f64) -> Rows {
+        if friction == 0.0 {
+            Rows::Normal
+        } else if dimension == Dimension::Two {
+            Rows::HalfPlanes
+        } else {
+            Rows::Cone
+        }
+    }
+
+    fn count(self) -> usize {
+        match self {
+            Rows::Normal => 1,
+            Rows::HalfPlanes => 2,
+            Rows::Cone => 3,
+        }
+    }
+}
+
+/// Degrees of freedom of a body: (v_x, v_y, ω_z) in 2D, (v, ω) in 3D.
+fn dofs(dimension: Dimension) -> usize {
+    match dimension {
+        Dimension::Two => 3,
+        Dimension::Three => 6,
+    }
+}
+
+/// Row of the scaled Jacobian of contact α along direction e: the
+/// coefficients of e·A_α ũ on the columns of i and j.
+fn jacobian_row(
+    contacts: &ContactSet,
+    a: usize,
+    e: &Vec3,
+    dimension: Dimension,
+    scales: &Scales,
+    row: &mut Vec<(usize, f64)>,
+) {
+    row.clear();
+    let d = dofs(dimension);
+    let n_cross_e = contacts.normal[a].cross(e);
+    for (body, lever, sign) in [
+        (contacts.body_i[a], contacts.lever_i[a], 1.0),
+        (contacts.body_j[a], contacts.lever_j[a], -1.0),
+    ] {
+        if body == STATIC {
+            continue;
+        }
+        let first = body as usize * d;
+        let kappa = scales.gap_per_velocity();
+        let e = kappa * e;
+        let rotation = -kappa * (lever / scales.length) * n_cross_e;
+        match dimension {
+            Dimension::Two => {
+                row.push((first, sign * e.x));
+                row.push((first + 1, sign * e.y));
+                row.push((first + 2, rotation.z));
+            }
+            Dimension::Three => {
+                for k in 0..3 {
+                    row.push((first + k, sign * e[k]));
+                    row.push((first + 3 + k, rotation[k]));
+                }
+            }
+        }
+    }
+}
+
+/// Solves the step's conic program. `tolerance`: Clarabel's gap and
+/// feasibility tolerances (ε of section 3.2, relative).
+pub fn solve(
+    contacts: &ContactSet,
+    bodies: &Bodies,
+    dimension: Dimension,
+    scales: &Scales,
+    tolerance: f64,
+    max_iterations: u32,
+) -> Result<Solution, String> {
+    let d = dofs(dimension);
+    let columns = bodies.len() * d;
+    let (length, velocity) = (scales.length, scales.velocity);
+
+    // P = M̃ (diagonal) and q = −M̃Ũ.
+    let mut mass = vec![0.0; columns];
+    let mut free = vec![0.0; columns];
+    for b in 0..bodies.len() {
+        let m = 1.0 / (bodies.inverse_mass[b] * scales.mass);
+        let inertia = 1.0 / (bodies.inverse_inertia[b] * scales.mass * length * length);
+        let v = bodies.free_velocity[b] / velocity;
+        let w = bodies.free_spin[b] * length / velocity;
+        let first = b * d;
+        match dimension {
+            Dimension::Two => {
+                mass[first..first + 3].copy_from_slice(&[m, m, inertia]);
+                free[first..first + 3].copy_from_slice(&[v.x, v.y, w.z]);
+            }
+            Dimension::Three => {
+                mass[first..first + 3].fill(m);
+                mass[first + 3..first + 6].fill(inertia);
+                free[first..first + 3].copy_from_slice(v.as_slice());
+                free[first + 3..first + 6].copy_from_slice(w.as_slice());
+            }
+        }
+    }
+    let p_matrix = CscMatrix::new(
+        columns,
+        columns,
+        (0..=columns).collect(),
+        (0..columns).collect(),
+        mass.clone(),
+    );
+    let q: Vec<f64> = mass.iter().zip(&free).map(|(m, u)| -m * u).collect();
+
+    // Rows: the half-plane and normal rows first, then the cones.
+    let kinds: Vec<Rows> = (0..contacts.len())
+        .map(|a| Rows::of(dimension, contacts.friction[a]))
+        .collect();
+    let linear_rows: usize = kinds
+        .iter()
+        .filter(|k| **k != Rows::Cone)
+        .map(|k| k.count())
+        .sum();
+    let cone_count = kinds.iter().filter(|k| **k == Rows::Cone).count();
+    let rows = linear_rows + 3 * cone_count;
+    let mut first_row = vec![0usize; contacts.len()];
+    let (mut next_linear, mut next_cone) = (0, linear_rows);
+    for (a, kind) in kinds.iter().enumerate() {
+        if *kind == Rows::Cone {
+            first_row[a] = next_cone;
+            next_cone += 3;
+        } else {
+            first_row[a] = next_linear;
+            next_linear += kind.count();
+        }
+    }
+
+    let (mut row_index, mut col_index, mut values) = (Vec::new(), Vec::new(), Vec::new());
+    let mut b = vec![0.0; rows];
+    let (mut normal_row, mut tangent_row, mut second_row) = (Vec::new(), Vec::new(), Vec::new());
+    let mut push = |r: usize, entries: &[(usize, f64)], factor: f64| {
+        for &(c, v) in entries {
+            row_index.push(r);
+            col_index.push(c);
+            values.push(-factor * v); // A = −H̃
+        }
+    };
+    for a in 0..contacts.len() {
+        let n = contacts.normal[a];
+        let mu = contacts.friction[a];
+        let (t1, t2) = tangents(dimension, &n);
+        let r = first_row[a];
+        let gap = contacts.gap[a] / length;
+        jacobian_row(contacts, a, &n, dimension, scales, &mut normal_row);
+        match kinds[a] {
+            Rows::Normal => {
+                push(r, &normal_row, 1.0);
+                b[r] = gap;
+            }
+            Rows::HalfPlanes => {
+                jacobian_row(contacts, a, &t1, dimension, scales, &mut tangent_row);
+                push(r, &normal_row, 1.0);
+                push(r, &tangent_row, mu);
+                push(r + 1, &normal_row, 1.0);
+                push(r + 1, &tangent_row, -mu);
+                b[r] = gap;
+                b[r + 1] = gap;
+            }
+            Rows::Cone => {
+                jacobian_row(contacts, a, &t1, dimension, scales, &mut tangent_row);
+                jacobian_row(contacts, a, &t2, dimension, scales, &mut second_row);
+                push(r, &normal_row, 1.0);
+                push(r + 1, &tangent_row, mu);
+                push(r + 2, &second_row, mu);
+                b[r] = gap;
+            }
+        }
+    }
+    let a_matrix = CscMatrix::new_from_triplets(rows, columns, row_index, col_index, values);
+    let mut cones = Vec::new();
+    if linear_rows > 0 {
+        cones.push(SupportedConeT::NonnegativeConeT(linear_rows));
+    }
+    cones.extend((0..cone_count).map(|_| SupportedConeT::SecondOrderConeT(3)));
+
+    // The objective is of order one in these units; its absolute gap
+    // tolerance follows its size, so that a nearly still scene is solved as
+    // accurately as a fast one.
+    let size: f64 = mass.iter().zip(&free).map(|(m, u)| m * u * u).sum();
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .max_iter(max_iterations)
+        .tol_gap_abs(tolerance * size.max(f64::MIN_POSITIVE))
+        .tol_gap_rel(tolerance)
+        .tol_feas(tolerance)
+        .build()
+        .map_err(|e| format!("COCD solver settings: {e}"))?;
+    let mut solver = DefaultSolver::new(&p_matrix, &q, &a_matrix, &b, &cones, settings)
+        .map_err(|e| format!("COCD problem rejected by the conic solver: {e:?}"))?;
+    solver.solve();
+    let solution = &solver.solution;
+    let reduced_accuracy = match solution.status {
+        SolverStatus::Solved => false,
+        SolverStatus::AlmostSolved => true,
+        status => {
+            return Err(format!(
+                "the conic solver stopped with status {status:?} after {} iterations \
+                 ({} contacts, {} grains)",
+                solution.iterations,
+                contacts.len(),
+                bodies.len()
+            ))
+        }
+    };
+
+    let mut out = Solution {
+        velocity: Vec::with_capacity(bodies.len()),
+        spin: Vec::with_capacity(bodies.len()),
+        normal_impulse: vec![0.0; contacts.len()],
+        tangential_impulse: vec![Vec3::zeros(); contacts.len()],
+        iterations: solution.iterations,
+        reduced_accuracy,
+    };
+    let x = &solution.x;
+    for body in 0..bodies.len() {
+        let first = body * d;
+        let (v, w) = match dimension {
+            Dimension::Two => (
+                Vec3::new(x[first], x[first + 1], 0.0),
+                Vec3::new(0.0, 0.0, x[first + 2]),
+            ),
+            Dimension::Three => (
+                Vec3::new(x[first], x[first + 1], x[first + 2]),
+                Vec3::new(x[first + 3], x[first + 4], x[first + 5]),
+            ),
+        };
+        out.velocity.push(v * velocity);
+        out.spin.push(w * velocity / length);
+    }
+    let z = &solution.z;
+    let unit = scales.impulse();
+    for a in 0..contacts.len() {
+        let r = first_row[a];
+        let mu = contacts.friction[a];
+        let (t1, t2) = tangents(dimension, &contacts.normal[a]);
+        let (normal, tangential) = match kinds[a] {
+            Rows::Normal => (z[r], Vec3::zeros()),
+            Rows::HalfPlanes => (z[r] + z[r + 1], mu * (z[r] - z[r + 1]) * t1),
+            Rows::Cone => (z[r], mu * (z[r + 1] * t1 + z[r + 2] * t2)),
+        };
+        out.normal_impulse[a] = normal * unit;
+        out.tangential_impulse[a] = tangential * unit;
+    }
+    Ok(out)
+}

@@ -1,0 +1,351 @@
+//! Candidate contacts and the bodies they move (Martin et al. 2022, section
+//! 2 and 3.3).
+//!
+//! A candidate α joins grain i to grain j or to a wall when their gap D_α
+//! is below the threshold D. Its normal n points from j to i; the contact
+//! points are C_i = c_i − r_i n and C_j = c_j + r_j n, so the relative
+//! velocity of eq. 2 is
+//!   A_α u = v_i + ω_i × (−r_i n) − v_j − ω_j × (r_j n).
+//! An impulse P on i (and −P on j) changes v_i by P/m_i, ω_i by
+//! −r_i (n × P)/J_i, v_j by −P/m_j and ω_j by −r_j (n × P)/J_j (the
+//! transpose A_αᵀ of eq. 1).
+//!
+//! The unknowns are the moving grains that have at least one candidate
+//! ("bodies", one column each); glued grains and walls have infinite mass
+//! and do not move. A periodic image stands for its source grain.
+
+use grainflow_core::{Dimension, Vec3};
+use grainflow_dem::DemSystem;
+
+/// Column of a side that does not move (a wall or a glued grain).
+pub const STATIC: u32 = u32::MAX;
+
+/// What grain i of a contact touches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Partner {
+    /// Owned grain (the source, for a periodic image).
+    Grain(u32),
+    Wall(u32),
+}
+
+/// Candidate contacts as flat arrays.
+#[derive(Clone, Debug, Default)]
+pub struct ContactSet {
+    /// Owned grain i of each contact.
+    pub grain: Vec<u32>,
+    pub partner: Vec<Partner>,
+    /// Columns of i and j among the bodies (`STATIC` if it does not move).
+    pub body_i: Vec<u32>,
+    pub body_j: Vec<u32>,
+    /// Unit normal from j to i.
+    pub normal: Vec<Vec3>,
+    /// Gap D_α(c^k) between the surfaces (negative: overlap).
+    pub gap: Vec<f64>,
+    /// Lever arms r_i, r_j (0 for a wall).
+    pub lever_i: Vec<f64>,
+    pub lever_j: Vec<f64>,
+    /// Coulomb coefficient μ of the pair.
+    pub friction: Vec<f64>,
+}
+
+impl ContactSet {
+    pub fn len(&self) -> usize {
+        self.grain.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.grain.is_empty()
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn push(
+        &mut self,
+        grain: usize,
+        partner: Partner,
+        normal: Vec3,
+        gap: f64,
+        lever_i: f64,
+        lever_j: f64,
+        friction: f64,
+    ) {
+        self.grain.push(grain as u32);
+        self.partner.push(partner);
+        self.normal.push(normal);
+        self.gap.push(gap);
+        self.lever_i.push(lever_i);
+        self.lever_j.push(lever_j);
+        self.friction.push(friction);
+    }
+
+    /// Relative velocity A_α u at the contact points.
+    #[inline]
+    pub fn relative_velocity(&self, a: usize, velocity: &[Vec3], spin: &[Vec3]) -> Vec3 {
+        let n = self.normal[a];
+        let mut relative = Vec3::zeros();
+        let bi = self.body_i[a];
+        if bi != STATIC {
+            let b = bi as usize;
+            relative += velocity[b] - self.lever_i[a] * spin[b].cross(&n);
+        }
+        let bj = self.body_j[a];
+        if bj != STATIC {
+            let b = bj as usize;
+            relative -= velocity[b] + self.lever_j[a] * spin[b].cross(&n);
+        }
+        relative
+    }
+
+    /// Applies impulse `impulse` on i (and its opposite on j).
+    #[inline]
+    pub fn apply_impulse(
+        &self,
+        a: usize,
+        impulse: Vec3,
+        bodies: &Bodies,
+        velocity: &mut [Vec3],
+        spin: &mut [Vec3],
+    ) {
+        let n_cross_p = self.normal[a].cross(&impulse);
+        let bi = self.body_i[a];
+        if bi != STATIC {
+            let b = bi as usize;
+            velocity[b] += bodies.inverse_mass[b] * impulse;
+            spin[b] -= self.lever_i[a] * bodies.inverse_inertia[b] * n_cross_p;
+        }
+        let bj = self.body_j[a];
+        if bj != STATIC {
+            let b = bj as usize;
+            velocity[b] -= bodies.inverse_mass[b] * impulse;
+            spin[b] -= self.lever_j[a] * bodies.inverse_inertia[b] * n_cross_p;
+        }
+    }
+
+    /// Inverse effective masses of contact α along the normal and in the
+    /// tangent plane: A_α M⁻¹ A_αᵀ = w_n n nᵀ + w_t (I − n nᵀ) for spheres and
+    /// discs, so normal and tangential impulses do not couple locally.
+    #[inline]
+    pub fn inverse_effective_masses(&self, a: usize, bodies: &Bodies) -> (f64, f64) {
+        let (mut w_n, mut w_t) = (0.0, 0.0);
+        for (body, lever) in [
+            (self.body_i[a], self.lever_i[a]),
+            (self.body_j[a], self.lever_j[a]),
+        ] {
+            if body != STATIC {
+                let b = body as usize;
+                w_n += bodies.inverse_mass[b];
+                w_t += bodies.inverse_mass[b] + lever * lever * bodies.inverse_inertia[b];
+            }
+        }
+        (w_n, w_t)
+    }
+}
+
+/// The moving grains with candidate contacts, one column each.
+#[derive(Clone, Debug, Default)]
+pub struct Bodies {
+    /// Column of each owned grain (`STATIC` if glued or without candidate).
+    pub column: Vec<u32>,
+    /// Owned grain of each column.
+    pub grain: Vec<u32>,
+    pub radius: Vec<f64>,
+    pub mass: Vec<f64>,
+    pub inverse_mass: Vec<f64>,
+    pub inverse_inertia: Vec<f64>,
+    /// Velocity and spin at the start of the step, u^k.
+    pub start_velocity: Vec<Vec3>,
+    pub start_spin: Vec<Vec3>,
+    /// Velocity and spin without contacts, U = u^k + Δt M⁻¹ f_ext (eq. 10).
+    pub free_velocity: Vec<Vec3>,
+    pub free_spin: Vec<Vec3>,
+}
+
+impl Bodies {
+    pub fn len(&self) -> usize {
+        self.grain.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.grain.is_empty()
+    }
+}
+
+/// Units of a step's conic problem and of its checks, so that every
+/// quantity is of order one and the tolerances are relative: the mean
+/// diameter L and mass m̄ of the bodies, the time step, and a velocity V,
+/// the largest free speed of a body (at least |g| Δt; L/Δt when nothing
+/// moves).
+#[derive(Clone, Copy, Debug)]
+pub struct Scales {
+    pub length: f64,
+    pub mass: f64,
+    pub time: f64,
+    pub velocity: f64,
+}
+
+impl Scales {
+    pub fn of(bodies: &Bodies, dt: f64, gravity: &Vec3) -> Scales {
+        let n = bodies.len().max(1) as f64;
+        let length = 2.0 * bodies.radius.iter().sum::<f64>() / n;
+        let length = if length > 0.0 { length } else { 1.0 };
+        let mass = bodies.mass.iter().sum::<f64>() / n;
+        let fastest = (0..bodies.len())
+            .map(|b| {
+                bodies.free_velocity[b]
+                    .norm()
+                    .max(bodies.free_spin[b].norm() * bodies.radius[b])
+            })
+            .fold(gravity.norm() * dt, f64::max);
+        Scales {
+            length,
+            mass: if mass > 0.0 { mass } else { 1.0 },
+            time: dt,
+            velocity: if fastest > 0.0 { fastest } else { length / dt },
+        }
+    }
+
+    /// κ = V Δt / L: the gap, in units of L, that a speed V closes in a step.
+    pub fn gap_per_velocity(&self) -> f64 {
+        self.velocity * self.time / self.length
+    }
+
+    /// The unit of impulse of the program's dual variables, m̄ V κ.
+    pub fn impulse(&self) -> f64 {
+        self.mass * self.velocity * self.gap_per_velocity()
+    }
+}
+
+/// The candidate contacts of the current configuration with gap below
+/// `threshold`, and the bodies they move. `free_velocity`, `free_spin`:
+/// U for every owned grain.
+pub fn gather(
+    system: &DemSystem,
+    threshold: f64,
+    free_velocity: &[Vec3],
+    free_spin: &[Vec3],
+) -> (ContactSet, Bodies) {
+    let p = &system.particles;
+    let n_owned = p.n_owned;
+    let list = &system.neighbours;
+    let mut contacts = ContactSet::default();
+    for i in 0..n_owned {
+        for e in list.range(i) {
+            let j = list.partner[e] as usize;
+            let source = if j < n_owned {
+                if j < i {
+                    continue; // listed from j's side
+                }
+                j
+            } else {
+                let source = system.ghost_source(j);
+                // The pair across the periodic edge is listed from both
+                // grains; the lower one holds it.
+                if source <= i {
+                    continue;
+                }
+                source
+            };
+            if p.is_fixed(i) && p.is_fixed(source) {
+                continue;
+            }
+            let branch = p.position[i] - p.position[j];
+            let distance = branch.norm();
+            let gap = distance - p.radius[i] - p.radius[j];
+            if gap >= threshold {
+                continue;
+            }
+            contacts.push(
+                i,
+                Partner::Grain(source as u32),
+                branch / distance,
+                gap,
+                p.radius[i],
+                p.radius[j],
+                system.law.friction,
+            );
+        }
+        if p.is_fixed(i) {
+            continue;
+        }
+        for (w, wall) in system.walls.iter().enumerate() {
+            if !wall.is_present(system.time) {
+                continue;
+            }
+            let gap = wall.distance(&p.position[i]) - p.radius[i];
+            if gap < threshold {
+                contacts.push(
+                    i,
+                    Partner::Wall(w as u32),
+                    wall.normal,
+                    gap,
+                    p.radius[i],
+                    0.0,
+                    wall.friction,
+                );
+            }
+        }
+    }
+
+    let mut bodies = Bodies {
+        column: vec![STATIC; n_owned],
+        ..Bodies::default()
+    };
+    let mark = |k: usize, bodies: &mut Bodies| {
+        if !p.is_fixed(k) {
+            bodies.column[k] = 0;
+        }
+    };
+    for a in 0..contacts.len() {
+        mark(contacts.grain[a] as usize, &mut bodies);
+        if let Partner::Grain(j) = contacts.partner[a] {
+            mark(j as usize, &mut bodies);
+        }
+    }
+    for k in 0..n_owned {
+        if bodies.column[k] == STATIC {
+            continue;
+        }
+        bodies.column[k] = bodies.grain.len() as u32;
+        bodies.grain.push(k as u32);
+        bodies.radius.push(p.radius[k]);
+        bodies.mass.push(p.mass[k]);
+        bodies.inverse_mass.push(p.inverse_mass[k]);
+        bodies.inverse_inertia.push(p.inverse_inertia[k]);
+        bodies.start_velocity.push(p.velocity[k]);
+        bodies.start_spin.push(p.angular_velocity[k]);
+        bodies.free_velocity.push(free_velocity[k]);
+        bodies.free_spin.push(free_spin[k]);
+    }
+    contacts.body_i = contacts
+        .grain
+        .iter()
+        .map(|&i| bodies.column[i as usize])
+        .collect();
+    contacts.body_j = contacts
+        .partner
+        .iter()
+        .map(|partner| match partner {
+            Partner::Grain(j) => bodies.column[*j as usize],
+            Partner::Wall(_) => STATIC,
+        })
+        .collect();
+    (contacts, bodies)
+}
+
+/// Unit tangents (t1, t2) completing n to an orthonormal basis; in 2D t1
+/// lies in the plane and t2 is unused.
+pub fn tangents(dimension: Dimension, n: &Vec3) -> (Vec3, Vec3) {
+    match dimension {
+        Dimension::Two => (Vec3::new(-n.y, n.x, 0.0), Vec3::zeros()),
+        Dimension::Three => {
+            let axis = if n.x.abs() <= n.y.abs() && n.x.abs() <= n.z.abs() {
+                Vec3::x()
+            } else if n.y.abs() <= n.z.abs() {
+                Vec3::y()
+            } else {
+                Vec3::z()
+            };
+            let t1 = n.cross(&axis).normalize();
+            (t1, n.cross(&t1))
+        }
+    }
+}

@@ -1,0 +1,270 @@
+//! One hard-contact time step over a [`DemSystem`]'s grains, walls and
+//! pair list (Martin et al. 2022, eq. 5–9):
+//! 1. U = u^k + Δt M⁻¹ f_ext for every grain (gravity, external loads);
+//! 2. candidates: gaps below the threshold D, widened to what the fastest
+//!    grains can close within the step (the list is rebuilt if it does not
+//!    reach that far);
+//! 3. u^{k+1} and the impulses: COCD or NSCD;
+//! 4. the contact law's residual at the solution;
+//! 5. c^{k+1} = c^k + Δt v^{k+1}; the largest overlap after the move.
+
+use crate::certificate;
+use crate::cocd::{self, Solution};
+use crate::contacts::{self, Partner, Scales, STATIC};
+use crate::nscd;
+use grainflow_core::Vec3;
+use grainflow_dem::DemSystem;
+use std::collections::HashMap;
+use std::time::Instant;
+
+/// The scheme and its parameter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// Convex optimization contact dynamics (inelastic).
+    Cocd,
+    /// Non-smooth contact dynamics with Newton's restitution e.
+    Nscd { restitution: f64 },
+}
+
+/// What one step did and how well its contact law holds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StepReport {
+    /// Candidate contacts and those that carry a force.
+    pub candidates: usize,
+    pub closed: usize,
+    /// Interior-point iterations (COCD) or Gauss–Seidel sweeps (NSCD).
+    pub iterations: u32,
+    /// Whether the solver stopped short of the tolerance (COCD at reduced
+    /// accuracy, NSCD at its sweep limit).
+    pub unconverged: bool,
+    /// Largest complementarity residual of the contact law and largest
+    /// violation of Coulomb's cone (see [`certificate`]).
+    pub complementarity: f64,
+    pub coulomb_violation: f64,
+    /// Largest overlap after the move over the mean diameter.
+    pub penetration: f64,
+    /// Candidate threshold used [m].
+    pub threshold: f64,
+    pub seconds_solve: f64,
+    pub non_finite: bool,
+}
+
+/// Hard contact between the grains of a dry scene.
+#[derive(Clone, Debug)]
+pub struct HardContact {
+    pub method: Method,
+    /// ε: the solver's relative tolerance (COCD) or the residual at which
+    /// Gauss–Seidel stops (NSCD).
+    pub tolerance: f64,
+    /// Interior-point iterations (COCD) or sweeps (NSCD) allowed per step.
+    pub max_iterations: u32,
+    /// Candidate threshold D on the gap [m] (section 3.3).
+    pub threshold: f64,
+    /// NSCD warm start: the impulses of the last step's contacts, by the
+    /// ids of their grains (u64::MAX − wall for a wall).
+    previous_impulses: HashMap<(u64, u64), (f64, Vec3)>,
+}
+
+impl HardContact {
+    pub fn new(method: Method, tolerance: f64, max_iterations: u32, threshold: f64) -> Self {
+        HardContact {
+            method,
+            tolerance,
+            max_iterations,
+            threshold,
+            previous_impulses: HashMap::new(),
+        }
+    }
+
+    /// Lists pairs within the threshold from now on (call before the first
+    /// step, or the first step rebuilds the list).
+    pub fn prepare(&self, system: &mut DemSystem) {
+        if system.listing_gap < self.threshold {
+            system.listing_gap = self.threshold;
+            system.rebuild();
+        }
+    }
+
+    /// Advances the grains by one step of size `dt`. An error names why the
+    /// step could not be solved (the grains are left at the start of the
+    /// step).
+    pub fn step(&mut self, system: &mut DemSystem, dt: f64) -> Result<StepReport, String> {
+        // 1. Free velocities.
+        let n = system.particles.n_owned;
+        let gravity = system.domain.gravity;
+        let (free_velocity, free_spin) = {
+            let p = &system.particles;
+            let mut velocity = Vec::with_capacity(n);
+            let mut spin = Vec::with_capacity(n);
+            for k in 0..n {
+                velocity.push(if p.is_fixed(k) {
+                    Vec3::zeros()
+                } else {
+                    p.velocity[k] + dt * (gravity + p.inverse_mass[k] * p.external_force[k])
+                });
+                spin.push(p.angular_velocity[k] + dt * p.inverse_inertia[k] * p.external_torque[k]);
+            }
+            (velocity, spin)
+        };
+
+        // 2. Candidates: a pair approaches by at most 2 v_max Δt within the
+        // step; 1.5 for the speed the contacts themselves may add.
+        let fastest = free_velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let threshold = self.threshold.max(3.0 * fastest * dt);
+        if threshold > system.neighbours.gap {
+            system.listing_gap = 2.0 * threshold;
+            system.rebuild();
+            return self.step(system, dt);
+        }
+        let (contacts, bodies) = contacts::gather(system, threshold, &free_velocity, &free_spin);
+        let scales = Scales::of(&bodies, dt, &gravity);
+
+        // 3. Solve.
+        let started = Instant::now();
+        let (solution, bounds, unconverged) = match self.method {
+            Method::Cocd => {
+                let bounds: Vec<f64> = contacts.gap.iter().map(|d| -d / dt).collect();
+                let solution = if contacts.is_empty() {
+                    Solution {
+                        velocity: bodies.free_velocity.clone(),
+                        spin: bodies.free_spin.clone(),
+                        ..Solution::default()
+                    }
+                } else {
+                    cocd::solve(
+                        &contacts,
+                        &bodies,
+                        system.dimension(),
+                        &scales,
+                        self.tolerance,
+                        self.max_iterations,
+                    )?
+                };
+                let reduced = solution.reduced_accuracy;
+                (solution, bounds, reduced)
+            }
+            Method::Nscd { restitution } => {
+                let bounds = nscd::normal_bounds(&contacts, &bodies, dt, restitution);
+                let ids = &system.particles.id;
+                let key = |a: usize| pair_key(ids, contacts.grain[a], contacts.partner[a]);
+                let initial: Vec<(f64, Vec3)> = (0..contacts.len())
+                    .map(|a| {
+                        let (key, sign) = key(a);
+                        self.previous_impulses
+                            .get(&key)
+                            .map_or((0.0, Vec3::zeros()), |&(p_n, p_t)| (p_n, sign * p_t))
+                    })
+                    .collect();
+                let (solution, converged) = nscd::solve(
+                    &contacts,
+                    &bodies,
+                    &scales,
+                    &bounds,
+                    &initial,
+                    self.tolerance,
+                    self.max_iterations,
+                );
+                self.previous_impulses = (0..contacts.len())
+                    .filter(|&a| solution.normal_impulse[a] > 0.0)
+                    .map(|a| {
+                        let (key, sign) = key(a);
+                        let impulses = (
+                            solution.normal_impulse[a],
+                            sign * solution.tangential_impulse[a],
+                        );
+                        (key, impulses)
+                    })
+                    .collect();
+                (solution, bounds, !converged)
+            }
+        };
+        let seconds_solve = started.elapsed().as_secs_f64();
+
+        // 4. The contact law at the solution.
+        let residual = certificate::contact_law_residual(
+            &contacts,
+            &scales,
+            &bounds,
+            &solution.velocity,
+            &solution.spin,
+            &solution.normal_impulse,
+            &solution.tangential_impulse,
+            matches!(self.method, Method::Nscd { .. }),
+        );
+
+        // End-of-step velocities; the force and torque written out are the
+        // step's mean ones, m (u^{k+1} − u^k)/Δt (contacts and gravity).
+        let p = &mut system.particles;
+        for k in 0..n {
+            if p.is_fixed(k) {
+                continue;
+            }
+            let column = bodies.column[k];
+            let (v, w) = if column == STATIC {
+                (free_velocity[k], free_spin[k])
+            } else {
+                (
+                    solution.velocity[column as usize],
+                    solution.spin[column as usize],
+                )
+            };
+            p.force[k] = p.mass[k] * (v - p.velocity[k]) / dt;
+            p.torque[k] = (w - p.angular_velocity[k]) / (p.inverse_inertia[k] * dt);
+            p.velocity[k] = v;
+            p.angular_velocity[k] = w;
+        }
+
+        // Contacts that carry a force (for coordination and rest tests).
+        let largest_impulse = solution.normal_impulse.iter().cloned().fold(0.0, f64::max);
+        let carries = |a: usize| solution.normal_impulse[a] > 1e-9 * largest_impulse;
+        let mut particle_contacts = vec![0u32; n];
+        let mut walls_touched = vec![0u64; n];
+        let mut closed = 0;
+        for a in (0..contacts.len()).filter(|&a| carries(a)) {
+            closed += 1;
+            let i = contacts.grain[a] as usize;
+            match contacts.partner[a] {
+                Partner::Grain(j) => {
+                    particle_contacts[i] += 1;
+                    particle_contacts[j as usize] += 1;
+                }
+                Partner::Wall(w) => walls_touched[i] |= 1u64 << w.min(63),
+            }
+        }
+        system.record_contacts(particle_contacts, walls_touched);
+
+        // 5. Move.
+        let non_finite = system.drift(dt);
+        let penetration = if non_finite {
+            f64::NAN
+        } else {
+            certificate::largest_overlap(system, scales.length)
+        };
+        Ok(StepReport {
+            candidates: contacts.len(),
+            closed,
+            iterations: solution.iterations,
+            unconverged,
+            complementarity: residual.complementarity,
+            coulomb_violation: residual.coulomb,
+            penetration,
+            threshold,
+            seconds_solve,
+            non_finite,
+        })
+    }
+}
+
+/// Identity of a contact that survives reordering: the ids of its grains,
+/// lower first, or of its grain and wall; and the sign that turns an
+/// impulse on grain i into one on the grain of lower id.
+fn pair_key(ids: &[u64], grain: u32, partner: Partner) -> ((u64, u64), f64) {
+    let i = ids[grain as usize];
+    match partner {
+        Partner::Grain(j) => {
+            let j = ids[j as usize];
+            ((i.min(j), i.max(j)), if i <= j { 1.0 } else { -1.0 })
+        }
+        Partner::Wall(w) => ((i, u64::MAX - w as u64), 1.0),
+    }
+}
