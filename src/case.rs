@@ -293,28 +293,33 @@ pub enum BlockSection {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSection {
-    /// "soft" (DEM). Hard contact ("cocd", "nscd") is not built yet.
+    /// "soft" (the DEM of Izard et al. 2014), or hard contact: "cocd"
+    /// (convex optimization contact dynamics) or "nscd" (non-smooth
+    /// contact dynamics), Martin et al. 2022. The rest of a case is the same
+    /// for the three.
     pub model: String,
-    /// Normal restitution e_n and contact time t_c [s] (eq. 17–18)...
+    /// Normal restitution e_n (soft: with contact_time; nscd: Newton's
+    /// restitution, default 0; cocd is inelastic).
     #[serde(default)]
     pub restitution: Option<f64>,
+    /// Soft: contact time t_c [s] (eq. 17–18) ...
     #[serde(default)]
     pub contact_time: Option<f64>,
     /// ... turned into k_n, γ_n by "exact" (restitution exactly e_n with the
-    /// no-attraction clamp) or "paper" (eq. 17–18 as printed).
-    #[serde(default = "default_calibration")]
-    pub calibration: String,
-    /// Or the same k_n [N/m] and γ_n [N s/m] for every pair.
+    /// no-attraction clamp, the default) or "paper" (eq. 17–18 as printed).
+    #[serde(default)]
+    pub calibration: Option<String>,
+    /// Soft: or the same k_n [N/m] and γ_n [N s/m] for every pair.
     #[serde(default)]
     pub stiffness: Option<f64>,
     #[serde(default)]
     pub damping: Option<f64>,
-    /// k_t / k_n.
-    #[serde(default = "default_tangential_ratio")]
-    pub tangential_ratio: f64,
+    /// Soft: k_t / k_n (default 0.2).
+    #[serde(default)]
+    pub tangential_ratio: Option<f64>,
     /// Coulomb coefficient between particles.
     pub friction: f64,
-    /// Rolling resistance μ_r (torque μ_r R* F_n against rolling; 0: none).
+    /// Soft: rolling resistance μ_r (torque μ_r R* F_n against rolling; 0: none).
     #[serde(default)]
     pub rolling_friction: f64,
     /// Coulomb coefficient with walls (default: `friction`).
@@ -323,14 +328,35 @@ pub struct ContactSection {
     /// Verlet skin [m] (default: 0.1 mean diameter).
     #[serde(default)]
     pub skin: Option<f64>,
+    /// Hard: the solver tolerance ε (cocd: the interior point's relative
+    /// gap and feasibility, default 1e-8; nscd: the residual of the contact
+    /// law at which Gauss–Seidel stops, default 1e-6).
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+    /// Hard: interior-point iterations (default 200) or Gauss–Seidel
+    /// sweeps (default 5000) allowed per step.
+    #[serde(default)]
+    pub max_iterations: Option<u32>,
+    /// Hard: candidate threshold D [m]: pairs closer than this enter the
+    /// step's problem (default 0.1 mean diameter; widened to what the
+    /// fastest grain closes in a step).
+    #[serde(default)]
+    pub threshold: Option<f64>,
 }
 
-fn default_calibration() -> String {
-    "exact".into()
-}
+impl ContactSection {
+    /// Whether the model is hard contact (cocd or nscd).
+    pub fn is_hard(&self) -> bool {
+        self.model == "cocd" || self.model == "nscd"
+    }
 
-fn default_tangential_ratio() -> f64 {
-    0.2
+    pub fn calibration(&self) -> &str {
+        self.calibration.as_deref().unwrap_or("exact")
+    }
+
+    pub fn tangential_ratio(&self) -> f64 {
+        self.tangential_ratio.unwrap_or(0.2)
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -476,6 +502,12 @@ pub enum AnalysisSection {
     /// Runout (R∞ − R0)/R0 and aspect ratio H0/R0 of a symmetric collapse
     /// released by removing the walls named `gate`.
     ColumnCollapse,
+    /// Grains at rest in a box (Martin et al. 2022, Fig. 3): the largest
+    /// ratio of kinetic to potential energy after they settle.
+    StaticBox {
+        /// Time given to the grains to settle from their placement [s].
+        settle: f64,
+    },
     /// Fluid: relative L2 error of the velocity against the exact decaying
     /// solution of `fluid.initial` (Taylor–Green or Beltrami) at the end.
     ExactDecay,
@@ -631,7 +663,7 @@ impl Case {
                 "analysis.kind",
                 "(a fluid analysis)",
                 "a scene of grains allows \"binary_collision\", \"bouncing\", \"silo\", \
-                 \"column_collapse\" or, in a fluid, \"falling_sphere\"",
+                 \"column_collapse\", \"static_box\" or, in a fluid, \"falling_sphere\"",
             ));
         }
         if self.fluid.is_none()
@@ -805,20 +837,39 @@ impl Case {
             }
         }
         match c.model.as_str() {
-            "soft" => {}
-            "cocd" | "nscd" => {
-                return Err(invalid(
-                    "contact.model",
-                    &c.model,
-                    "hard contact (cocd, nscd) is not available yet; allowed now: \"soft\"",
-                ))
-            }
+            "soft" => self.validate_soft_contact(c)?,
+            "cocd" | "nscd" => self.validate_hard_contact(c)?,
             other => {
                 return Err(invalid(
                     "contact.model",
                     other,
                     "allowed: \"soft\", \"cocd\", \"nscd\"",
                 ))
+            }
+        }
+        non_negative("contact.friction", c.friction)?;
+        non_negative("contact.rolling_friction", c.rolling_friction)?;
+        if let Some(f) = c.wall_friction {
+            non_negative("contact.wall_friction", f)?;
+        }
+        if let Some(s) = c.skin {
+            positive("contact.skin", s)?;
+        }
+        Ok(())
+    }
+
+    fn validate_soft_contact(&self, c: &ContactSection) -> Result<(), CaseError> {
+        for (key, given) in [
+            ("contact.tolerance", c.tolerance.is_some()),
+            ("contact.max_iterations", c.max_iterations.is_some()),
+            ("contact.threshold", c.threshold.is_some()),
+        ] {
+            if given {
+                return Err(invalid(
+                    key,
+                    "(given)",
+                    "a hard-contact key: allowed only with contact.model = \"cocd\" or \"nscd\"",
+                ));
             }
         }
         match (c.restitution, c.contact_time, c.stiffness, c.damping) {
@@ -830,7 +881,7 @@ impl Case {
                         "allowed: 0 < restitution ≤ 1",
                     ));
                 }
-                if c.calibration == "exact"
+                if c.calibration() == "exact"
                     && e <= grainflow_dem::contact_law::MIN_EXACT_RESTITUTION
                 {
                     return Err(invalid(
@@ -856,21 +907,95 @@ impl Case {
                 ))
             }
         }
-        if c.calibration != "exact" && c.calibration != "paper" {
+        if c.calibration() != "exact" && c.calibration() != "paper" {
             return Err(invalid(
                 "contact.calibration",
-                &c.calibration,
+                c.calibration(),
                 "allowed: \"exact\" or \"paper\"",
             ));
         }
-        non_negative("contact.tangential_ratio", c.tangential_ratio)?;
-        non_negative("contact.friction", c.friction)?;
-        non_negative("contact.rolling_friction", c.rolling_friction)?;
-        if let Some(f) = c.wall_friction {
-            non_negative("contact.wall_friction", f)?;
+        non_negative("contact.tangential_ratio", c.tangential_ratio())?;
+        Ok(())
+    }
+
+    /// Hard contact: a dry scene, a fixed time step, and none of the soft
+    /// law's keys.
+    fn validate_hard_contact(&self, c: &ContactSection) -> Result<(), CaseError> {
+        if self.fluid.is_some() {
+            return Err(invalid(
+                "contact.model",
+                &c.model,
+                "hard contact runs in dry scenes; grains in a fluid allowed: \"soft\"",
+            ));
         }
-        if let Some(s) = c.skin {
-            positive("contact.skin", s)?;
+        for (key, given) in [
+            ("contact.contact_time", c.contact_time.is_some()),
+            ("contact.calibration", c.calibration.is_some()),
+            ("contact.stiffness", c.stiffness.is_some()),
+            ("contact.damping", c.damping.is_some()),
+            ("contact.tangential_ratio", c.tangential_ratio.is_some()),
+            ("contact.rolling_friction", c.rolling_friction != 0.0),
+        ] {
+            if given {
+                return Err(invalid(
+                    key,
+                    "(given)",
+                    &format!(
+                        "a soft-contact key: not used by contact.model = \"{}\" (grains do not overlap)",
+                        c.model
+                    ),
+                ));
+            }
+        }
+        if let Some(e) = c.restitution {
+            if c.model == "cocd" {
+                return Err(invalid(
+                    "contact.restitution",
+                    e,
+                    "COCD is inelastic (Martin et al. 2022, eq. 5–9): leave restitution out, or use \"nscd\"",
+                ));
+            }
+            if !(0.0..=1.0).contains(&e) {
+                return Err(invalid(
+                    "contact.restitution",
+                    e,
+                    "allowed: 0 ≤ restitution ≤ 1",
+                ));
+            }
+        }
+        if let Some(tolerance) = c.tolerance {
+            if !(tolerance > 0.0 && tolerance < 1.0) {
+                return Err(invalid(
+                    "contact.tolerance",
+                    tolerance,
+                    "allowed: 0 < tolerance < 1",
+                ));
+            }
+        }
+        if c.max_iterations == Some(0) {
+            return Err(invalid(
+                "contact.max_iterations",
+                0,
+                "allowed: at least 1",
+            ));
+        }
+        if let Some(threshold) = c.threshold {
+            positive("contact.threshold", threshold)?;
+        }
+        if self.time.dt.is_none() {
+            return Err(invalid(
+                "time.dt",
+                "(missing)",
+                "hard contact has no contact time: give time.dt (e.g. 1e-3 s for 2D columns, \
+                 Martin et al. 2022 section 3.4.1)",
+            ));
+        }
+        if self.time.dt_over_contact_time.is_some() {
+            return Err(invalid(
+                "time.dt_over_contact_time",
+                "(given)",
+                "hard contact has no contact time: allowed: time.dt",
+            ));
         }
         Ok(())
     }
@@ -1239,6 +1364,15 @@ impl Case {
         }
         if let Some(AnalysisSection::Silo { slab, .. }) = &self.analysis {
             positive("analysis.slab", *slab)?;
+        }
+        if let Some(AnalysisSection::StaticBox { settle }) = &self.analysis {
+            if !(*settle >= 0.0 && *settle < self.time.end) {
+                return Err(invalid(
+                    "analysis.settle",
+                    settle,
+                    "allowed: 0 ≤ settle < time.end",
+                ));
+            }
         }
         if matches!(self.analysis, Some(AnalysisSection::ColumnCollapse))
             && !self.walls.iter().any(|w| w.remove_at.is_some())

@@ -13,6 +13,7 @@ pub mod case;
 pub mod check;
 pub mod coupled_analysis;
 pub mod coupled_simulation;
+pub mod dry_stepping;
 pub mod fluid_scene;
 pub mod fluid_simulation;
 pub mod output;

@@ -1,6 +1,7 @@
 //! Scene assembly: turns a validated [`Case`] into a [`DemSystem`].
 
 use crate::case::{BlockSection, Case};
+use grainflow_contact::{HardContact, Method};
 use grainflow_core::{Dimension, Domain, Vec3};
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
 use grainflow_dem::particles::NewParticle;
@@ -46,9 +47,12 @@ pub fn domain(case: &Case) -> Domain {
 
 pub fn contact_law(case: &Case) -> ContactLaw {
     let c = case.contact_section();
+    if c.is_hard() {
+        return ContactLaw::rigid(c.friction);
+    }
     let normal = match (c.restitution, c.contact_time, c.stiffness, c.damping) {
         (Some(e), Some(tc), _, _) => {
-            let calibration = if c.calibration == "paper" {
+            let calibration = if c.calibration() == "paper" {
                 NormalCalibration::Paper
             } else {
                 NormalCalibration::Exact
@@ -63,7 +67,7 @@ pub fn contact_law(case: &Case) -> ContactLaw {
     };
     ContactLaw {
         normal,
-        tangential_ratio: c.tangential_ratio,
+        tangential_ratio: c.tangential_ratio(),
         friction: c.friction,
         rolling_friction: c.rolling_friction,
     }
@@ -334,6 +338,29 @@ pub fn contact_gap(case: &Case) -> f64 {
     cells * smallest
 }
 
+/// Hard contact (Martin et al. 2022), for `contact.model` = cocd or nscd.
+pub fn hard_contact(case: &Case) -> Option<HardContact> {
+    let c = case.contact_section();
+    let method = match c.model.as_str() {
+        "cocd" => Method::Cocd,
+        "nscd" => Method::Nscd {
+            restitution: c.restitution.unwrap_or(0.0),
+        },
+        _ => return None,
+    };
+    let (tolerance, iterations) = match method {
+        Method::Cocd => (1e-8, 200),
+        Method::Nscd { .. } => (1e-6, 5000),
+    };
+    Some(HardContact::new(
+        method,
+        c.tolerance.unwrap_or(tolerance),
+        c.max_iterations.unwrap_or(iterations),
+        c.threshold
+            .unwrap_or(0.2 * case.particles_section().radius),
+    ))
+}
+
 /// The scene's DEM system, with its particles placed.
 pub fn build(case: &Case) -> Result<DemSystem, String> {
     let domain = domain(case);
@@ -344,6 +371,9 @@ pub fn build(case: &Case) -> Result<DemSystem, String> {
     // and the contact gap.
     system.lubrication = lubrication(case);
     system.contact_gap = contact_gap(case);
+    if let Some(hard) = hard_contact(case) {
+        system.listing_gap = hard.threshold;
+    }
     system.add_particles(&placed);
     Ok(system)
 }

@@ -5,6 +5,7 @@ use crate::analysis::Analysis;
 use crate::case::Case;
 use crate::output::Outputs;
 use crate::stability::{self, TimeStepVerdict};
+use crate::dry_stepping::DryStepper;
 use crate::{coupled_simulation, fluid_simulation, scene, RunError};
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
@@ -93,12 +94,11 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     }
     let started = Instant::now();
     let mut system = scene::build(case).map_err(RunError::Case)?;
-    let (dt, contact_time) = time_step(case, &system);
-    let warning = check_time_step(dt, contact_time)?;
+    let (mut stepper, dt, warning) = DryStepper::new(case, &mut system)?;
 
     let mut outputs = Outputs::create(out, case).map_err(RunError::Io)?;
     outputs.run.log(&format!(
-        "grainflow {}: {} particles ({} glued), {}D soft-sphere DEM, dry scene (no fluid grid)",
+        "grainflow {}: {} particles ({} glued), {}D, dry scene (no fluid grid)",
         env!("CARGO_PKG_VERSION"),
         system.particles.n_owned,
         (0..system.particles.n_owned)
@@ -106,10 +106,7 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
             .count(),
         system.domain.dimension.count()
     ));
-    outputs.run.log(&format!(
-        "dt = {dt:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s)",
-        dt / contact_time
-    ));
+    outputs.run.log(&stepper.describe(dt));
     if let Some(w) = &warning {
         outputs.run.log(w);
         eprintln!("{w}");
@@ -144,28 +141,9 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     next_tracked += tracked_interval;
 
     while system.time < end - 0.5 * dt {
-        let diagnostics = system.step(dt);
-        analysis.after_step(&system);
-
-        if diagnostics.non_finite {
-            failure = Some(format!(
-                "unstable at t = {:.6e} s (step {}): a position or velocity is not finite; \
-                 reduce time.dt (now {:.3} t_c)",
-                system.time,
-                system.steps,
-                dt / contact_time
-            ));
-        } else if diagnostics.max_overlap_ratio > case.time.overlap_limit {
-            failure = Some(format!(
-                "unstable at t = {:.6e} s (step {}): overlap reached {:.3} of a radius, beyond \
-                 time.overlap_limit = {}; the contacts are too soft for the load or the time step \
-                 is too large (dt = {:.3} t_c)",
-                system.time,
-                system.steps,
-                diagnostics.max_overlap_ratio,
-                case.time.overlap_limit,
-                dt / contact_time
-            ));
+        failure = stepper.step(&mut system, dt, case.time.overlap_limit);
+        if failure.is_none() {
+            analysis.after_step(&system);
         }
         if failure.is_some() {
             break;
@@ -231,6 +209,7 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     if failure.is_none() {
         metrics = analysis.finish(&system, out).map_err(RunError::Io)?;
     }
+    metrics.extend(stepper.metrics());
     let particle_steps = system.particles.n_owned as f64 * system.steps as f64;
     let json = json!({
         "analysis": case.analysis,
@@ -240,7 +219,8 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
         "dimension": system.domain.dimension.count(),
         "steps": system.steps,
         "dt": dt,
-        "contact_time": contact_time,
+        "contact_model": case.contact_section().model,
+        "contact_time": stepper.contact_time(),
         "simulated_time": system.time,
         "wall_seconds": wall_seconds,
         "particle_steps_per_second": particle_steps / wall_seconds,

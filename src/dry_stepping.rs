@@ -1,0 +1,192 @@
+//! How the grains of a dry scene advance: the soft DEM (velocity Verlet at
+//! a fraction of the contact time) or hard contact (COCD or NSCD at a fixed
+//! step), and what each checks after every step.
+
+use crate::case::Case;
+use crate::simulation::{check_time_step, time_step};
+use crate::{scene, RunError};
+use grainflow_contact::{HardContact, Method, StepReport};
+use grainflow_dem::DemSystem;
+use serde_json::{json, Map, Value};
+
+/// The soft or hard stepping of a dry scene.
+pub enum DryStepper {
+    Soft {
+        contact_time: f64,
+    },
+    Hard {
+        contact: HardContact,
+        record: HardRecord,
+    },
+}
+
+/// Run-wide record of the hard-contact steps: their certificates, solver
+/// effort and size.
+#[derive(Clone, Debug, Default)]
+pub struct HardRecord {
+    pub steps: u64,
+    pub max_coulomb_violation: f64,
+    pub max_penetration: f64,
+    pub max_complementarity: f64,
+    pub iterations: u64,
+    pub max_iterations: u32,
+    pub candidates: u64,
+    pub closed: u64,
+    pub unconverged_steps: u64,
+    pub seconds_solve: f64,
+}
+
+impl HardRecord {
+    fn add(&mut self, report: &StepReport) {
+        self.steps += 1;
+        self.max_coulomb_violation = self.max_coulomb_violation.max(report.coulomb_violation);
+        self.max_penetration = self.max_penetration.max(report.penetration);
+        self.max_complementarity = self.max_complementarity.max(report.complementarity);
+        self.iterations += report.iterations as u64;
+        self.max_iterations = self.max_iterations.max(report.iterations);
+        self.candidates += report.candidates as u64;
+        self.closed += report.closed as u64;
+        self.unconverged_steps += u64::from(report.unconverged);
+        self.seconds_solve += report.seconds_solve;
+    }
+
+    /// The metrics of `summary.json`.
+    pub fn metrics(&self) -> Map<String, Value> {
+        let steps = self.steps.max(1) as f64;
+        let mut metrics = Map::new();
+        for (key, value) in [
+            ("max_coulomb_violation", json!(self.max_coulomb_violation)),
+            ("max_penetration", json!(self.max_penetration)),
+            ("max_complementarity", json!(self.max_complementarity)),
+            ("mean_iterations", json!(self.iterations as f64 / steps)),
+            ("max_iterations", json!(self.max_iterations)),
+            ("mean_candidates", json!(self.candidates as f64 / steps)),
+            ("mean_closed_contacts", json!(self.closed as f64 / steps)),
+            ("unconverged_steps", json!(self.unconverged_steps)),
+            ("seconds_per_solve", json!(self.seconds_solve / steps)),
+        ] {
+            metrics.insert(key.into(), value);
+        }
+        metrics
+    }
+}
+
+impl DryStepper {
+    /// The stepper of a case, its time step, and a warning to log. Refuses
+    /// (before anything is written) a soft time step past the stability
+    /// limit.
+    pub fn new(case: &Case, system: &mut DemSystem) -> Result<(Self, f64, Option<String>), RunError> {
+        match scene::hard_contact(case) {
+            Some(contact) => {
+                contact.prepare(system);
+                let dt = case.time.dt.expect("validated: hard contact has time.dt");
+                let stepper = DryStepper::Hard {
+                    contact,
+                    record: HardRecord::default(),
+                };
+                Ok((stepper, dt, None))
+            }
+            None => {
+                let (dt, contact_time) = time_step(case, system);
+                let warning = check_time_step(dt, contact_time)?;
+                Ok((DryStepper::Soft { contact_time }, dt, warning))
+            }
+        }
+    }
+
+    /// One line for the log naming the model and its step.
+    pub fn describe(&self, dt: f64) -> String {
+        match self {
+            DryStepper::Soft { contact_time } => format!(
+                "soft-sphere DEM; dt = {dt:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s)",
+                dt / contact_time
+            ),
+            DryStepper::Hard { contact, .. } => {
+                let scheme = match contact.method {
+                    Method::Cocd => "COCD (conic program per step, Clarabel)".to_string(),
+                    Method::Nscd { restitution } => {
+                        format!("NSCD (Gauss-Seidel, restitution {restitution})")
+                    }
+                };
+                format!(
+                    "hard contact, {scheme}; dt = {dt:.4e} s, tolerance {:.1e}, candidate threshold {:.3e} m",
+                    contact.tolerance, contact.threshold
+                )
+            }
+        }
+    }
+
+    /// Advances one step; returns the diagnosis if the run must stop.
+    pub fn step(&mut self, system: &mut DemSystem, dt: f64, overlap_limit: f64) -> Option<String> {
+        match self {
+            DryStepper::Soft { contact_time } => {
+                let diagnostics = system.step(dt);
+                if diagnostics.non_finite {
+                    Some(format!(
+                        "unstable at t = {:.6e} s (step {}): a position or velocity is not finite; \
+                         reduce time.dt (now {:.3} t_c)",
+                        system.time,
+                        system.steps,
+                        dt / *contact_time
+                    ))
+                } else if diagnostics.max_overlap_ratio > overlap_limit {
+                    Some(format!(
+                        "unstable at t = {:.6e} s (step {}): overlap reached {:.3} of a radius, beyond \
+                         time.overlap_limit = {overlap_limit}; the contacts are too soft for the load or \
+                         the time step is too large (dt = {:.3} t_c)",
+                        system.time,
+                        system.steps,
+                        diagnostics.max_overlap_ratio,
+                        dt / *contact_time
+                    ))
+                } else {
+                    None
+                }
+            }
+            DryStepper::Hard { contact, record } => match contact.step(system, dt) {
+                Err(why) => Some(format!(
+                    "hard-contact step failed at t = {:.6e} s (step {}): {why}; try a smaller \
+                     time.dt or a looser contact.tolerance",
+                    system.time,
+                    system.steps + 1
+                )),
+                Ok(report) => {
+                    record.add(&report);
+                    if report.non_finite {
+                        Some(format!(
+                            "unstable at t = {:.6e} s (step {}): a position or velocity is not finite",
+                            system.time, system.steps
+                        ))
+                    } else if 2.0 * report.penetration > overlap_limit {
+                        Some(format!(
+                            "at t = {:.6e} s (step {}) grains overlap by {:.3} of a radius, beyond \
+                             time.overlap_limit = {overlap_limit}: the solver did not hold the \
+                             non-penetration constraint (tighten contact.tolerance)",
+                            system.time,
+                            system.steps,
+                            2.0 * report.penetration
+                        ))
+                    } else {
+                        None
+                    }
+                }
+            },
+        }
+    }
+
+    /// The soft contact time (None for hard contact).
+    pub fn contact_time(&self) -> Option<f64> {
+        match self {
+            DryStepper::Soft { contact_time } => Some(*contact_time),
+            DryStepper::Hard { .. } => None,
+        }
+    }
+
+    /// The hard-contact metrics of `summary.json` (empty for soft contact).
+    pub fn metrics(&self) -> Map<String, Value> {
+        match self {
+            DryStepper::Soft { .. } => Map::new(),
+            DryStepper::Hard { record, .. } => record.metrics(),
+        }
+    }
+}
