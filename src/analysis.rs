@@ -33,8 +33,8 @@ impl Analysis {
                 slab: *slab,
                 exclude_bottom: *exclude_bottom,
             },
-            Some(AnalysisSection::ColumnCollapse) => {
-                Analysis::ColumnCollapse(ColumnCollapse::new(system))
+            Some(AnalysisSection::ColumnCollapse { profile_times }) => {
+                Analysis::ColumnCollapse(ColumnCollapse::new(system, profile_times))
             }
             Some(AnalysisSection::StaticBox { settle }) => {
                 Analysis::StaticBox(StaticBox::new(*settle))
@@ -71,7 +71,7 @@ impl Analysis {
                 slab,
                 exclude_bottom,
             } => silo(system, *slab, *exclude_bottom, out),
-            Analysis::ColumnCollapse(c) => c.finish(system),
+            Analysis::ColumnCollapse(c) => c.finish(system, out),
             Analysis::StaticBox(b) => b.finish(out),
         }
     }
@@ -118,9 +118,8 @@ impl StaticBox {
     }
 
     fn finish(&self, out: &Path) -> std::io::Result<Map<String, Value>> {
-        let mut file = std::io::BufWriter::new(std::fs::File::create(
-            out.join("kinetic_to_potential.csv"),
-        )?);
+        let mut file =
+            std::io::BufWriter::new(std::fs::File::create(out.join("kinetic_to_potential.csv"))?);
         writeln!(file, "time,kinetic_to_potential")?;
         for (t, ratio) in &self.history {
             writeln!(file, "{t:.6e},{ratio:.6e}")?;
@@ -499,11 +498,18 @@ pub struct ColumnCollapse {
     release_time: f64,
     centre: f64,
     half_width: f64,
+    /// The sides the column spreads to from `centre`: both for a column
+    /// between two gates, +x for one against a back wall.
+    sides: Vec<f64>,
     initial_height: Option<f64>,
+    /// Times after the release at which to record the height profile, and
+    /// the profiles recorded: (time after release, x, height).
+    profile_times: Vec<f64>,
+    profiles: Vec<(f64, f64, f64)>,
 }
 
 impl ColumnCollapse {
-    fn new(system: &DemSystem) -> Self {
+    fn new(system: &DemSystem, profile_times: &[f64]) -> Self {
         let gates: Vec<_> = system
             .walls
             .iter()
@@ -515,19 +521,48 @@ impl ColumnCollapse {
             xs.iter().cloned().fold(f64::MAX, f64::min),
             xs.iter().cloned().fold(f64::MIN, f64::max),
         );
-        let (centre, half_width) = if gates.len() >= 2 {
-            (0.5 * (lo + hi), 0.5 * (hi - lo))
+        let (centre, half_width, sides) = if gates.len() >= 2 {
+            (0.5 * (lo + hi), 0.5 * (hi - lo), vec![-1.0, 1.0])
         } else {
             // One gate: the column stands against a fixed back wall at the
             // domain's lower x.
-            (system.domain.lower.x, hi - system.domain.lower.x)
+            (system.domain.lower.x, hi - system.domain.lower.x, vec![1.0])
         };
+        let mut profile_times = profile_times.to_vec();
+        profile_times.sort_by(|a, b| b.total_cmp(a)); // next one last
         ColumnCollapse {
             release_time,
             centre,
             half_width,
+            sides,
             initial_height: None,
+            profile_times,
+            profiles: Vec::new(),
         }
+    }
+
+    /// Height profile h(x): in bins one mean diameter wide along x, the top
+    /// of the highest mobile grain whose centre lies in the bin, above the
+    /// domain's floor (0 where the bin is empty).
+    fn profile(system: &DemSystem) -> Vec<(f64, f64)> {
+        let p = &system.particles;
+        let vertical = Self::vertical(system);
+        let floor = system.domain.lower[vertical];
+        let mobile: Vec<usize> = (0..p.n_owned).filter(|&k| !p.is_fixed(k)).collect();
+        let diameter =
+            2.0 * mobile.iter().map(|&k| p.radius[k]).sum::<f64>() / mobile.len().max(1) as f64;
+        let lower = system.domain.lower.x;
+        let bins = ((system.domain.extent().x / diameter).ceil() as usize).max(1);
+        let mut height = vec![0.0f64; bins];
+        for &k in &mobile {
+            let bin = (((p.position[k].x - lower) / diameter) as usize).min(bins - 1);
+            height[bin] = height[bin].max(p.position[k][vertical] + p.radius[k] - floor);
+        }
+        height
+            .iter()
+            .enumerate()
+            .map(|(b, &h)| (lower + (b as f64 + 0.5) * diameter, h))
+            .collect()
     }
 
     fn vertical(system: &DemSystem) -> usize {
@@ -551,6 +586,15 @@ impl ColumnCollapse {
         if self.initial_height.is_none() && system.time >= self.release_time {
             self.initial_height = Some(Self::height(system));
         }
+        while let Some(&t) = self.profile_times.last() {
+            if system.time < self.release_time + t {
+                break;
+            }
+            self.profile_times.pop();
+            for (x, h) in Self::profile(system) {
+                self.profiles.push((t, x, h));
+            }
+        }
     }
 
     /// Front of the deposit on each side: bins two mean diameters wide along
@@ -559,7 +603,7 @@ impl ColumnCollapse {
     /// half a monolayer (in 2D, fewer than one grain in the bin; in 3D,
     /// fewer than the spanwise length over a diameter). A chain of single grains
     /// still counts; grains that rolled or bounced away alone do not.
-    /// Returns the mean of the two sides.
+    /// Returns the mean over the sides.
     fn front(&self, system: &DemSystem) -> f64 {
         let p = &system.particles;
         let mobile: Vec<usize> = (0..p.n_owned)
@@ -578,7 +622,7 @@ impl ColumnCollapse {
         let width = 2.0 * diameter;
         let bins = ((system.domain.extent().x / width).ceil() as usize).max(1);
         let mut fronts = Vec::new();
-        for side in [-1.0, 1.0] {
+        for &side in &self.sides {
             let mut count = vec![0usize; bins];
             for &k in &mobile {
                 let d = side * (p.position[k].x - self.centre);
@@ -597,10 +641,18 @@ impl ColumnCollapse {
                 .fold(0.0, f64::max);
             fronts.push(front);
         }
-        0.5 * (fronts[0] + fronts[1])
+        fronts.iter().sum::<f64>() / fronts.len() as f64
     }
 
-    fn finish(&self, system: &DemSystem) -> std::io::Result<Map<String, Value>> {
+    fn finish(&self, system: &DemSystem, out: &Path) -> std::io::Result<Map<String, Value>> {
+        if !self.profiles.is_empty() {
+            let mut file =
+                std::io::BufWriter::new(std::fs::File::create(out.join("profiles.csv"))?);
+            writeln!(file, "time_after_release,x,height")?;
+            for (t, x, h) in &self.profiles {
+                writeln!(file, "{t:.6e},{x:.6e},{h:.6e}")?;
+            }
+        }
         let mut metrics = Map::new();
         let h0 = self.initial_height.unwrap_or(f64::NAN);
         let r0 = self.half_width;

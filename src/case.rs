@@ -342,6 +342,11 @@ pub struct ContactSection {
     /// fastest grain closes in a step).
     #[serde(default)]
     pub threshold: Option<f64>,
+    /// cocd: "interior_point" (grainflow's, on the normal equations, where
+    /// the cones are linear: 2D discs; the default) or "clarabel" (the
+    /// reference; always used for 3D frictional contacts).
+    #[serde(default)]
+    pub conic_solver: Option<String>,
 }
 
 impl ContactSection {
@@ -501,7 +506,12 @@ pub enum AnalysisSection {
     },
     /// Runout (R∞ − R0)/R0 and aspect ratio H0/R0 of a symmetric collapse
     /// released by removing the walls named `gate`.
-    ColumnCollapse,
+    ColumnCollapse {
+        /// Times after the release [s] at which the height profile h(x) of
+        /// the grains is written to `profiles.csv`.
+        #[serde(default)]
+        profile_times: Vec<f64>,
+    },
     /// Grains at rest in a box (Martin et al. 2022, Fig. 3): the largest
     /// ratio of kinetic to potential energy after they settle.
     StaticBox {
@@ -863,6 +873,7 @@ impl Case {
             ("contact.tolerance", c.tolerance.is_some()),
             ("contact.max_iterations", c.max_iterations.is_some()),
             ("contact.threshold", c.threshold.is_some()),
+            ("contact.conic_solver", c.conic_solver.is_some()),
         ] {
             if given {
                 return Err(invalid(
@@ -973,14 +984,27 @@ impl Case {
             }
         }
         if c.max_iterations == Some(0) {
-            return Err(invalid(
-                "contact.max_iterations",
-                0,
-                "allowed: at least 1",
-            ));
+            return Err(invalid("contact.max_iterations", 0, "allowed: at least 1"));
         }
         if let Some(threshold) = c.threshold {
             positive("contact.threshold", threshold)?;
+        }
+        match (c.model.as_str(), c.conic_solver.as_deref()) {
+            (_, None) | ("cocd", Some("interior_point" | "clarabel")) => {}
+            ("cocd", Some(other)) => {
+                return Err(invalid(
+                    "contact.conic_solver",
+                    other,
+                    "allowed: \"interior_point\" or \"clarabel\"",
+                ))
+            }
+            (_, Some(_)) => {
+                return Err(invalid(
+                    "contact.conic_solver",
+                    "(given)",
+                    "a COCD key: allowed only with contact.model = \"cocd\"",
+                ))
+            }
         }
         if self.time.dt.is_none() {
             return Err(invalid(
@@ -1374,7 +1398,16 @@ impl Case {
                 ));
             }
         }
-        if matches!(self.analysis, Some(AnalysisSection::ColumnCollapse))
+        if let Some(AnalysisSection::ColumnCollapse { profile_times }) = &self.analysis {
+            if profile_times.iter().any(|t| t.is_nan() || *t < 0.0) {
+                return Err(invalid(
+                    "analysis.profile_times",
+                    format!("{profile_times:?}"),
+                    "allowed: times ≥ 0 after the release [s]",
+                ));
+            }
+        }
+        if matches!(self.analysis, Some(AnalysisSection::ColumnCollapse { .. }))
             && !self.walls.iter().any(|w| w.remove_at.is_some())
         {
             return Err(invalid(

@@ -5,6 +5,7 @@ use crate::case::Case;
 use crate::coupled_simulation;
 use crate::simulation::{check_time_step, time_step};
 use crate::{fluid_scene, scene, stability, RunError};
+use grainflow_contact::Method;
 use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
 use grainflow_ibm::settling::schiller_naumann_reynolds;
 use std::fmt::Write;
@@ -29,18 +30,24 @@ pub fn report(case: &Case) -> Result<String, RunError> {
         return coupled_report(case);
     }
     let system = scene::build(case).map_err(RunError::Case)?;
-    let (dt, contact_time) = time_step(case, &system);
-    let warning = check_time_step(dt, contact_time)?;
+    let hard = scene::hard_contact(case);
     let p = &system.particles;
     let n = p.n_owned;
     let glued = (0..n).filter(|&k| p.is_fixed(k)).count();
     let mut out = String::new();
     let dim = system.domain.dimension.count();
     let _ = writeln!(out, "models:");
-    let _ = writeln!(
-        out,
-        "  {dim}D soft-sphere DEM (linear spring-dashpot, tangential history, Coulomb)"
-    );
+    let model = match hard.as_ref().map(|h| h.method) {
+        None => "soft-sphere DEM (linear spring-dashpot, tangential history, Coulomb)".to_string(),
+        Some(Method::Cocd) => {
+            "hard contact: COCD, one conic program per step (Clarabel), inelastic, Coulomb's cone"
+                .to_string()
+        }
+        Some(Method::Nscd { restitution }) => format!(
+            "hard contact: NSCD, Gauss-Seidel over the contacts, Newton restitution {restitution}, Coulomb"
+        ),
+    };
+    let _ = writeln!(out, "  {dim}D {model}");
     let _ = writeln!(
         out,
         "  dry scene: no [fluid] table, so no fluid grid is allocated and no lubrication"
@@ -86,35 +93,66 @@ pub fn report(case: &Case) -> Result<String, RunError> {
         "  mass: {m_min:.4e} .. {m_max:.4e} kg{}",
         if dim == 2 { " per metre" } else { "" }
     );
-    let (k_lo, g_lo) = system.law.normal.coefficients(0.5 * m_min);
-    let _ = writeln!(out, "contact:");
-    let _ = writeln!(
-        out,
-        "  k_n = {k_lo:.4e} N/m, gamma_n = {g_lo:.4e} N s/m (lightest pair)"
-    );
-    let _ = writeln!(
-        out,
-        "  k_t/k_n = {}, friction = {}",
-        system.law.tangential_ratio, system.law.friction
-    );
-    let _ = writeln!(out, "  shortest contact time t_c = {contact_time:.4e} s");
-    let _ = writeln!(out, "time:");
-    let _ = writeln!(out, "  dt = {dt:.4e} s = {:.4} t_c", dt / contact_time);
-    let _ = writeln!(
-        out,
-        "  limits: accurate (restitution within 1 %) dt <= {:.4e} s; stable dt <= {:.4e} s",
-        stability::ACCURATE_DT_OVER_TC * contact_time,
-        stability::STABLE_DT_OVER_TC * contact_time
-    );
-    let steps = (case.time.end / dt).ceil();
-    let _ = writeln!(
-        out,
-        "  end = {} s: {steps:.0} steps, {:.3e} particle-steps",
-        case.time.end,
-        steps * n as f64
-    );
-    if let Some(w) = warning {
-        let _ = writeln!(out, "{w}");
+    if let Some(hard) = &hard {
+        let dt = case.time.dt.expect("validated: hard contact has time.dt");
+        let _ = writeln!(out, "contact:");
+        let _ = writeln!(
+            out,
+            "  friction = {}, tolerance = {:.1e}, at most {} {} per step",
+            system.law.friction,
+            hard.tolerance,
+            hard.max_iterations,
+            if hard.method == Method::Cocd {
+                "interior-point iterations"
+            } else {
+                "Gauss-Seidel sweeps"
+            }
+        );
+        let _ = writeln!(
+            out,
+            "  candidate threshold D = {:.4e} m (widened to 3 v_max dt when grains are faster)",
+            hard.threshold
+        );
+        let _ = writeln!(out, "time:");
+        let steps = (case.time.end / dt).ceil();
+        let _ = writeln!(
+            out,
+            "  dt = {dt:.4e} s (no contact time: grains do not overlap); end = {} s: {steps:.0} steps",
+            case.time.end
+        );
+    } else {
+        let (dt, contact_time) = time_step(case, &system);
+        let warning = check_time_step(dt, contact_time)?;
+        let (k_lo, g_lo) = system.law.normal.coefficients(0.5 * m_min);
+        let _ = writeln!(out, "contact:");
+        let _ = writeln!(
+            out,
+            "  k_n = {k_lo:.4e} N/m, gamma_n = {g_lo:.4e} N s/m (lightest pair)"
+        );
+        let _ = writeln!(
+            out,
+            "  k_t/k_n = {}, friction = {}",
+            system.law.tangential_ratio, system.law.friction
+        );
+        let _ = writeln!(out, "  shortest contact time t_c = {contact_time:.4e} s");
+        let _ = writeln!(out, "time:");
+        let _ = writeln!(out, "  dt = {dt:.4e} s = {:.4} t_c", dt / contact_time);
+        let _ = writeln!(
+            out,
+            "  limits: accurate (restitution within 1 %) dt <= {:.4e} s; stable dt <= {:.4e} s",
+            stability::ACCURATE_DT_OVER_TC * contact_time,
+            stability::STABLE_DT_OVER_TC * contact_time
+        );
+        let steps = (case.time.end / dt).ceil();
+        let _ = writeln!(
+            out,
+            "  end = {} s: {steps:.0} steps, {:.3e} particle-steps",
+            case.time.end,
+            steps * n as f64
+        );
+        if let Some(w) = warning {
+            let _ = writeln!(out, "{w}");
+        }
     }
     let _ = writeln!(
         out,

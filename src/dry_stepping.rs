@@ -75,7 +75,10 @@ impl DryStepper {
     /// The stepper of a case, its time step, and a warning to log. Refuses
     /// (before anything is written) a soft time step past the stability
     /// limit.
-    pub fn new(case: &Case, system: &mut DemSystem) -> Result<(Self, f64, Option<String>), RunError> {
+    pub fn new(
+        case: &Case,
+        system: &mut DemSystem,
+    ) -> Result<(Self, f64, Option<String>), RunError> {
         match scene::hard_contact(case) {
             Some(contact) => {
                 contact.prepare(system);

@@ -151,6 +151,34 @@ impl Outputs {
         Ok(())
     }
 
+    /// `final_particles.csv`: the mobile grains at the end, in the format a
+    /// `file` block reads (`x,y[,z],radius,vx,vy[,vz]`), so that a deposit
+    /// made by one run is the initial state of others.
+    pub fn write_final_particles(&self, system: &DemSystem) -> std::io::Result<()> {
+        let p = &system.particles;
+        let dim = system.domain.dimension.count();
+        let mut file = std::io::BufWriter::new(std::fs::File::create(
+            self.run.dir.join("final_particles.csv"),
+        )?);
+        let header = if dim == 2 {
+            "x,y,radius,vx,vy"
+        } else {
+            "x,y,z,radius,vx,vy,vz"
+        };
+        writeln!(file, "{header}")?;
+        let mut order: Vec<usize> = (0..p.n_owned).filter(|&k| !p.is_fixed(k)).collect();
+        order.sort_by_key(|&k| p.id[k]);
+        for k in order {
+            let mut row: Vec<String> = (0..dim)
+                .map(|a| format!("{:.17e}", p.position[k][a]))
+                .collect();
+            row.push(format!("{:.17e}", p.radius[k]));
+            row.extend((0..dim).map(|a| format!("{:.17e}", p.velocity[k][a])));
+            writeln!(file, "{}", row.join(","))?;
+        }
+        Ok(())
+    }
+
     /// Rows of `tracked.csv` for the tracked ids.
     pub fn write_tracked(&mut self, system: &DemSystem, ids: &[u64]) -> std::io::Result<()> {
         let p = &system.particles;

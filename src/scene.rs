@@ -1,7 +1,7 @@
 //! Scene assembly: turns a validated [`Case`] into a [`DemSystem`].
 
 use crate::case::{BlockSection, Case};
-use grainflow_contact::{HardContact, Method};
+use grainflow_contact::{ConicSolver, HardContact, Method};
 use grainflow_core::{Dimension, Domain, Vec3};
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
 use grainflow_dem::particles::NewParticle;
@@ -352,13 +352,16 @@ pub fn hard_contact(case: &Case) -> Option<HardContact> {
         Method::Cocd => (1e-8, 200),
         Method::Nscd { .. } => (1e-6, 5000),
     };
-    Some(HardContact::new(
+    let mut hard = HardContact::new(
         method,
         c.tolerance.unwrap_or(tolerance),
         c.max_iterations.unwrap_or(iterations),
-        c.threshold
-            .unwrap_or(0.2 * case.particles_section().radius),
-    ))
+        c.threshold.unwrap_or(0.2 * case.particles_section().radius),
+    );
+    if c.conic_solver.as_deref() == Some("clarabel") {
+        hard.conic_solver = ConicSolver::Clarabel;
+    }
+    Some(hard)
 }
 
 /// The scene's DEM system, with its particles placed.

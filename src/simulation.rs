@@ -3,9 +3,9 @@
 
 use crate::analysis::Analysis;
 use crate::case::Case;
+use crate::dry_stepping::DryStepper;
 use crate::output::Outputs;
 use crate::stability::{self, TimeStepVerdict};
-use crate::dry_stepping::DryStepper;
 use crate::{coupled_simulation, fluid_simulation, scene, RunError};
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
@@ -208,6 +208,9 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     let mut metrics = Map::new();
     if failure.is_none() {
         metrics = analysis.finish(&system, out).map_err(RunError::Io)?;
+        outputs
+            .write_final_particles(&system)
+            .map_err(RunError::Io)?;
     }
     metrics.extend(stepper.metrics());
     let particle_steps = system.particles.n_owned as f64 * system.steps as f64;

@@ -118,8 +118,60 @@ fn jacobian_row(
     }
 }
 
-/// Solves the step's conic program. `tolerance`: Clarabel's gap and
-/// feasibility tolerances (ε of section 3.2, relative).
+/// Which interior-point code solves the conic program.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ConicSolver {
+    /// grainflow's own, on the normal equations M̃ + H̃ᵀΘH̃ (linear cones:
+    /// 2D discs, frictionless contacts); see [`crate::interior_point`].
+    InteriorPoint,
+    /// Clarabel (any cone), the reference.
+    Clarabel,
+}
+
+/// The step's program in Clarabel's standard form.
+pub struct ConicProgram {
+    /// Diagonal of P = M̃ and the free velocity Ũ (q = −M̃Ũ).
+    pub mass: Vec<f64>,
+    pub free: Vec<f64>,
+    /// A = −H̃ (rows: the linear ones first, then the cones) and b.
+    pub a_matrix: CscMatrix<f64>,
+    pub b: Vec<f64>,
+    /// Rows in the nonnegative cone, then second-order cones of size 3.
+    pub linear_rows: usize,
+    pub cone_count: usize,
+    kinds: Vec<Rows>,
+    first_row: Vec<usize>,
+    dimension: Dimension,
+    scales: Scales,
+}
+
+impl ConicProgram {
+    pub fn q(&self) -> Vec<f64> {
+        self.mass
+            .iter()
+            .zip(&self.free)
+            .map(|(m, u)| -m * u)
+            .collect()
+    }
+
+    /// ŨᵀM̃Ũ: the size of the objective.
+    pub fn size(&self) -> f64 {
+        self.mass
+            .iter()
+            .zip(&self.free)
+            .map(|(m, u)| m * u * u)
+            .sum()
+    }
+
+    /// κ = VΔt/L, the factor of every row of A.
+    pub fn row_scale(&self) -> f64 {
+        self.scales.gap_per_velocity()
+    }
+}
+
+/// Solves the step's conic program with `solver` (Clarabel where the cones
+/// are not linear). `tolerance`: the relative gap and feasibility
+/// tolerances (ε of section 3.2).
 pub fn solve(
     contacts: &ContactSet,
     bodies: &Bodies,
@@ -127,7 +179,32 @@ pub fn solve(
     scales: &Scales,
     tolerance: f64,
     max_iterations: u32,
+    solver: ConicSolver,
 ) -> Result<Solution, String> {
+    let program = build(contacts, bodies, dimension, scales);
+    let (x, z, iterations, reduced_accuracy) =
+        if solver == ConicSolver::InteriorPoint && program.cone_count == 0 {
+            crate::interior_point::solve(&program, tolerance, max_iterations)?
+        } else {
+            solve_with_clarabel(&program, tolerance, max_iterations)?
+        };
+    Ok(recover(
+        contacts,
+        &program,
+        &x,
+        &z,
+        iterations,
+        reduced_accuracy,
+    ))
+}
+
+/// Assembles the program of the step.
+pub fn build(
+    contacts: &ContactSet,
+    bodies: &Bodies,
+    dimension: Dimension,
+    scales: &Scales,
+) -> ConicProgram {
     let d = dofs(dimension);
     let columns = bodies.len() * d;
     let (length, velocity) = (scales.length, scales.velocity);
@@ -154,14 +231,6 @@ pub fn solve(
             }
         }
     }
-    let p_matrix = CscMatrix::new(
-        columns,
-        columns,
-        (0..=columns).collect(),
-        (0..columns).collect(),
-        mass.clone(),
-    );
-    let q: Vec<f64> = mass.iter().zip(&free).map(|(m, u)| -m * u).collect();
 
     // Rows: the half-plane and normal rows first, then the cones.
     let kinds: Vec<Rows> = (0..contacts.len())
@@ -227,17 +296,45 @@ pub fn solve(
             }
         }
     }
-    let a_matrix = CscMatrix::new_from_triplets(rows, columns, row_index, col_index, values);
-    let mut cones = Vec::new();
-    if linear_rows > 0 {
-        cones.push(SupportedConeT::NonnegativeConeT(linear_rows));
+    ConicProgram {
+        mass,
+        free,
+        a_matrix: CscMatrix::new_from_triplets(rows, columns, row_index, col_index, values),
+        b,
+        linear_rows,
+        cone_count,
+        kinds,
+        first_row,
+        dimension,
+        scales: *scales,
     }
-    cones.extend((0..cone_count).map(|_| SupportedConeT::SecondOrderConeT(3)));
+}
+
+/// Solves the program with Clarabel: (x, z, iterations, reduced accuracy).
+fn solve_with_clarabel(
+    program: &ConicProgram,
+    tolerance: f64,
+    max_iterations: u32,
+) -> Result<(Vec<f64>, Vec<f64>, u32, bool), String> {
+    let columns = program.mass.len();
+    let p_matrix = CscMatrix::new(
+        columns,
+        columns,
+        (0..=columns).collect(),
+        (0..columns).collect(),
+        program.mass.clone(),
+    );
+    let q = program.q();
+    let mut cones = Vec::new();
+    if program.linear_rows > 0 {
+        cones.push(SupportedConeT::NonnegativeConeT(program.linear_rows));
+    }
+    cones.extend((0..program.cone_count).map(|_| SupportedConeT::SecondOrderConeT(3)));
 
     // The objective is of order one in these units; its absolute gap
     // tolerance follows its size, so that a nearly still scene is solved as
     // accurately as a fast one.
-    let size: f64 = mass.iter().zip(&free).map(|(m, u)| m * u * u).sum();
+    let size: f64 = program.size();
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
         .max_iter(max_iterations)
@@ -246,8 +343,15 @@ pub fn solve(
         .tol_feas(tolerance)
         .build()
         .map_err(|e| format!("COCD solver settings: {e}"))?;
-    let mut solver = DefaultSolver::new(&p_matrix, &q, &a_matrix, &b, &cones, settings)
-        .map_err(|e| format!("COCD problem rejected by the conic solver: {e:?}"))?;
+    let mut solver = DefaultSolver::new(
+        &p_matrix,
+        &q,
+        &program.a_matrix,
+        &program.b,
+        &cones,
+        settings,
+    )
+    .map_err(|e| format!("COCD problem rejected by the conic solver: {e:?}"))?;
     solver.solve();
     let solution = &solver.solution;
     let reduced_accuracy = match solution.status {
@@ -255,25 +359,46 @@ pub fn solve(
         SolverStatus::AlmostSolved => true,
         status => {
             return Err(format!(
-                "the conic solver stopped with status {status:?} after {} iterations \
-                 ({} contacts, {} grains)",
+                "the conic solver (Clarabel) stopped with status {status:?} after {} iterations \
+                 ({} rows, {} unknowns)",
                 solution.iterations,
-                contacts.len(),
-                bodies.len()
+                program.b.len(),
+                columns
             ))
         }
     };
+    Ok((
+        solution.x.clone(),
+        solution.z.clone(),
+        solution.iterations,
+        reduced_accuracy,
+    ))
+}
+
+/// The velocities and impulses of a solution (x, z) of the program.
+fn recover(
+    contacts: &ContactSet,
+    program: &ConicProgram,
+    x: &[f64],
+    z: &[f64],
+    iterations: u32,
+    reduced_accuracy: bool,
+) -> Solution {
+    let (dimension, scales) = (program.dimension, &program.scales);
+    let (length, velocity) = (scales.length, scales.velocity);
+    let d = dofs(dimension);
+    let bodies = program.mass.len() / d;
+    let (kinds, first_row) = (&program.kinds, &program.first_row);
 
     let mut out = Solution {
-        velocity: Vec::with_capacity(bodies.len()),
-        spin: Vec::with_capacity(bodies.len()),
+        velocity: Vec::with_capacity(bodies),
+        spin: Vec::with_capacity(bodies),
         normal_impulse: vec![0.0; contacts.len()],
         tangential_impulse: vec![Vec3::zeros(); contacts.len()],
-        iterations: solution.iterations,
+        iterations,
         reduced_accuracy,
     };
-    let x = &solution.x;
-    for body in 0..bodies.len() {
+    for body in 0..bodies {
         let first = body * d;
         let (v, w) = match dimension {
             Dimension::Two => (
@@ -288,7 +413,6 @@ pub fn solve(
         out.velocity.push(v * velocity);
         out.spin.push(w * velocity / length);
     }
-    let z = &solution.z;
     let unit = scales.impulse();
     for a in 0..contacts.len() {
         let r = first_row[a];
@@ -302,5 +426,5 @@ pub fn solve(
         out.normal_impulse[a] = normal * unit;
         out.tangential_impulse[a] = tangential * unit;
     }
-    Ok(out)
+    out
 }

@@ -10,8 +10,10 @@
 //!   constraint per candidate contact α,
 //!   D_α + Δt ∇D_α·u ≥ μ Δt |P_α A_α u|  (eq. 9),
 //!   a second-order cone (eq. 13). Inelastic, Coulomb's full cone; the
-//!   contact forces are the cone's dual variables. Solved by Clarabel's
-//!   interior-point method ([`cocd`]).
+//!   contact forces are the cone's dual variables ([`cocd`]). Solved by
+//!   grainflow's interior point on the normal equations where the cones
+//!   are linear (2D discs: [`interior_point`]), by Clarabel otherwise and
+//!   on request (the reference).
 //! - **NSCD** (non-smooth contact dynamics, Moreau–Jean, section 3.5): the
 //!   same Euler step with Signorini's condition on the predicted gap,
 //!   D_α + Δt v_n ≥ 0 ⊥ f_n ≥ 0, and Coulomb's law with its sliding rule,
@@ -29,8 +31,10 @@
 pub mod certificate;
 pub mod cocd;
 pub mod contacts;
+pub mod interior_point;
 pub mod nscd;
 pub mod step;
 
+pub use cocd::ConicSolver;
 pub use contacts::{Bodies, ContactSet, Partner, Scales};
 pub use step::{HardContact, Method, StepReport};

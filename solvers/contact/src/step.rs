@@ -9,11 +9,11 @@
 //! 5. c^{k+1} = c^k + Δt v^{k+1}; the largest overlap after the move.
 
 use crate::certificate;
-use crate::cocd::{self, Solution};
+use crate::cocd::{self, ConicSolver, Solution};
 use crate::contacts::{self, Partner, Scales, STATIC};
 use crate::nscd;
 use grainflow_core::Vec3;
-use grainflow_dem::DemSystem;
+use grainflow_dem::{DemSystem, StepDiagnostics};
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -60,6 +60,9 @@ pub struct HardContact {
     pub max_iterations: u32,
     /// Candidate threshold D on the gap [m] (section 3.3).
     pub threshold: f64,
+    /// COCD: the interior-point code (Clarabel wherever the cones are not
+    /// linear).
+    pub conic_solver: ConicSolver,
     /// NSCD warm start: the impulses of the last step's contacts, by the
     /// ids of their grains (u64::MAX − wall for a wall).
     previous_impulses: HashMap<(u64, u64), (f64, Vec3)>,
@@ -72,6 +75,7 @@ impl HardContact {
             tolerance,
             max_iterations,
             threshold,
+            conic_solver: ConicSolver::InteriorPoint,
             previous_impulses: HashMap::new(),
         }
     }
@@ -138,6 +142,7 @@ impl HardContact {
                         &scales,
                         self.tolerance,
                         self.max_iterations,
+                        self.conic_solver,
                     )?
                 };
                 let reduced = solution.reduced_accuracy;
@@ -219,7 +224,7 @@ impl HardContact {
         let carries = |a: usize| solution.normal_impulse[a] > 1e-9 * largest_impulse;
         let mut particle_contacts = vec![0u32; n];
         let mut walls_touched = vec![0u64; n];
-        let mut closed = 0;
+        let (mut closed, mut wall_contacts) = (0, 0);
         for a in (0..contacts.len()).filter(|&a| carries(a)) {
             closed += 1;
             let i = contacts.grain[a] as usize;
@@ -228,7 +233,10 @@ impl HardContact {
                     particle_contacts[i] += 1;
                     particle_contacts[j as usize] += 1;
                 }
-                Partner::Wall(w) => walls_touched[i] |= 1u64 << w.min(63),
+                Partner::Wall(w) => {
+                    walls_touched[i] |= 1u64 << w.min(63);
+                    wall_contacts += 1;
+                }
             }
         }
         system.record_contacts(particle_contacts, walls_touched);
@@ -239,6 +247,12 @@ impl HardContact {
             f64::NAN
         } else {
             certificate::largest_overlap(system, scales.length)
+        };
+        system.last = StepDiagnostics {
+            max_overlap_ratio: 2.0 * penetration,
+            particle_contacts: closed - wall_contacts,
+            wall_contacts,
+            non_finite,
         };
         Ok(StepReport {
             candidates: contacts.len(),

@@ -3,7 +3,7 @@
 //! head-on impacts, and an impact across a periodic edge.
 
 use grainflow_contact::contacts::gather;
-use grainflow_contact::{cocd, nscd, HardContact, Method, Scales};
+use grainflow_contact::{cocd, nscd, ConicSolver, HardContact, Method, Scales};
 use grainflow_core::{Dimension, Domain, Vec3};
 use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, PlaneWall};
@@ -223,7 +223,16 @@ fn grain_on_two_glued_grains_is_held_by_the_statics_forces() {
     let (contacts, bodies) = gather(&system, 0.1 * RADIUS, &free, &spins);
     assert_eq!(contacts.len(), 2);
     let scales = Scales::of(&bodies, dt, &Vec3::new(0.0, -G, 0.0));
-    let conic = cocd::solve(&contacts, &bodies, Dimension::Two, &scales, TOLERANCE, 100).unwrap();
+    let conic = cocd::solve(
+        &contacts,
+        &bodies,
+        Dimension::Two,
+        &scales,
+        TOLERANCE,
+        100,
+        ConicSolver::Clarabel,
+    )
+    .unwrap();
     let bounds: Vec<f64> = contacts.gap.iter().map(|d| -d / dt).collect();
     let zeros = vec![(0.0, Vec3::zeros()); 2];
     let (gauss_seidel, converged) = nscd::solve(

@@ -1,0 +1,109 @@
+//! Hard contact from case files (Martin et al. 2022): the keys a hard
+//! scene refuses, grains at rest that must stay at rest (Fig. 3) and where
+//! the solver tolerance breaks that, and the certificates of each step.
+
+mod common;
+
+use common::{metric, run, run_cli};
+
+/// A soft-contact key with hard contact, restitution with the inelastic
+/// COCD, a hard-contact key with soft contact, hard contact in a fluid and
+/// an unknown model are refused, named, and nothing is written.
+#[test]
+fn hard_contact_keys_are_checked_and_nothing_is_written() {
+    for (case, overrides, key) in [
+        (
+            "static_box.toml",
+            vec!["contact.restitution=0.5"],
+            "contact.restitution",
+        ),
+        (
+            "static_box.toml",
+            vec!["contact.contact_time=1e-4"],
+            "contact.contact_time",
+        ),
+        (
+            "static_box.toml",
+            vec!["contact.rolling_friction=0.05"],
+            "contact.rolling_friction",
+        ),
+        (
+            "static_box.toml",
+            vec!["contact.tolerance=2.0"],
+            "contact.tolerance",
+        ),
+        (
+            "static_box.toml",
+            vec!["contact.max_iterations=0"],
+            "contact.max_iterations",
+        ),
+        (
+            "static_box.toml",
+            vec!["contact.threshold=-1e-3"],
+            "contact.threshold",
+        ),
+        (
+            "static_box.toml",
+            vec!["contact.model=\"lcp\""],
+            "contact.model",
+        ),
+        (
+            "column_collapse_2d.toml",
+            vec!["contact.tolerance=1e-6"],
+            "contact.tolerance",
+        ),
+        (
+            "falling_sphere.toml",
+            vec!["contact.model=\"cocd\""],
+            "contact.model",
+        ),
+    ] {
+        let (code, stderr, written) = run_cli(case, &overrides);
+        assert_ne!(code, Some(0), "{case} {overrides:?} must be refused");
+        assert!(stderr.contains(key), "{case} {overrides:?}: {stderr}");
+        assert!(!written, "{case} {overrides:?}: nothing may be written");
+    }
+}
+
+/// 400 discs at rest in a box (`cases/static_box.toml`, 0.2 s of it).
+/// COCD with ε = 1e-3 keeps E_k/E_p below 1e-8 (over the full second the
+/// sweep measured 1.2e-9 at ε = 1e-3, 1.1e-8 at 3e-3 and 2.9e-6 at 1e-2:
+/// docs/validation.md §8); with ε = 1e-1 the interior point stops so early
+/// that the packing creeps. NSCD starts without the packing's force
+/// network: while Gauss–Seidel builds it the grains stir (1.9e-8 measured
+/// over the first 10 ms), then they are at rest again (1.1e-10 at 0.2 s).
+/// Every step's certificates hold to ε: Coulomb's cone and non-penetration.
+#[test]
+fn grains_at_rest_stay_at_rest_below_the_tolerance_where_it_breaks() {
+    let (summary, _dir) = run(
+        "static_box.toml",
+        &["contact.tolerance=1e-3", "time.end=0.2"],
+    );
+    let ratio = metric(&summary, "max_kinetic_to_potential");
+    assert!(ratio < 1e-8, "COCD at ε = 1e-3: E_k/E_p = {ratio:e}");
+    assert!(metric(&summary, "max_coulomb_violation") < 1e-3);
+    assert!(metric(&summary, "max_penetration") < 1e-3);
+
+    let (summary, _dir) = run(
+        "static_box.toml",
+        &["contact.tolerance=1e-1", "time.end=0.2"],
+    );
+    let ratio = metric(&summary, "max_kinetic_to_potential");
+    assert!(ratio > 1e-8, "COCD at ε = 0.1: E_k/E_p = {ratio:e}");
+
+    let (summary, _dir) = run(
+        "static_box.toml",
+        &[
+            "contact.model=\"nscd\"",
+            "contact.tolerance=1e-6",
+            "contact.max_iterations=50000",
+            "time.end=0.2",
+        ],
+    );
+    assert_eq!(metric(&summary, "unconverged_steps"), 0.0);
+    let largest = metric(&summary, "max_kinetic_to_potential");
+    let last = metric(&summary, "final_kinetic_to_potential");
+    assert!(largest < 1e-7 && last < 1e-9, "NSCD: {largest:e}, {last:e}");
+    assert!(metric(&summary, "max_coulomb_violation") < 1e-6);
+    assert!(metric(&summary, "max_penetration") < 1e-6);
+}
