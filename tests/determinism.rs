@@ -235,7 +235,13 @@ fn hard_run_with_threads(model: &str, threads: usize, steps: usize) -> DemSystem
         "model = \"soft\"\n    restitution = 0.5\n    contact_time = 1.0e-4\n    friction = 0.5\n    rolling_friction = 0.05",
         &format!("model = \"{model}\"\n    friction = 0.5"),
     );
-    let text = text.replace("end = 0.1", "end = 0.1\n    dt = 2.0e-3");
+    // Three layers of 64 spheres, so that the test stays short.
+    let text = text
+        .replace("end = 0.1", "end = 0.1\n    dt = 2.0e-3")
+        .replace(
+            "upper = [0.088, 0.088, 0.2]",
+            "upper = [0.088, 0.088, 0.033]",
+        );
     on_threads(threads, || {
         let case = Case::from_text(&text, "packing", &[]).unwrap();
         let mut system = scene::build(&case).unwrap();
@@ -250,8 +256,8 @@ fn hard_run_with_threads(model: &str, threads: usize, steps: usize) -> DemSystem
     })
 }
 
-/// Hard contact (3D spheres across periodic edges, 40 steps of 2 ms: the
-/// packing lands and piles up) gives the same bits on 1 and 2 threads: the
+/// Hard contact (192 spheres across periodic edges, 40 steps of 2 ms: the
+/// layers land and pile up) gives the same bits on 1 and 2 threads: the
 /// solve is serial and the position update is per grain.
 #[test]
 fn hard_contact_gives_the_same_bits_on_one_and_two_threads() {
@@ -259,8 +265,9 @@ fn hard_contact_gives_the_same_bits_on_one_and_two_threads() {
         let serial = hard_run_with_threads(model, 1, 40);
         let parallel = hard_run_with_threads(model, 2, 40);
         assert!(
-            serial.last.particle_contacts > 300,
-            "{model}: the packing must be in contact"
+            serial.last.particle_contacts > 150,
+            "{model}: the packing must be in contact: {}",
+            serial.last.particle_contacts
         );
         for k in 0..serial.particles.n_owned {
             let j = parallel.index_of(serial.particles.id[k]).unwrap();
