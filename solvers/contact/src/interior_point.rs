@@ -10,9 +10,10 @@
 //!
 //!   (P + AᵀΘA) Δx = −r_d + Aᵀ ((r_c − z∘r_p) / s),   Θ = diag(z/s),
 //!
-//! an SPD matrix of the size of the unknowns (three per disc) whose pattern
-//! is the contact graph: a sparse LDLᵀ (QDLDL with an AMD ordering, the
-//! symbolic analysis done once per step and reused by every iteration).
+//! an SPD matrix of the size of the unknowns (three per disc), at least M̃,
+//! whose pattern is the contact graph: a supernodal sparse Cholesky (faer,
+//! AMD ordering), its symbolic analysis done once per step and reused by
+//! every iteration.
 //! Clarabel works on the larger quasi-definite system [P Aᵀ; A −Θ⁻¹] of
 //! unknowns and rows together.
 //!
@@ -24,7 +25,14 @@
 
 use crate::cocd::ConicProgram;
 use clarabel::algebra::CscMatrix;
-use clarabel::qdldl::{QDLDLFactorisation, QDLDLSettingsBuilder};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
 
 /// Fraction of the distance to the boundary of the cone taken by a step.
 const STEP_FRACTION: f64 = 0.99;
@@ -157,6 +165,79 @@ impl NormalPattern {
     }
 }
 
+/// The Cholesky factor of the normal matrix: ordering and symbolic
+/// analysis once, numeric factorisations per iteration. Sequential, so
+/// that results do not depend on the number of threads.
+struct NormalFactor {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+    work: MemBuffer,
+}
+
+impl NormalFactor {
+    fn new(matrix: &CscMatrix<f64>) -> Result<Self, String> {
+        let pattern = SymbolicSparseColMatRef::new_checked(
+            matrix.n,
+            matrix.n,
+            &matrix.colptr,
+            None,
+            &matrix.rowval,
+        );
+        let symbolic = factorize_symbolic_cholesky(
+            pattern,
+            Side::Upper,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| format!("symbolic factorisation: {e:?}"))?;
+        let scratch = StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        Ok(NormalFactor {
+            values: vec![0.0; symbolic.len_val()],
+            symbolic,
+            work: MemBuffer::new(scratch),
+        })
+    }
+
+    fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
+        let pattern = SymbolicSparseColMatRef::new_checked(
+            matrix.n,
+            matrix.n,
+            &matrix.colptr,
+            None,
+            &matrix.rowval,
+        );
+        let no_regularisation = LltRegularization {
+            dynamic_regularization_delta: 0.0,
+            dynamic_regularization_epsilon: 0.0,
+        };
+        self.symbolic
+            .factorize_numeric_llt(
+                &mut self.values,
+                SparseColMatRef::new(pattern, &matrix.nzval),
+                Side::Upper,
+                no_regularisation,
+                Par::Seq,
+                MemStack::new(&mut self.work),
+                Default::default(),
+            )
+            .map(|_| ())
+            .map_err(|e| format!("the normal matrix is not positive definite: {e:?}"))
+    }
+
+    fn solve(&mut self, rhs: &mut [f64]) {
+        let n = rhs.len();
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(rhs, n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.work),
+        );
+    }
+}
+
 fn infinity_norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
@@ -194,12 +275,8 @@ pub fn solve(
 
     // The ordering and symbolic factorisation, once per step.
     pattern.assemble(mass, &vec![1.0; m]);
-    let settings = QDLDLSettingsBuilder::default()
-        .build()
-        .map_err(|e| fail(format!("settings: {e}")))?;
-    let mut factor = QDLDLFactorisation::new(&pattern.matrix, Some(settings))
-        .map_err(|e| fail(format!("factorisation: {e}")))?;
-    let all: Vec<usize> = (0..pattern.matrix.nzval.len()).collect();
+    let mut factor = NormalFactor::new(&pattern.matrix).map_err(fail)?;
+    factor.factorise(&pattern.matrix).map_err(fail)?;
 
     // Start: the minimiser of ½xᵀPx + qᵀx + ½|Ax − b|², then s and z
     // shifted into the interior (as in CVXOPT's coneqp).
@@ -268,10 +345,9 @@ pub fn solve(
             theta[i] = z[i] / s[i];
         }
         pattern.assemble(mass, &theta);
-        factor.update_values(&all, &pattern.matrix.nzval);
         factor
-            .refactor()
-            .map_err(|e| fail(format!("refactorisation at iteration {iteration}: {e}")))?;
+            .factorise(&pattern.matrix)
+            .map_err(|e| fail(format!("iteration {iteration}: {e}")))?;
 
         // Predictor (affine) then corrector with the same factor.
         let mut direction =
