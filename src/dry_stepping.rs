@@ -33,6 +33,8 @@ pub struct HardRecord {
     pub candidates: u64,
     pub closed: u64,
     pub unconverged_steps: u64,
+    /// Steps Clarabel took over from grainflow's interior point.
+    pub fallback_steps: u64,
     pub seconds_solve: f64,
 }
 
@@ -47,6 +49,7 @@ impl HardRecord {
         self.candidates += report.candidates as u64;
         self.closed += report.closed as u64;
         self.unconverged_steps += u64::from(report.unconverged);
+        self.fallback_steps += u64::from(report.fell_back);
         self.seconds_solve += report.seconds_solve;
     }
 
@@ -63,6 +66,7 @@ impl HardRecord {
             ("mean_candidates", json!(self.candidates as f64 / steps)),
             ("mean_closed_contacts", json!(self.closed as f64 / steps)),
             ("unconverged_steps", json!(self.unconverged_steps)),
+            ("fallback_steps", json!(self.fallback_steps)),
             ("seconds_per_solve", json!(self.seconds_solve / steps)),
         ] {
             metrics.insert(key.into(), value);

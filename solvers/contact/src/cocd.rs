@@ -37,6 +37,8 @@ pub struct Solution {
     pub iterations: u32,
     /// Whether the solver stopped at reduced accuracy.
     pub reduced_accuracy: bool,
+    /// Whether Clarabel took over a step grainflow's interior point failed.
+    pub fell_back: bool,
 }
 
 /// The rows a contact contributes and the cone they form.
@@ -182,9 +184,15 @@ pub fn solve(
     solver: ConicSolver,
 ) -> Result<Solution, String> {
     let program = build(contacts, bodies, dimension, scales);
+    // Should grainflow's interior point fail on a step, Clarabel takes it
+    // over (and stops the run if it fails too).
     let (x, z, iterations, reduced_accuracy) =
         if solver == ConicSolver::InteriorPoint && program.cone_count == 0 {
-            crate::interior_point::solve(&program, tolerance, max_iterations)?
+            match crate::interior_point::solve(&program, tolerance, max_iterations) {
+                Ok(solution) => solution,
+                Err(why) => solve_with_clarabel(&program, tolerance, max_iterations)
+                    .map_err(|again| format!("{why}; then {again}"))?,
+            }
         } else {
             solve_with_clarabel(&program, tolerance, max_iterations)?
         };
@@ -397,6 +405,7 @@ fn recover(
         tangential_impulse: vec![Vec3::zeros(); contacts.len()],
         iterations,
         reduced_accuracy,
+        fell_back: false,
     };
     for body in 0..bodies {
         let first = body * d;

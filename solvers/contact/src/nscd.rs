@@ -125,6 +125,7 @@ pub fn solve(
             tangential_impulse,
             iterations: sweeps,
             reduced_accuracy: !converged,
+            fell_back: false,
         },
         converged,
     )

@@ -43,6 +43,8 @@ pub struct StepReport {
     pub coulomb_violation: f64,
     /// Largest overlap after the move over the mean diameter.
     pub penetration: f64,
+    /// Whether Clarabel took over from grainflow's interior point.
+    pub fell_back: bool,
     /// Candidate threshold used [m].
     pub threshold: f64,
     pub seconds_solve: f64,
@@ -262,6 +264,7 @@ impl HardContact {
             complementarity: residual.complementarity,
             coulomb_violation: residual.coulomb,
             penetration,
+            fell_back: solution.fell_back,
             threshold,
             seconds_solve,
             non_finite,
