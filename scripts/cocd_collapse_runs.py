@@ -77,7 +77,7 @@ def main():
     with open(args.out, "w", newline="") as f, open(profile_path, "w", newline="") as g:
         writer = csv.DictWriter(f, fieldnames=FIELDS)
         writer.writeheader()
-        profiles = csv.DictWriter(g, fieldnames=["model", "dt", "time_after_release", "x", "height"])
+        profiles = csv.DictWriter(g, fieldnames=["model", "dt", "time_after_release", "x", "height", "top"])
         profiles.writeheader()
         for spec in args.run:
             model, dt = spec.split(":")

@@ -503,9 +503,9 @@ pub struct ColumnCollapse {
     sides: Vec<f64>,
     initial_height: Option<f64>,
     /// Times after the release at which to record the height profile, and
-    /// the profiles recorded: (time after release, x, height).
+    /// the profiles recorded: (time after release, x, mass profile, top).
     profile_times: Vec<f64>,
-    profiles: Vec<(f64, f64, f64)>,
+    profiles: Vec<(f64, f64, f64, f64)>,
 }
 
 impl ColumnCollapse {
@@ -541,27 +541,40 @@ impl ColumnCollapse {
         }
     }
 
-    /// Height profile h(x): in bins one mean diameter wide along x, the top
-    /// of the highest mobile grain whose centre lies in the bin, above the
-    /// domain's floor (0 where the bin is empty).
-    fn profile(system: &DemSystem) -> Vec<(f64, f64)> {
+    /// Mass profile h(x): in bins two mean diameters wide along x, the
+    /// volume of the mobile grains whose centre lies in the bin over the
+    /// bin's width (and, in 3D, the spanwise length): the height the grains
+    /// would have packed without voids. Unlike the top of the highest grain,
+    /// it does not jump when a single grain flies up. Also the top of the
+    /// highest grain above the floor, per bin.
+    fn profile(system: &DemSystem) -> Vec<(f64, f64, f64)> {
         let p = &system.particles;
         let vertical = Self::vertical(system);
         let floor = system.domain.lower[vertical];
         let mobile: Vec<usize> = (0..p.n_owned).filter(|&k| !p.is_fixed(k)).collect();
         let diameter =
             2.0 * mobile.iter().map(|&k| p.radius[k]).sum::<f64>() / mobile.len().max(1) as f64;
+        let width = 2.0 * diameter;
+        let (span, volume): (f64, fn(f64) -> f64) = match system.domain.dimension {
+            grainflow_core::Dimension::Two => (1.0, |r| std::f64::consts::PI * r * r),
+            grainflow_core::Dimension::Three => {
+                let spanwise = (0..3).find(|&a| a != 0 && a != vertical).unwrap();
+                (system.domain.extent()[spanwise], |r| {
+                    4.0 / 3.0 * std::f64::consts::PI * r * r * r
+                })
+            }
+        };
         let lower = system.domain.lower.x;
-        let bins = ((system.domain.extent().x / diameter).ceil() as usize).max(1);
-        let mut height = vec![0.0f64; bins];
+        let bins = ((system.domain.extent().x / width).ceil() as usize).max(1);
+        let mut solid = vec![0.0f64; bins];
+        let mut top = vec![0.0f64; bins];
         for &k in &mobile {
-            let bin = (((p.position[k].x - lower) / diameter) as usize).min(bins - 1);
-            height[bin] = height[bin].max(p.position[k][vertical] + p.radius[k] - floor);
+            let bin = (((p.position[k].x - lower) / width) as usize).min(bins - 1);
+            solid[bin] += volume(p.radius[k]) / (width * span);
+            top[bin] = top[bin].max(p.position[k][vertical] + p.radius[k] - floor);
         }
-        height
-            .iter()
-            .enumerate()
-            .map(|(b, &h)| (lower + (b as f64 + 0.5) * diameter, h))
+        (0..bins)
+            .map(|b| (lower + (b as f64 + 0.5) * width, solid[b], top[b]))
             .collect()
     }
 
@@ -591,8 +604,8 @@ impl ColumnCollapse {
                 break;
             }
             self.profile_times.pop();
-            for (x, h) in Self::profile(system) {
-                self.profiles.push((t, x, h));
+            for (x, h, top) in Self::profile(system) {
+                self.profiles.push((t, x, h, top));
             }
         }
     }
@@ -648,9 +661,9 @@ impl ColumnCollapse {
         if !self.profiles.is_empty() {
             let mut file =
                 std::io::BufWriter::new(std::fs::File::create(out.join("profiles.csv"))?);
-            writeln!(file, "time_after_release,x,height")?;
-            for (t, x, h) in &self.profiles {
-                writeln!(file, "{t:.6e},{x:.6e},{h:.6e}")?;
+            writeln!(file, "time_after_release,x,height,top")?;
+            for (t, x, h, top) in &self.profiles {
+                writeln!(file, "{t:.6e},{x:.6e},{h:.6e},{top:.6e}")?;
             }
         }
         let mut metrics = Map::new();
