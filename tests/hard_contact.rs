@@ -67,7 +67,7 @@ fn hard_contact_keys_are_checked_and_nothing_is_written() {
 
 /// 400 discs at rest in a box (`cases/static_box.toml`, 0.2 s of it).
 /// COCD with ε = 1e-3 keeps E_k/E_p below 1e-8 (over the full second the
-/// sweep measured 1.2e-9 at ε = 1e-3, 1.1e-8 at 3e-3 and 2.9e-6 at 1e-2:
+/// sweep measured 1.5e-9 at ε = 1e-3, 6.6e-9 at 3e-3 and 2.9e-6 at 1e-2:
 /// docs/validation.md §8); with ε = 1e-1 the interior point stops so early
 /// that the packing creeps. NSCD starts without the packing's force
 /// network: while Gauss–Seidel builds it the grains stir (1.9e-8 measured
