@@ -13,10 +13,10 @@ the model and time step of each row.
 """
 import argparse
 import csv
-import json
 import os
-import subprocess
 import sys
+
+from grainflow_run import run_case
 
 FIELDS = [
     "model", "dt", "status", "runout", "final_front", "aspect_ratio", "steps", "wall_seconds",
@@ -28,23 +28,14 @@ FIELDS = [
 
 def run(binary, case, model, dt, workdir, soft_sets, extra):
     out = os.path.join(workdir, f"collapse_{model}_{dt:g}")
-    command = [binary, "run", case, "--out", out,
-               "--set", f'contact.model="{model}"', "--set", f"time.dt={dt}"]
-    if model == "soft":
-        for s in soft_sets:
-            command += ["--set", s]
-    for s in extra:
-        command += ["--set", s]
-    finished = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    sets = [f'contact.model="{model}"', f"time.dt={dt}"]
+    sets += (soft_sets if model == "soft" else []) + extra
+    summary, refusal = run_case(binary, case, out, sets)
     row = {"model": model, "dt": dt}
-    summary_path = os.path.join(out, "summary.json")
-    if not os.path.exists(summary_path):
-        lines = finished.stderr.strip().splitlines()
+    if summary is None:
         row["status"] = "refused"
-        row["stop_reason"] = lines[-1] if lines else "failed"
+        row["stop_reason"] = refusal
         return row, []
-    with open(summary_path) as f:
-        summary = json.load(f)
     row["status"] = summary["status"]
     row["stop_reason"] = summary["stop_reason"]
     row["steps"] = summary["steps"]

@@ -11,10 +11,10 @@ Each model is run with every tolerance given.
 """
 import argparse
 import csv
-import json
 import os
-import subprocess
 import sys
+
+from grainflow_run import run_case
 
 FIELDS = [
     "model", "tolerance", "status", "max_kinetic_to_potential", "final_kinetic_to_potential",
@@ -26,18 +26,12 @@ FIELDS = [
 
 def run(binary, case, model, tolerance, workdir, extra):
     out = os.path.join(workdir, f"static_box_{model}_{tolerance:g}")
-    command = [binary, "run", case, "--out", out,
-               "--set", f'contact.model="{model}"', "--set", f"contact.tolerance={tolerance}"]
-    for s in extra:
-        command += ["--set", s]
-    finished = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    sets = [f'contact.model="{model}"', f"contact.tolerance={tolerance}"] + extra
+    summary, refusal = run_case(binary, case, out, sets)
     row = {"model": model, "tolerance": tolerance}
-    summary_path = os.path.join(out, "summary.json")
-    if not os.path.exists(summary_path):
-        row["status"] = finished.stderr.strip().splitlines()[-1] if finished.stderr else "failed"
+    if summary is None:
+        row["status"] = refusal
         return row
-    with open(summary_path) as f:
-        summary = json.load(f)
     row["status"] = summary["status"]
     for key in FIELDS:
         if key in summary["metrics"]:

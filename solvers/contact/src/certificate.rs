@@ -104,6 +104,9 @@ pub fn largest_overlap(system: &DemSystem, length: f64) -> f64 {
     for i in 0..p.n_owned {
         for e in list.range(i) {
             let j = list.partner[e] as usize;
+            if j < i {
+                continue; // the pair was measured from j's side
+            }
             let gap = (p.position[i] - p.position[j]).norm() - p.radius[i] - p.radius[j];
             largest = largest.max(-gap);
         }

@@ -174,15 +174,14 @@ struct NormalFactor {
     work: MemBuffer,
 }
 
+/// faer's view of the upper-triangle pattern of a CSC matrix.
+fn symbolic_pattern(matrix: &CscMatrix<f64>) -> SymbolicSparseColMatRef<'_, usize> {
+    SymbolicSparseColMatRef::new_checked(matrix.n, matrix.n, &matrix.colptr, None, &matrix.rowval)
+}
+
 impl NormalFactor {
     fn new(matrix: &CscMatrix<f64>) -> Result<Self, String> {
-        let pattern = SymbolicSparseColMatRef::new_checked(
-            matrix.n,
-            matrix.n,
-            &matrix.colptr,
-            None,
-            &matrix.rowval,
-        );
+        let pattern = symbolic_pattern(matrix);
         let symbolic = factorize_symbolic_cholesky(
             pattern,
             Side::Upper,
@@ -202,13 +201,7 @@ impl NormalFactor {
     }
 
     fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
-        let pattern = SymbolicSparseColMatRef::new_checked(
-            matrix.n,
-            matrix.n,
-            &matrix.colptr,
-            None,
-            &matrix.rowval,
-        );
+        let pattern = symbolic_pattern(matrix);
         let no_regularisation = LltRegularization {
             dynamic_regularization_delta: 0.0,
             dynamic_regularization_epsilon: 0.0,

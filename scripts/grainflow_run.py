@@ -1,0 +1,21 @@
+"""Runs grainflow on a case with `--set` overrides and reads its summary:
+shared by the sweep scripts of this folder."""
+import json
+import os
+import subprocess
+
+
+def run_case(binary, case, out, sets):
+    """`binary run case --out out --set s ...`. Returns the parsed
+    summary.json and None, or None and the last line grainflow wrote to
+    stderr when the case was refused (nothing written)."""
+    command = [binary, "run", case, "--out", out]
+    for s in sets:
+        command += ["--set", s]
+    finished = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    summary_path = os.path.join(out, "summary.json")
+    if not os.path.exists(summary_path):
+        lines = finished.stderr.strip().splitlines()
+        return None, lines[-1] if lines else "failed"
+    with open(summary_path) as f:
+        return json.load(f), None
