@@ -13,7 +13,9 @@
 //!   - along the last active axis (y in 2D, z in 3D: the wall-normal axis
 //!     of a channel, solved by tridiagonal elimination) the interpolant is
 //!     the parabola through the ghost and the first two cells,
-//!     `u_ghost = (8 u_wall − 6 u_1 + u_2) / 3` (`DirichletCellQuadratic`);
+//!     `u_ghost = (8 u_wall − 6 u_1 + u_2) / 3` (`DirichletCellQuadratic`;
+//!     on a stretched axis the same parabola through the actual distances,
+//!     [`Grid::wall_ghost_weights`]);
 //!     the ghost is exact for any parabola (third order at the wall), so
 //!     with the three-point Laplacian, exact for parabolas too, a steady
 //!     Poiseuille or open-channel profile is reproduced to round-off;
@@ -131,6 +133,11 @@ impl Boundaries {
             }
         }
         let line_axis = dim - 1;
+        if !grid.is_uniform(line_axis) && self.faces[line_axis][0] == BoundaryCondition::Periodic {
+            return Err(FluidError::Boundary(format!(
+                "axis {line_axis} is stretched and needs walls on both faces, not periodic ends                  (a periodic axis has no place to cluster cells towards)"
+            )));
+        }
         for component in 0..dim {
             let ends = self.velocity_ends(grid, component);
             for (axis, end) in ends.iter().enumerate().take(line_axis) {
@@ -252,6 +259,11 @@ pub fn fill_ghosts(grid: &Grid, field: &mut [f64], location: Location, ends: &Fi
         // The quadratic ghost reads the second unknown from the wall; a
         // grid has at least two cells per axis, so it is never a ghost.
         debug_assert!(n >= 2);
+        let quadratic = if axis == grid.line_axis() {
+            [0, 1].map(|side| grid.wall_ghost_weights(side))
+        } else {
+            [[0.0; 3]; 2]
+        };
         grid.for_each(&line_block, |first, _| {
             let at = |i: usize| first + i * stride;
             match lower.kind {
@@ -259,7 +271,8 @@ pub fn fill_ghosts(grid: &Grid, field: &mut [f64], location: Location, ends: &Fi
                 EndKind::Neumann => field[at(0)] = field[at(1)],
                 EndKind::DirichletCell => field[at(0)] = 2.0 * lower.value - field[at(1)],
                 EndKind::DirichletCellQuadratic => {
-                    field[at(0)] = (8.0 * lower.value - 6.0 * field[at(1)] + field[at(2)]) / 3.0
+                    let [wall, near, far] = quadratic[0];
+                    field[at(0)] = wall * lower.value + near * field[at(1)] + far * field[at(2)]
                 }
                 EndKind::DirichletFace => field[at(0)] = lower.value,
             }
@@ -268,8 +281,9 @@ pub fn fill_ghosts(grid: &Grid, field: &mut [f64], location: Location, ends: &Fi
                 EndKind::Neumann => field[at(n + 1)] = field[at(n)],
                 EndKind::DirichletCell => field[at(n + 1)] = 2.0 * upper.value - field[at(n)],
                 EndKind::DirichletCellQuadratic => {
+                    let [wall, near, far] = quadratic[1];
                     field[at(n + 1)] =
-                        (8.0 * upper.value - 6.0 * field[at(n)] + field[at(n - 1)]) / 3.0
+                        wall * upper.value + near * field[at(n)] + far * field[at(n - 1)]
                 }
                 EndKind::DirichletFace => {
                     field[at(n)] = upper.value;

@@ -41,7 +41,7 @@ pub mod transform;
 
 pub use boundary::{Boundaries, BoundaryCondition};
 pub use error::FluidError;
-pub use grid::{Block, Grid, Location};
+pub use grid::{clustered_faces, Block, Clustering, Grid, Location};
 pub use navier_stokes::{
     stage_fraction, FlowSolver, StepReport, ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT,
     STAGES,

@@ -310,14 +310,15 @@ impl FlowSolver {
     }
 
     /// `ν Δt Σ_a 4/h_a²`: the viscous number an explicit step must keep
-    /// below [`EXPLICIT_VISCOUS_LIMIT`].
+    /// below [`EXPLICIT_VISCOUS_LIMIT`]. Along a stretched axis `4/h²` is
+    /// replaced by the Gershgorin bound of its Laplacian,
+    /// [`Grid::laplacian_bound`].
     pub fn viscous_number(&self, dt: f64) -> f64 {
         let grid = &self.grid;
         self.viscosity
             * dt
-            * grid.spacing[..grid.dim()]
-                .iter()
-                .map(|h| 4.0 / (h * h))
+            * (0..grid.dim())
+                .map(|axis| grid.laplacian_bound(axis))
                 .sum::<f64>()
     }
 
@@ -360,6 +361,7 @@ impl FlowSolver {
             add_laplacian(
                 grid,
                 &self.velocity[component],
+                Location::Face(component),
                 block,
                 alpha * dt * self.viscosity,
                 rhs,
@@ -458,6 +460,7 @@ impl FlowSolver {
             add_laplacian(
                 grid,
                 correction,
+                Location::Centre,
                 &cells,
                 -0.5 * scale * self.viscosity,
                 pressure,
@@ -483,14 +486,17 @@ impl FlowSolver {
         let divergence = &self.divergence;
         let largest = self
             .grid
-            .par_max(&self.grid.cell_block(), |index| divergence[index].abs());
+            .par_max(&self.grid.cell_block(), |index, _| divergence[index].abs());
         self.communicator.max(largest)
     }
 
     /// `½ ∫ |u|² dV` over the domain, each component integrated on its own
-    /// faces (trapezoidal weights ½ on wall faces).
+    /// faces (trapezoidal weights ½ on wall faces; along a stretched axis
+    /// each value weighted by its cell width or face control length).
     pub fn kinetic_energy(&self) -> f64 {
         let grid = &self.grid;
+        let line = grid.line_axis();
+        let uniform = grid.is_uniform(line);
         let mut sum = 0.0;
         for (component, field) in self.velocity.iter().enumerate() {
             let mut block = self.velocity_unknowns[component];
@@ -500,24 +506,42 @@ impl FlowSolver {
                 block.end[component] += 1;
             }
             let (first, last) = (block.start[component], block.end[component] - 1);
+            let on_face = component == line;
             sum += grid.par_sum(&block, |index, point| {
                 let on_wall = walls && (point[component] == first || point[component] == last);
                 let weight = if on_wall { 0.5 } else { 1.0 };
-                weight * field[index] * field[index]
+                let length = match (uniform, on_face) {
+                    (true, _) => 1.0,
+                    (false, true) => grid.gap(line, point[line]),
+                    (false, false) => grid.width(line, point[line]),
+                };
+                weight * length * field[index] * field[index]
             });
         }
-        self.communicator.sum(0.5 * sum * grid.cell_volume())
+        let volume = if uniform {
+            grid.cell_volume()
+        } else {
+            grid.section_area()
+        };
+        self.communicator.sum(0.5 * sum * volume)
     }
 
-    /// `Δt Σ_a max|u_a| / h_a` over every rank.
+    /// `Δt Σ_a max|u_a| / h_a` over every rank; along a stretched axis the
+    /// largest `|u_a| / g` over its faces.
     pub fn max_cfl(&self, dt: f64) -> f64 {
         let grid = &self.grid;
         let mut cfl = 0.0;
         for (component, field) in self.velocity.iter().enumerate() {
-            let largest = grid.par_max(&self.velocity_unknowns[component], |index| {
-                field[index].abs()
-            });
-            cfl += self.communicator.max(largest) * dt / grid.spacing[component];
+            let block = &self.velocity_unknowns[component];
+            cfl += if grid.is_uniform(component) {
+                let largest = grid.par_max(block, |index, _| field[index].abs());
+                self.communicator.max(largest) * dt / grid.spacing[component]
+            } else {
+                let largest = grid.par_max(block, |index, plane| {
+                    field[index].abs() / grid.gap(component, plane)
+                });
+                self.communicator.max(largest) * dt
+            };
         }
         cfl
     }

@@ -42,15 +42,16 @@
 
 use crate::boundary::{unknowns, EndKind, FieldEnds};
 use crate::error::FluidError;
-use crate::grid::{Block, Grid};
+use crate::grid::{Block, Grid, Location};
 use crate::transform::{AxisTransform, Direction, TransformKind};
 
 /// A planned direct solver for one field's unknowns and end conditions.
 pub struct DirectSolver {
     /// The last active axis, solved by tridiagonal elimination.
     line_axis: usize,
-    line_spacing: f64,
     line_ends: [EndKind; 2],
+    /// The line operator per row, in units of the Laplacian's coefficient.
+    rows: LineRows,
     /// Padded indices of the unknowns in the field.
     block: Block,
     /// Unknowns along each axis (1 along an inactive axis).
@@ -62,10 +63,97 @@ pub struct DirectSolver {
     lines: ModeLines,
 }
 
+/// The three-point operator along a line, row by row: row `j` reads
+/// `lower_j x_{j−1} + shift_j x_j + upper_j x_{j+1}`, the end closures
+/// folded into the first and last rows (`lower_0` and `upper_{n−1}` unused
+/// unless the line is periodic). `width_j` is the width of the row's
+/// control volume, the weight under which the operator is symmetric.
+#[derive(Clone, Debug, Default)]
+struct LineRows {
+    lower: Vec<f64>,
+    shift: Vec<f64>,
+    upper: Vec<f64>,
+    width: Vec<f64>,
+}
+
+impl LineRows {
+    /// The line operator of a field at `location` along the line axis of
+    /// `grid`, rows `first..first + length` (padded), closed by `ends`.
+    fn new(
+        grid: &Grid,
+        location: Location,
+        first: usize,
+        length: usize,
+        ends: [EndKind; 2],
+    ) -> Self {
+        let axis = grid.line_axis();
+        let mut rows = LineRows::default();
+        for j in 0..length {
+            let [below, above] = grid.line_laplacian(location, first + j);
+            rows.lower.push(below);
+            rows.upper.push(above);
+            rows.shift.push(-(below + above));
+            rows.width.push(if location == Location::Face(axis) {
+                grid.gap(axis, first + j)
+            } else {
+                grid.width(axis, first + j)
+            });
+        }
+        // What the ghost beyond each end puts on its row: `ghost = a x_near
+        // + b x_far` (homogeneous), so the row's diagonal gains `a` times
+        // the coupling to the ghost and its inner neighbour `b` times it.
+        let last = length - 1;
+        for side in 0..2 {
+            let (row, inner) = if side == 0 {
+                (0, 1)
+            } else {
+                (last, last.wrapping_sub(1))
+            };
+            let coupling = if side == 0 {
+                rows.lower[row]
+            } else {
+                rows.upper[row]
+            };
+            let [near, far] = match ends[side] {
+                EndKind::Neumann => [1.0, 0.0],
+                EndKind::DirichletCell => [-1.0, 0.0],
+                EndKind::DirichletCellQuadratic => {
+                    let [_, near, far] = grid.wall_ghost_weights(side);
+                    [near, far]
+                }
+                EndKind::DirichletFace | EndKind::Periodic => [0.0, 0.0],
+            };
+            rows.shift[row] += near * coupling;
+            if far != 0.0 {
+                if side == 0 {
+                    rows.upper[row] += far * coupling;
+                } else {
+                    rows.lower[row] += far * coupling;
+                }
+                debug_assert!(inner < length);
+            }
+        }
+        rows
+    }
+
+    /// The same rows times `factor`.
+    fn scaled(&self, factor: f64, out: &mut LineRows) {
+        let scale = |from: &[f64], to: &mut Vec<f64>| {
+            to.clear();
+            to.extend(from.iter().map(|value| factor * value));
+        };
+        scale(&self.lower, &mut out.lower);
+        scale(&self.shift, &mut out.shift);
+        scale(&self.upper, &mut out.upper);
+    }
+}
+
 impl DirectSolver {
     /// Plans a solver for a field with these end conditions (only their
     /// kinds matter: the solver works on homogeneous conditions; prescribed
-    /// values enter through the right-hand side or an increment form).
+    /// values enter through the right-hand side or an increment form). A
+    /// field with prescribed face values along the line axis lives on the
+    /// faces normal to it, any other at cell centres along it.
     pub fn new(grid: &Grid, ends: &FieldEnds) -> Result<Self, FluidError> {
         let dim = grid.dim();
         let line_axis = dim - 1;
@@ -110,6 +198,11 @@ impl DirectSolver {
                 "axis {line_axis}: periodic on one end only"
             )));
         }
+        if periodic_line[0] && !grid.is_uniform(line_axis) {
+            return Err(FluidError::Boundary(format!(
+                "axis {line_axis}: a periodic line must be uniform, this one is stretched"
+            )));
+        }
         let quadratic_line = line_ends.contains(&EndKind::DirichletCellQuadratic);
         if quadratic_line && shape[line_axis] < 2 {
             return Err(FluidError::Boundary(format!(
@@ -123,6 +216,18 @@ impl DirectSolver {
                 "axis {line_axis}: a periodic line needs at least 3 cells"
             )));
         }
+        let location = if line_ends[0] == EndKind::DirichletFace {
+            Location::Face(line_axis)
+        } else {
+            Location::Centre
+        };
+        let rows = LineRows::new(
+            grid,
+            location,
+            block.start[line_axis],
+            shape[line_axis],
+            line_ends,
+        );
         // Modes are ordered like the compact array: first axis fastest.
         let mode_count: usize = shape[..line_axis].iter().product();
         let modal = (0..mode_count)
@@ -139,8 +244,8 @@ impl DirectSolver {
         let total = shape.iter().product();
         Ok(DirectSolver {
             line_axis,
-            line_spacing: grid.spacing[line_axis],
             line_ends,
+            rows,
             block,
             shape,
             transforms,
@@ -149,7 +254,6 @@ impl DirectSolver {
             lines: ModeLines::new(mode_count, shape[line_axis], periodic_line[0]),
         })
     }
-
     /// The padded indices of the unknowns this solver owns in a field.
     pub fn unknowns(&self) -> &Block {
         &self.block
@@ -204,25 +308,8 @@ impl DirectSolver {
     /// elimination runs over flat arrays.
     fn solve_lines(&mut self, identity: f64, laplacian: f64) {
         let length = self.shape[self.line_axis];
-        let coupling = laplacian / (self.line_spacing * self.line_spacing);
-        // What each end's ghost adds to the diagonal of its row (see the
-        // module documentation), and the entry coupling that row to its
-        // neighbour inside the line.
-        let end_shift = self.line_ends.map(|kind| match kind {
-            EndKind::Neumann => coupling,
-            EndKind::DirichletCell => -coupling,
-            EndKind::DirichletCellQuadratic => -2.0 * coupling,
-            EndKind::DirichletFace | EndKind::Periodic => 0.0,
-        });
-        let end_coupling = self.line_ends.map(|kind| match kind {
-            EndKind::DirichletCellQuadratic => 4.0 / 3.0 * coupling,
-            _ => coupling,
-        });
-        let off_diagonals = OffDiagonals {
-            interior: coupling,
-            first_upper: end_coupling[0],
-            last_lower: end_coupling[1],
-        };
+        let work = &mut self.lines;
+        self.rows.scaled(laplacian, &mut work.rows);
         let periodic = self.line_ends[0] == EndKind::Periodic;
         let singular = identity == 0.0
             && self.modal[0] == 0.0
@@ -230,32 +317,22 @@ impl DirectSolver {
                 .line_ends
                 .iter()
                 .all(|&kind| matches!(kind, EndKind::Periodic | EndKind::Neumann));
-        let work = &mut self.lines;
         for (m, &modal) in self.modal.iter().enumerate() {
-            let diagonal = identity + laplacian * modal - 2.0 * coupling;
-            work.interior[m] = diagonal;
-            work.first[m] = diagonal + end_shift[0];
-            work.last[m] = diagonal + end_shift[1];
-            if length == 1 {
-                work.first[m] += end_shift[1];
-            }
+            work.base[m] = identity + laplacian * modal;
         }
         if singular {
-            // Set the singular mode aside; identity rows keep the sweep finite.
+            // Set the singular mode aside; it is swept as the identity.
             work.singular_line.clear();
             work.singular_line
                 .extend((0..length).map(|j| self.modes[j * self.modal.len()]));
-            work.interior[0] = 1.0;
-            work.first[0] = 1.0;
-            work.last[0] = 1.0;
         }
         if periodic {
-            work.solve_cyclic(&mut self.modes, length, coupling);
+            work.solve_cyclic(&mut self.modes, length, singular);
         } else {
-            work.sweep(&mut self.modes, length, off_diagonals);
+            work.sweep(&mut self.modes, length, singular);
         }
         if singular {
-            let line = work.solve_singular(length, coupling, end_shift[1]);
+            let line = work.solve_singular(length, &self.rows.width);
             let stride = self.modal.len();
             for (j, value) in line.iter().enumerate() {
                 self.modes[j * stride] = *value;
@@ -264,35 +341,15 @@ impl DirectSolver {
     }
 }
 
-/// The off-diagonal entries of the line systems, the same for every mode:
-/// `interior` everywhere but the upper entry of the first row and the
-/// lower entry of the last row, which the end closures set (`(4/3) c` next
-/// to a quadratic wall ghost).
-#[derive(Clone, Copy, Debug)]
-struct OffDiagonals {
-    interior: f64,
-    first_upper: f64,
-    last_lower: f64,
-}
-
-impl OffDiagonals {
-    /// The same entry everywhere.
-    fn uniform(coupling: f64) -> Self {
-        OffDiagonals {
-            interior: coupling,
-            first_upper: coupling,
-            last_lower: coupling,
-        }
-    }
-}
-
-/// Work arrays of the tridiagonal systems of all modes: per-mode diagonal
-/// `first` (row 0), `interior`, `last` (row n − 1); the off-diagonals are
-/// [`OffDiagonals`]. Row `j` of mode `m` is at `m + j · modes` in a flat
-/// array.
+/// Work arrays of the tridiagonal systems of all modes: the line operator
+/// `rows` scaled by the Laplacian's coefficient, and per mode the diagonal
+/// part `base` that the transformed axes and the identity add to every row
+/// (the first and last rows of a periodic line add a Sherman–Morrison
+/// term). Row `j` of mode `m` is at `m + j · modes` in a flat array.
 struct ModeLines {
+    rows: LineRows,
+    base: Vec<f64>,
     first: Vec<f64>,
-    interior: Vec<f64>,
     last: Vec<f64>,
     /// The elimination's modified upper diagonal, one per row and mode.
     modified: Vec<f64>,
@@ -306,8 +363,9 @@ struct ModeLines {
 impl ModeLines {
     fn new(modes: usize, length: usize, periodic: bool) -> Self {
         ModeLines {
+            rows: LineRows::default(),
+            base: vec![0.0; modes],
             first: vec![0.0; modes],
-            interior: vec![0.0; modes],
             last: vec![0.0; modes],
             modified: vec![0.0; modes * length],
             correction: if periodic {
@@ -324,43 +382,54 @@ impl ModeLines {
         }
     }
 
-    /// Thomas algorithm on every mode: `rhs` is overwritten with the
-    /// solutions.
-    fn sweep(&mut self, rhs: &mut [f64], length: usize, off_diagonals: OffDiagonals) {
-        thomas(
-            rhs,
-            &mut self.modified,
-            length,
-            off_diagonals,
-            [&self.first[..], &self.interior[..], &self.last[..]],
-        );
+    /// The per-mode diagonal parts of the first and last rows, `base`
+    /// until a periodic line changes them. Mode 0 of a singular system is
+    /// swept as the identity ([`thomas`]); its first row gets a unit
+    /// diagonal so that a periodic line's `γ` stays finite.
+    fn end_bases(&mut self, singular: bool) {
+        self.first.copy_from_slice(&self.base);
+        self.last.copy_from_slice(&self.base);
+        if singular {
+            self.first[0] = 1.0 - self.rows.shift[0];
+        }
     }
 
-    /// Periodic lines: the corner entries `coupling` are a rank-one update
-    /// `u vᵀ` of a tridiagonal matrix, `u = (γ, 0, …, 0, c)`,
-    /// `v = (1, 0, …, 0, c/γ)` with `γ = −b₀` (Sherman–Morrison); two
-    /// sweeps, then `x = y − z (v·y) / (1 + v·z)`.
-    fn solve_cyclic(&mut self, rhs: &mut [f64], length: usize, coupling: f64) {
+    /// Thomas algorithm on every mode: `rhs` is overwritten with the
+    /// solutions.
+    fn sweep(&mut self, rhs: &mut [f64], length: usize, singular: bool) {
+        self.end_bases(singular);
+        let bases = [&self.first[..], &self.base[..], &self.last[..]];
+        thomas(rhs, &mut self.modified, length, &self.rows, bases, singular);
+    }
+
+    /// Periodic lines (uniform, so every row has the same coupling `c`):
+    /// the corner entries `c` are a rank-one update `u vᵀ` of a
+    /// tridiagonal matrix, `u = (γ, 0, …, 0, c)`, `v = (1, 0, …, 0, c/γ)`
+    /// with `γ = −b₀` (Sherman–Morrison); two sweeps, then
+    /// `x = y − z (v·y) / (1 + v·z)`.
+    fn solve_cyclic(&mut self, rhs: &mut [f64], length: usize, singular: bool) {
+        self.end_bases(singular);
         let modes = self.first.len();
         let last_row = (length - 1) * modes;
+        let coupling = self.rows.upper[0];
         self.correction.fill(0.0);
         for m in 0..modes {
-            let gamma = -self.first[m];
+            let gamma = -(self.first[m] + self.rows.shift[0]);
             self.gamma[m] = gamma;
             self.correction[m] = gamma;
             self.correction[last_row + m] = coupling;
             self.first[m] -= gamma;
             self.last[m] -= coupling * coupling / gamma;
         }
-        let diagonals = [&self.first[..], &self.interior[..], &self.last[..]];
-        let off_diagonals = OffDiagonals::uniform(coupling);
-        thomas(rhs, &mut self.modified, length, off_diagonals, diagonals);
+        let bases = [&self.first[..], &self.base[..], &self.last[..]];
+        thomas(rhs, &mut self.modified, length, &self.rows, bases, singular);
         thomas(
             &mut self.correction,
             &mut self.modified,
             length,
-            off_diagonals,
-            diagonals,
+            &self.rows,
+            bases,
+            singular,
         );
         // v·y / (1 + v·z) per mode, kept in `gamma`'s place once used.
         for m in 0..modes {
@@ -381,62 +450,74 @@ impl ModeLines {
     }
 
     /// The singular mode of a pure Neumann or periodic Laplacian: remove
-    /// the mean of the right-hand side (the compatibility condition), pin
+    /// the mean of the right-hand side, weighted by the rows' widths (the
+    /// compatibility condition: the operator conserves `Σ w_j x_j`), pin
     /// the first value to zero and drop its row (implied by the others),
     /// then shift the solution to zero mean. For a periodic line the
     /// wrap-around couplings to the pinned value vanish too.
-    fn solve_singular(&mut self, length: usize, coupling: f64, last_shift: f64) -> &[f64] {
+    fn solve_singular(&mut self, length: usize, widths: &[f64]) -> &[f64] {
         let line = &mut self.singular_line;
-        let count = length as f64;
-        let mean = line.iter().sum::<f64>() / count;
+        let total: f64 = widths.iter().sum();
+        let weighted_mean =
+            |line: &[f64]| line.iter().zip(widths).map(|(x, w)| x * w).sum::<f64>() / total;
+        let mean = weighted_mean(line);
         line.iter_mut().for_each(|r| *r -= mean);
         line[0] = 0.0;
-        let interior = [-2.0 * coupling];
-        let last = [-2.0 * coupling + last_shift];
-        // With two cells the one remaining row is the last one.
-        let first = if length == 2 { last } else { interior };
+        // Rows 1..n of the line operator, without their coupling to x_0.
+        let rows = &self.rows;
+        let mut reduced = LineRows {
+            lower: rows.lower[1..].to_vec(),
+            shift: rows.shift[1..].to_vec(),
+            upper: rows.upper[1..].to_vec(),
+            width: Vec::new(),
+        };
+        reduced.lower[0] = 0.0;
+        let zero = [0.0];
         let mut modified = vec![0.0; length - 1];
         thomas(
             &mut line[1..],
             &mut modified,
             length - 1,
-            OffDiagonals::uniform(coupling),
-            [&first[..], &interior[..], &last[..]],
+            &reduced,
+            [&zero[..], &zero[..], &zero[..]],
+            false,
         );
-        let mean = line.iter().sum::<f64>() / count;
+        let mean = weighted_mean(line);
         line.iter_mut().for_each(|x| *x -= mean);
         line
     }
 }
 
-/// Thomas algorithm for `modes = diagonals[0].len()` independent
-/// tridiagonal systems of `length` rows with off-diagonals `off_diagonals`
-/// and diagonals `[first row, interior rows, last row]` per mode,
+/// Thomas algorithm for `modes = bases[0].len()` independent tridiagonal
+/// systems of `length` rows, row `j` of mode `m` reading
+/// `lower_j x_{j−1} + (base_m + shift_j) x_j + upper_j x_{j+1}` with
+/// `base` taken from `bases = [first row, interior rows, last row]`;
 /// right-hand sides in `rhs` (row-major over modes), overwritten with the
-/// solutions. The end entries are chosen per row, outside the loop over
-/// modes, so the interior sweep is the same as with uniform entries.
+/// solutions. With `identity_first_mode`, mode 0 solves the identity
+/// instead (its diagonal is 1, its off-diagonals 0): the place holder of a
+/// singular mode solved apart.
 fn thomas(
     rhs: &mut [f64],
     modified: &mut [f64],
     length: usize,
-    off_diagonals: OffDiagonals,
-    diagonals: [&[f64]; 3],
+    rows: &LineRows,
+    bases: [&[f64]; 3],
+    identity_first_mode: bool,
 ) {
-    let [first, interior, last] = diagonals;
+    let [first, interior, last] = bases;
     let modes = first.len();
     for m in 0..modes {
-        let pivot = first[m];
-        modified[m] = off_diagonals.first_upper / pivot;
+        let pivot = first[m] + rows.shift[0];
+        modified[m] = rows.upper[0] / pivot;
         rhs[m] /= pivot;
     }
-    // The last row has no upper entry: its modified value is never read.
-    let upper = off_diagonals.interior;
+    if identity_first_mode {
+        modified[0] = 0.0;
+        rhs[0] = 0.0;
+    }
     for j in 1..length {
-        let (diagonal, lower) = if j == length - 1 {
-            (last, off_diagonals.last_lower)
-        } else {
-            (interior, off_diagonals.interior)
-        };
+        let base = if j == length - 1 { last } else { interior };
+        let (lower, shift, upper) = (rows.lower[j], rows.shift[j], rows.upper[j]);
         let (done, rest) = rhs.split_at_mut(j * modes);
         let previous = &done[(j - 1) * modes..];
         let current = &mut rest[..modes];
@@ -444,9 +525,13 @@ fn thomas(
         let previous_modified = &done_modified[(j - 1) * modes..];
         let current_modified = &mut rest_modified[..modes];
         for m in 0..modes {
-            let pivot = diagonal[m] - lower * previous_modified[m];
+            let pivot = base[m] + shift - lower * previous_modified[m];
             current_modified[m] = upper / pivot;
             current[m] = (current[m] - lower * previous[m]) / pivot;
+        }
+        if identity_first_mode {
+            current_modified[0] = 0.0;
+            current[0] = 0.0;
         }
     }
     for j in (0..length - 1).rev() {

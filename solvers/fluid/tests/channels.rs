@@ -259,7 +259,7 @@ fn slowest_no_slip_shear_mode(grid: &Grid) -> (Vec<f64>, f64) {
     }
     fill_ghosts(grid, &mut mode, Location::Face(0), &ends);
     let mut laplacian = grid.zeros();
-    add_laplacian(grid, &mode, &block, 1.0, &mut laplacian);
+    add_laplacian(grid, &mode, Location::Face(0), &block, 1.0, &mut laplacian);
     let (mut numerator, mut denominator) = (0.0, 0.0);
     grid.for_each(&block, |index, _| {
         numerator += mode[index] * laplacian[index];
