@@ -135,7 +135,8 @@ impl Boundaries {
         let line_axis = dim - 1;
         if !grid.is_uniform(line_axis) && self.faces[line_axis][0] == BoundaryCondition::Periodic {
             return Err(FluidError::Boundary(format!(
-                "axis {line_axis} is stretched and needs walls on both faces, not periodic ends                  (a periodic axis has no place to cluster cells towards)"
+                "axis {line_axis} is stretched and needs walls on both faces, not periodic \
+                 ends"
             )));
         }
         for component in 0..dim {

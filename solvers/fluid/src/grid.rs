@@ -258,9 +258,12 @@ impl Grid {
                 lower[axis], upper[axis], faces[0], faces[n]
             )));
         }
-        if let Some(i) = (1..=n).find(|&i| !(faces[i] > faces[i - 1])) {
+        if let Some(i) = (1..=n)
+            .find(|&i| faces[i].partial_cmp(&faces[i - 1]) != Some(std::cmp::Ordering::Greater))
+        {
             return Err(FluidError::Parameter(format!(
-                "the faces of the stretched {name} axis must increase strictly: face {i} at {}                  follows {}",
+                "the faces of the stretched {name} axis must increase strictly: face {i} at {} \
+                 follows {}",
                 faces[i],
                 faces[i - 1]
             )));

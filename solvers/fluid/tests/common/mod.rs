@@ -41,9 +41,9 @@ pub fn order(coarse: f64, fine: f64) -> f64 {
 /// divergence after any projection, made dimensionless with the finest
 /// spacing and `velocity_scale`, is at most 1e-12.
 pub fn advance(solver: &mut FlowSolver, dt: f64, steps: usize, velocity_scale: f64) -> f64 {
-    let spacing = solver.grid.spacing[..solver.grid.dim()]
-        .iter()
-        .cloned()
+    let grid = &solver.grid;
+    let spacing = (0..grid.dim())
+        .map(|axis| grid.min_width(axis))
         .fold(f64::INFINITY, f64::min);
     let mut worst: f64 = 0.0;
     for _ in 0..steps {
