@@ -104,7 +104,34 @@ pub struct FluidSection {
     /// "explicit" (no solve; ν Δt Σ 4/h² ≤ 8.61).
     #[serde(default = "default_viscous_scheme")]
     pub viscous: String,
+    /// Cells clustered towards the walls of the last axis (z in 3D, y in
+    /// 2D); uniform without it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stretching: Option<StretchingSection>,
 }
+
+/// How the last axis is stretched: a tanh map clustering cells at one or
+/// both walls (`cluster` and `factor`), or the face coordinates themselves.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StretchingSection {
+    /// "both_walls", "lower_wall" or "upper_wall".
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cluster: Option<String>,
+    /// β of the map f(ξ) (see `grainflow_fluid::clustered_faces`): the
+    /// clustered end cells are 2β / sinh 2β of the mean width.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub factor: Option<f64>,
+    /// Face coordinates [m], `cells + 1` of them from the lower to the
+    /// upper end of the axis, strictly increasing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub faces: Option<Vec<f64>>,
+}
+
+pub const CLUSTER_KINDS: &str = "\"both_walls\", \"lower_wall\" or \"upper_wall\"";
+
+/// Largest tanh factor: at β = 12 the end cells are 1e-9 of the mean width.
+pub const MAX_STRETCHING_FACTOR: f64 = 12.0;
 
 fn default_viscous_scheme() -> String {
     "crank_nicolson".to_string()
@@ -521,9 +548,10 @@ pub enum AnalysisSection {
     /// Fluid: relative L2 error of the velocity against the exact decaying
     /// solution of `fluid.initial` (Taylor–Green or Beltrami) at the end.
     ExactDecay,
-    /// Fluid: the steady Poiseuille–Couette profile between the walls of the
-    /// last axis, driven by `fluid.pressure_gradient` and moving walls, against
-    /// the computed one at the end.
+    /// Fluid: the Poiseuille–Couette profile between the walls of the last
+    /// axis, driven by `fluid.pressure_gradient` and moving walls, against
+    /// the computed one at the end: the exact start-up from rest when the
+    /// flow starts at rest under a pressure gradient, else the steady one.
     Channel,
     /// Grain in a fluid: particle 0 released from rest; its initial
     /// acceleration against the added-mass estimate (eq. 20) and its
@@ -1150,6 +1178,9 @@ impl Case {
         }
         let periodic = |axis: usize| self.domain.periodic.get(axis).copied().unwrap_or(false);
         let extent = |axis: usize| self.domain.upper[axis] - self.domain.lower[axis];
+        if let Some(stretching) = &f.stretching {
+            self.validate_stretching(stretching, periodic(dim - 1))?;
+        }
         match &f.initial {
             InitialFlowSection::Rest => {}
             InitialFlowSection::Uniform { velocity } => check_len(
@@ -1231,6 +1262,69 @@ impl Case {
             }
             (Some(_), _) | (None, _) => {}
         }
+        Ok(())
+    }
+
+    /// `[fluid.stretching]`: one of its two forms, along an axis with walls,
+    /// in a scene without grains, giving faces that make a grid.
+    fn validate_stretching(
+        &self,
+        s: &StretchingSection,
+        periodic_line: bool,
+    ) -> Result<(), CaseError> {
+        let line = ["x", "y", "z"][self.dimension() - 1];
+        if periodic_line {
+            return Err(invalid(
+                "fluid.stretching",
+                "(given)",
+                &format!(
+                    "the stretched axis is the last one ({line}), which must have walls, not be \
+                     periodic"
+                ),
+            ));
+        }
+        if self.has_grains() {
+            return Err(invalid(
+                "fluid.stretching",
+                "(given)",
+                "grains in a fluid need uniform cells (the immersed boundary's smoothing \
+                 length is a cell size): stretching is for fluid-only scenes",
+            ));
+        }
+        match (&s.cluster, s.factor, &s.faces) {
+            (Some(cluster), Some(factor), None) => {
+                if !matches!(cluster.as_str(), "both_walls" | "lower_wall" | "upper_wall") {
+                    return Err(invalid(
+                        "fluid.stretching.cluster",
+                        cluster,
+                        &format!("allowed: {CLUSTER_KINDS}"),
+                    ));
+                }
+                if !(factor > 0.0 && factor <= MAX_STRETCHING_FACTOR) {
+                    return Err(invalid(
+                        "fluid.stretching.factor",
+                        factor,
+                        &format!(
+                            "allowed: 0 < factor ≤ {MAX_STRETCHING_FACTOR} (the clustered end \
+                             cells are 2β/sinh 2β of the mean width)"
+                        ),
+                    ));
+                }
+            }
+            (None, None, Some(_)) => {}
+            _ => {
+                return Err(invalid(
+                    "fluid.stretching",
+                    "(incomplete or mixed)",
+                    &format!(
+                        "allowed: cluster ({CLUSTER_KINDS}) with factor, or faces (the {line} \
+                         face coordinates [m]), not both"
+                    ),
+                ))
+            }
+        }
+        crate::fluid_scene::try_grid(self)
+            .map_err(|message| invalid("fluid.stretching.faces", "(the faces given)", &message))?;
         Ok(())
     }
 

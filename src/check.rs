@@ -169,6 +169,26 @@ fn bytes_per_cell(dimension: usize) -> usize {
     8 * (4 * dimension + 3 + 2)
 }
 
+/// Largest ratio of neighbouring widths along a stretched axis that
+/// `check` passes without a warning.
+const MAX_SMOOTH_GROWTH: f64 = 1.25;
+
+/// `check` warns when Crank–Nicolson leaves the finest grid modes with
+/// more than this factor per step.
+const SLOW_DAMPING: f64 = 0.9;
+
+/// What a step multiplies a Laplacian mode by with Crank–Nicolson at each
+/// stage, `Π_k (1 − α_k z/2) / (1 + α_k z/2)`, `z` its viscous number: it
+/// tends to −1 as `z` grows (the scheme is A- but not L-stable).
+fn crank_nicolson_damping(viscous_number: f64) -> f64 {
+    (0..grainflow_fluid::STAGES)
+        .map(|stage| {
+            let half = 0.5 * grainflow_fluid::stage_fraction(stage) * viscous_number;
+            (1.0 - half) / (1.0 + half)
+        })
+        .product()
+}
+
 /// `check` of a fluid-only scene: grid, Reynolds number of the initial
 /// flow, the convective and viscous time-step limits, memory.
 fn fluid_report(case: &Case) -> Result<String, RunError> {
@@ -177,9 +197,8 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
     let grid = &solver.grid;
     let dim = grid.dim();
     let cells: usize = grid.cells.iter().product();
-    let h = grid.spacing[..dim]
-        .iter()
-        .copied()
+    let h = (0..dim)
+        .map(|axis| grid.min_width(axis))
         .fold(f64::INFINITY, f64::min);
     let nu = solver.viscosity;
     let mut out = String::new();
@@ -206,6 +225,24 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
         &grid.cells[..dim],
         &grid.spacing[..dim]
     );
+    let line = grid.line_axis();
+    if !grid.is_uniform(line) {
+        let widths: Vec<f64> = grid.interior(line).map(|i| grid.width(line, i)).collect();
+        let widest = widths.iter().copied().fold(0.0, f64::max);
+        let growth = grid.max_growth(line);
+        let _ = writeln!(
+            out,
+            "  {} stretched: widths {:.4e} to {widest:.4e} m, largest ratio of neighbours {growth:.3}{}",
+            ["x", "y", "z"][line],
+            grid.min_width(line),
+            if growth > MAX_SMOOTH_GROWTH {
+                " -- warning: above 1.25 the second-order truncation error grows with the \
+                 change of width; add cells or lower the factor"
+            } else {
+                ""
+            }
+        );
+    }
     let _ = writeln!(
         out,
         "  density {} kg/m3, viscosity {} Pa s (nu = {nu:.4e} m2/s)",
@@ -251,6 +288,17 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
                     ""
                 }
             );
+            let stiffness = solver.viscous_number(dt);
+            let damping = crank_nicolson_damping(stiffness);
+            if solver.viscous_scheme == ViscousScheme::CrankNicolson && damping.abs() > SLOW_DAMPING
+            {
+                let _ = writeln!(
+                    out,
+                    "  viscous number nu dt sum 4/h^2 = {stiffness:.3e}: Crank–Nicolson multiplies \
+                     the finest grid modes by {damping:.3} per step -- warning: a sudden start or \
+                     wall leaves grid-scale oscillations that decay slowly; start with a smaller dt"
+                );
+            }
             let steps = (case.time.end / dt).ceil();
             let _ = writeln!(
                 out,

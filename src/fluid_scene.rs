@@ -6,7 +6,9 @@
 
 use crate::case::{AnalysisSection, Case, InitialFlowSection};
 use grainflow_core::{Communicator, Dimension};
-use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid, ViscousScheme};
+use grainflow_fluid::{
+    clustered_faces, Boundaries, BoundaryCondition, Clustering, FlowSolver, Grid, ViscousScheme,
+};
 use std::f64::consts::PI;
 
 fn axis_values(values: &[f64]) -> [f64; 3] {
@@ -15,7 +17,14 @@ fn axis_values(values: &[f64]) -> [f64; 3] {
     out
 }
 
+/// The grid of a validated case.
 pub fn grid(case: &Case) -> Grid {
+    try_grid(case).expect("validated stretching")
+}
+
+/// The grid of the `[fluid]` table, uniform or stretched along its last
+/// axis; the reason if the stretching's faces do not make a grid.
+pub fn try_grid(case: &Case) -> Result<Grid, String> {
     let f = case.fluid_section();
     let dimension = if case.dimension() == 2 {
         Dimension::Two
@@ -24,11 +33,29 @@ pub fn grid(case: &Case) -> Grid {
     };
     let mut cells = [1; 3];
     cells[..f.cells.len()].copy_from_slice(&f.cells);
+    let lower = axis_values(&case.domain.lower);
     let mut upper = axis_values(&case.domain.upper);
     if dimension == Dimension::Two {
         upper[2] = 1.0;
     }
-    Grid::new(dimension, cells, axis_values(&case.domain.lower), upper)
+    let Some(stretching) = &f.stretching else {
+        return Ok(Grid::new(dimension, cells, lower, upper));
+    };
+    let line = case.dimension() - 1;
+    let faces = match (&stretching.faces, &stretching.cluster, stretching.factor) {
+        (Some(faces), _, _) => faces.clone(),
+        (None, Some(cluster), Some(factor)) => {
+            let clustering = match cluster.as_str() {
+                "both_walls" => Clustering::BothEnds,
+                "lower_wall" => Clustering::Lower,
+                "upper_wall" => Clustering::Upper,
+                other => return Err(format!("unknown cluster {other}")),
+            };
+            clustered_faces(clustering, factor, cells[line], lower[line], upper[line])
+        }
+        _ => return Err("give cluster and factor, or faces".to_string()),
+    };
+    Grid::stretched(dimension, cells, lower, upper, &faces).map_err(|e| e.to_string())
 }
 
 pub fn boundaries(case: &Case) -> Boundaries {
@@ -201,10 +228,20 @@ fn carried_phases(k: f64, origin: [f64; 3], stream: [f64; 3], x: [f64; 3], time:
     [0, 1].map(|axis| k * (x[axis] - origin[axis] - stream[axis] * time))
 }
 
-/// The steady Poiseuille–Couette profile between the walls of the last
-/// axis: ν u_c'' = ∂p/∂x_c / ρ − g_c for each streamwise component c, with
-/// the wall velocities as end values (second-order central differences are
-/// exact for this parabola, so the discrete steady state matches it).
+/// The Poiseuille–Couette profile between the walls of the last axis:
+/// ν u_c'' = ∂p/∂x_c / ρ − g_c for each streamwise component c, with the
+/// wall velocities as end values (second-order central differences are
+/// exact for this parabola on a uniform grid, so the discrete steady state
+/// matches it; on a stretched one it converges at second order).
+///
+/// A flow that starts from rest under a pressure gradient (not a held bulk
+/// velocity) follows it through the start-up: with η = (y − y₀)/H and
+/// `b_n` the sine coefficients of the steady profile `u_s`,
+/// `u(y, t) = u_s(y) − Σ_n b_n sin(nπη) e^{−n²π²νt/H²}`, where for the
+/// line `U₀(1 − η) + U₁ η` between the wall velocities
+/// `b_n = 2 (U₀ − (−1)ⁿ U₁) / (nπ)` and for the parabola
+/// `(K/2)(y − y₀)(y − y₀ − H)` `b_n = −2 K H² (1 − (−1)ⁿ) / (nπ)³`: a wall set
+/// sliding under fluid at rest grows a boundary layer of thickness √(νt).
 pub struct ChannelProfile {
     pub wall_axis: usize,
     lower: f64,
@@ -212,6 +249,8 @@ pub struct ChannelProfile {
     /// u_c'' = ∂p/∂x_c / (ρ ν) − g_c / ν, or set by a held bulk velocity.
     pub curvature: [f64; 3],
     wall_velocity: [[f64; 3]; 2],
+    /// ν, when the flow follows the start-up from rest (none: steady only).
+    start_up_viscosity: Option<f64>,
 }
 
 impl ChannelProfile {
@@ -230,36 +269,66 @@ impl ChannelProfile {
                 .map_or([0.0; 3], |v| axis_values(v))
         });
         let height = case.domain.upper[wall_axis] - case.domain.lower[wall_axis];
-        let spacing = height / f.cells[wall_axis] as f64;
+        // Σ w³ / H over the cells across the channel: h² when uniform.
+        let grid = grid(case);
+        let midpoint_defect = grid
+            .interior(wall_axis)
+            .map(|i| grid.width(wall_axis, i).powi(3))
+            .sum::<f64>()
+            / height;
         let curvature = [0, 1, 2].map(|c| match f.bulk_velocity.along(c) {
             // The held bulk velocity is the mean over the cells (midpoint
             // rule), which for this parabola is the exact mean minus
-            // K h²/24: (U_lower + U_upper)/2 − K H²/12 − K h²/24 = U_b.
+            // K Σ w³ / (24 H): (U_lower + U_upper)/2 − K H²/12 − K h²/24 = U_b
+            // on a uniform grid.
             Some(bulk) => {
                 (0.5 * (wall_velocity[0][c] + wall_velocity[1][c]) - bulk)
-                    / (height * height / 12.0 + spacing * spacing / 24.0)
+                    / (height * height / 12.0 + midpoint_defect / 24.0)
             }
             None => (gradient[c] / f.density - gravity[c]) / viscosity,
         });
+        let from_rest = matches!(f.initial, InitialFlowSection::Rest)
+            && (0..3).all(|c| f.bulk_velocity.along(c).is_none());
         Some(ChannelProfile {
             wall_axis,
             lower: case.domain.lower[wall_axis],
             height,
             curvature,
             wall_velocity,
+            start_up_viscosity: from_rest.then_some(viscosity),
         })
     }
 
     /// Velocity component `component` at height `y` above the lower wall's
-    /// coordinate origin.
-    pub fn velocity(&self, component: usize, y: f64) -> f64 {
+    /// coordinate origin, at time `time` (the steady profile unless the
+    /// flow started from rest).
+    pub fn velocity(&self, component: usize, y: f64, time: f64) -> f64 {
         if component == self.wall_axis {
             return 0.0;
         }
         let eta = (y - self.lower) / self.height;
         let [lower, upper] = self.wall_velocity.map(|v| v[component]);
-        0.5 * self.curvature[component] * (y - self.lower) * (y - self.lower - self.height)
+        let curvature = self.curvature[component];
+        let steady = 0.5 * curvature * (y - self.lower) * (y - self.lower - self.height)
             + lower * (1.0 - eta)
-            + upper * eta
+            + upper * eta;
+        let Some(viscosity) = self.start_up_viscosity else {
+            return steady;
+        };
+        if time <= 0.0 {
+            return 0.0;
+        }
+        // Terms until e^{−n²π²νt/H²} < 1e-18.
+        let rate = PI * PI * viscosity * time / (self.height * self.height);
+        let terms = ((41.5 / rate).sqrt().ceil() as usize).clamp(1, 200_000);
+        let mut transient = 0.0;
+        for n in 1..=terms {
+            let n_pi = n as f64 * PI;
+            let sign = if n % 2 == 0 { 1.0 } else { -1.0 };
+            let coefficient = 2.0 * (lower - sign * upper) / n_pi
+                - 2.0 * curvature * self.height * self.height * (1.0 - sign) / n_pi.powi(3);
+            transient += coefficient * (n_pi * eta).sin() * (-rate * (n * n) as f64).exp();
+        }
+        steady - transient
     }
 }

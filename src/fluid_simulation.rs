@@ -10,7 +10,7 @@ use crate::output::RunDirectory;
 use crate::simulation::{peak_memory_bytes, Progress, Summary};
 use crate::RunError;
 use grainflow_fluid::{FlowSolver, Location, StepReport, ViscousScheme, CFL_LIMIT};
-use grainflow_io::{CsvSeries, FieldFrame, PvdIndex};
+use grainflow_io::{CellLayout, CsvSeries, FieldFrame, PvdIndex};
 use serde_json::{json, Map, Value};
 use std::path::Path;
 use std::time::Instant;
@@ -169,9 +169,8 @@ fn viscous_limit(solver: &FlowSolver) -> Option<f64> {
 fn fluid_metrics(case: &Case, solver: &FlowSolver, report: &StepReport) -> Map<String, Value> {
     let mut metrics = Map::new();
     let grid = &solver.grid;
-    let h = grid.spacing[..grid.dim()]
-        .iter()
-        .copied()
+    let h = (0..grid.dim())
+        .map(|axis| grid.min_width(axis))
         .fold(f64::INFINITY, f64::min);
     let mut speed = f64::MIN_POSITIVE;
     for_each_velocity(solver, |_, value, _| speed = speed.max(value.abs()));
@@ -194,7 +193,7 @@ fn fluid_metrics(case: &Case, solver: &FlowSolver, report: &StepReport) -> Map<S
             let profile = ChannelProfile::of(case).expect("validated");
             let (mut error, mut scale): (f64, f64) = (0.0, 0.0);
             for_each_velocity(solver, |component, value, x| {
-                let reference = profile.velocity(component, x[profile.wall_axis]);
+                let reference = profile.velocity(component, x[profile.wall_axis], solver.time);
                 error = error.max((value - reference).abs());
                 scale = scale.max(reference.abs());
             });
@@ -245,21 +244,32 @@ fn cell_fields(solver: &mut FlowSolver, density: f64) -> (Vec<[f64; 3]>, Vec<f64
     let mut cell_velocity = Vec::new();
     let mut pressure = Vec::new();
     let mut vorticity = Vec::new();
-    grid.for_each(&cells, |index, _| {
+    let line = grid.line_axis();
+    grid.for_each(&cells, |index, point| {
         let mut u = [0.0; 3];
         for a in 0..dim {
             u[a] = 0.5 * (velocity[a][index - grid.stride(a)] + velocity[a][index]);
         }
         cell_velocity.push(u);
         pressure.push(density * solver.pressure[index]);
-        // ω_c = ∂u_b/∂x_a − ∂u_a/∂x_b on the four edges of the cell along c.
+        // ω_c = ∂u_b/∂x_a − ∂u_a/∂x_b on the four edges of the cell along c;
+        // each difference spans the distance between the centres on either
+        // side of its edge (edge `e` along the line axis lies on face `e`).
         let curl = |a: usize, b: usize| {
             let (sa, sb) = (grid.stride(a), grid.stride(b));
             let mut sum = 0.0;
-            for edge_a in [index - sa, index] {
-                for edge_b in [edge_a - sb, edge_a] {
-                    sum += (velocity[b][edge_b + sa] - velocity[b][edge_b]) / grid.spacing[a]
-                        - (velocity[a][edge_b + sb] - velocity[a][edge_b]) / grid.spacing[b];
+            for shift_a in [1, 0] {
+                for shift_b in [1, 0] {
+                    let edge = index - shift_a * sa - shift_b * sb;
+                    let mut edge_line = point[line];
+                    if a == line {
+                        edge_line -= shift_a;
+                    }
+                    if b == line {
+                        edge_line -= shift_b;
+                    }
+                    sum += (velocity[b][edge + sa] - velocity[b][edge]) / grid.gap(a, edge_line)
+                        - (velocity[a][edge + sb] - velocity[a][edge]) / grid.gap(b, edge_line);
                 }
             }
             0.25 * sum
@@ -305,13 +315,23 @@ impl FieldFiles {
     ) -> std::io::Result<()> {
         let (velocity, pressure, vorticity) = cell_fields(solver, density);
         let grid = &solver.grid;
-        let name = format!("fields/fields_{:06}.vti", self.frames);
+        let faces = [0, 1, 2].map(|axis| grid.face_coordinates(axis));
+        let layout = if grid.is_uniform(grid.line_axis()) {
+            CellLayout::Uniform {
+                origin: grid.lower,
+                spacing: grid.spacing,
+            }
+        } else {
+            CellLayout::Rectilinear {
+                faces: [&faces[0], &faces[1], &faces[2]],
+            }
+        };
+        let name = format!("fields/fields_{:06}.{}", self.frames, layout.extension());
         let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", &pressure)];
         scalars.extend_from_slice(extra);
         FieldFrame {
             cells: grid.cells,
-            origin: grid.lower,
-            spacing: grid.spacing,
+            layout,
             scalars: &scalars,
             vectors: &[("velocity", &velocity), ("vorticity", &vorticity)],
         }

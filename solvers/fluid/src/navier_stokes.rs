@@ -387,16 +387,29 @@ impl FlowSolver {
                     self.velocity_solvers[component].solve_helmholtz(grid, response, implicit);
                 }
                 let velocity = &self.velocity[component];
-                let count: usize = (0..3).map(|a| block.end[a] - block.start[a]).product();
-                let count = self.communicator.sum_count(count) as f64;
-                let mean = self
+                // The mean over the cells' volumes: on a stretched line
+                // each value weighs its cell's width (a bulk velocity runs
+                // along a periodic axis, so its values sit at centres
+                // along the line axis).
+                let line = grid.line_axis();
+                let uniform = grid.is_uniform(line);
+                let weight = |point: [usize; 3]| {
+                    if uniform {
+                        1.0
+                    } else {
+                        grid.width(line, point[line])
+                    }
+                };
+                let total = self
                     .communicator
-                    .sum(grid.par_sum(block, |index, _| velocity[index] + increment[index]))
-                    / count;
+                    .sum(grid.par_sum(block, |_, point| weight(point)));
+                let mean = self.communicator.sum(grid.par_sum(block, |index, point| {
+                    weight(point) * (velocity[index] + increment[index])
+                })) / total;
                 let response_mean = self
                     .communicator
-                    .sum(grid.par_sum(block, |index, _| response[index]))
-                    / count;
+                    .sum(grid.par_sum(block, |index, point| weight(point) * response[index]))
+                    / total;
                 let forcing = (target - mean) / (alpha * dt * response_mean);
                 let scale = alpha * dt * forcing;
                 grid.par_update(block, increment, |index, value| {

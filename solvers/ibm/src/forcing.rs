@@ -101,8 +101,15 @@ pub struct ImmersedBoundaries {
 impl ImmersedBoundaries {
     /// Immersed boundaries on the flow grid `grid` of the scene's `domain`
     /// (its periodic axes give the images of particles near its edges).
+    /// The grid must be uniform: the transition width of eq. 10 is a cell
+    /// size and the loads integrate with one cell volume (the case refuses
+    /// a stretched grid with grains before this).
     pub fn new(grid: &Grid, domain: &Domain) -> Self {
         let dim = grid.dim();
+        assert!(
+            grid.is_uniform(grid.line_axis()),
+            "immersed boundaries need a uniform grid"
+        );
         let length = domain.extent();
         ImmersedBoundaries {
             width: transition_width(&grid.spacing[..dim]),

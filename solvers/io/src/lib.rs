@@ -6,4 +6,4 @@ pub mod csv;
 pub mod vtk;
 
 pub use csv::CsvSeries;
-pub use vtk::{FieldFrame, ParticleFrame, PvdIndex};
+pub use vtk::{CellLayout, FieldFrame, ParticleFrame, PvdIndex};

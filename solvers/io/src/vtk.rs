@@ -1,6 +1,7 @@
 //! VTK XML PolyData (`.vtp`) particle files, ImageData (`.vti`) files of
-//! cell-centred fields on a uniform grid, and the `.pvd` collection that
-//! lets ParaView open either as one time series.
+//! cell-centred fields on a uniform grid, RectilinearGrid (`.vtr`) files
+//! on a grid stretched along an axis, and the `.pvd` collection that lets
+//! ParaView open any of them as one time series.
 //!
 //! Arrays are written in binary (base64, little-endian, with a UInt32 byte
 //! count header), which ParaView reads directly; one vertex per particle.
@@ -90,12 +91,30 @@ impl ParticleFrame<'_> {
     }
 }
 
-/// Cell-centred fields on a uniform grid of `cells` cells of size
-/// `spacing` from `origin` (a 2D grid has one cell along z).
+/// How the cells of a field file are laid out.
+pub enum CellLayout<'a> {
+    /// Cells of size `spacing` from `origin`: an ImageData file (`.vti`).
+    Uniform { origin: [f64; 3], spacing: [f64; 3] },
+    /// Cells between these face coordinates along each axis (`cells + 1`
+    /// of them): a RectilinearGrid file (`.vtr`).
+    Rectilinear { faces: [&'a [f64]; 3] },
+}
+
+impl CellLayout<'_> {
+    /// The file extension ParaView expects for this layout.
+    pub fn extension(&self) -> &'static str {
+        match self {
+            CellLayout::Uniform { .. } => "vti",
+            CellLayout::Rectilinear { .. } => "vtr",
+        }
+    }
+}
+
+/// Cell-centred fields on a grid of `cells` cells (a 2D grid has one cell
+/// along z).
 pub struct FieldFrame<'a> {
     pub cells: [usize; 3],
-    pub origin: [f64; 3],
-    pub spacing: [f64; 3],
+    pub layout: CellLayout<'a>,
     /// Scalar fields, one value per cell, x fastest.
     pub scalars: &'a [(&'a str, &'a [f64])],
     /// Vector fields, one [x, y, z] per cell, x fastest.
@@ -105,20 +124,38 @@ pub struct FieldFrame<'a> {
 impl FieldFrame<'_> {
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let [nx, ny, nz] = self.cells;
-        let [ox, oy, oz] = self.origin;
-        let [dx, dy, dz] = self.spacing;
         let mut out = BufWriter::new(File::create(path)?);
         writeln!(out, r#"<?xml version="1.0"?>"#)?;
-        writeln!(
-            out,
-            r#"<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
-        )?;
         let extent = format!("0 {nx} 0 {ny} 0 {nz}");
+        let kind = match self.layout {
+            CellLayout::Uniform { .. } => "ImageData",
+            CellLayout::Rectilinear { .. } => "RectilinearGrid",
+        };
         writeln!(
             out,
-            r#"<ImageData WholeExtent="{extent}" Origin="{ox:e} {oy:e} {oz:e}" Spacing="{dx:e} {dy:e} {dz:e}">"#
+            r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
         )?;
-        writeln!(out, r#"<Piece Extent="{extent}">"#)?;
+        match &self.layout {
+            CellLayout::Uniform { origin, spacing } => {
+                let [ox, oy, oz] = origin;
+                let [dx, dy, dz] = spacing;
+                writeln!(
+                    out,
+                    r#"<ImageData WholeExtent="{extent}" Origin="{ox:e} {oy:e} {oz:e}" Spacing="{dx:e} {dy:e} {dz:e}">"#
+                )?;
+                writeln!(out, r#"<Piece Extent="{extent}">"#)?;
+            }
+            CellLayout::Rectilinear { faces } => {
+                writeln!(out, r#"<RectilinearGrid WholeExtent="{extent}">"#)?;
+                writeln!(out, r#"<Piece Extent="{extent}">"#)?;
+                writeln!(out, "<Coordinates>")?;
+                for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+                    debug_assert_eq!(faces[axis].len(), self.cells[axis] + 1);
+                    write_array(&mut out, name, "Float64", 1, &to_bytes_f64(faces[axis]))?;
+                }
+                writeln!(out, "</Coordinates>")?;
+            }
+        }
         writeln!(out, "<CellData>")?;
         for (name, values) in self.scalars {
             write_array(&mut out, name, "Float64", 1, &to_bytes_f64(values))?;
@@ -133,7 +170,7 @@ impl FieldFrame<'_> {
             )?;
         }
         writeln!(out, "</CellData>")?;
-        writeln!(out, "</Piece>\n</ImageData>\n</VTKFile>")?;
+        writeln!(out, "</Piece>\n</{kind}>\n</VTKFile>")?;
         out.flush()
     }
 }
