@@ -33,6 +33,8 @@
 
 pub mod boundary;
 pub mod error;
+#[cfg(feature = "fftw")]
+pub mod fftw;
 pub mod grid;
 pub mod navier_stokes;
 pub mod operators;
@@ -46,4 +48,4 @@ pub use navier_stokes::{
     stage_fraction, FlowSolver, StepReport, ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT,
     STAGES,
 };
-pub use poisson::DirectSolver;
+pub use poisson::{DirectSolver, TransformBackend};

@@ -45,6 +45,38 @@ use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
 use crate::transform::{AxisTransform, Direction, TransformKind};
 
+/// Which library transforms the lines of the direct solvers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransformBackend {
+    /// rustfft and rustdct: pure Rust, always built.
+    Rust,
+    /// FFTW (cargo feature `fftw`): one plan per axis over all its lines.
+    Fftw,
+}
+
+impl TransformBackend {
+    /// FFTW when built with it, else the pure-Rust transforms.
+    pub fn preferred() -> Self {
+        if cfg!(feature = "fftw") {
+            TransformBackend::Fftw
+        } else {
+            TransformBackend::Rust
+        }
+    }
+
+    /// Whether this build can use it.
+    pub fn is_available(self) -> bool {
+        self == TransformBackend::Rust || cfg!(feature = "fftw")
+    }
+}
+
+/// The planned transforms of the axes a solver diagonalises.
+enum LineTransforms {
+    Rust(Vec<AxisTransform>),
+    #[cfg(feature = "fftw")]
+    Fftw(Vec<crate::fftw::BatchTransform>),
+}
+
 /// A planned direct solver for one field's unknowns and end conditions.
 pub struct DirectSolver {
     /// The last active axis, solved by tridiagonal elimination.
@@ -56,7 +88,7 @@ pub struct DirectSolver {
     block: Block,
     /// Unknowns along each axis (1 along an inactive axis).
     shape: [usize; 3],
-    transforms: Vec<AxisTransform>,
+    transforms: LineTransforms,
     /// `Σ λ_k` over the transformed axes, for every mode.
     modal: Vec<f64>,
     modes: Vec<f64>,
@@ -155,6 +187,22 @@ impl DirectSolver {
     /// field with prescribed face values along the line axis lives on the
     /// faces normal to it, any other at cell centres along it.
     pub fn new(grid: &Grid, ends: &FieldEnds) -> Result<Self, FluidError> {
+        Self::with_backend(grid, ends, TransformBackend::preferred())
+    }
+
+    /// [`DirectSolver::new`] with the transforms of `backend`; refuses one
+    /// this build does not have.
+    pub fn with_backend(
+        grid: &Grid,
+        ends: &FieldEnds,
+        backend: TransformBackend,
+    ) -> Result<Self, FluidError> {
+        if !backend.is_available() {
+            return Err(FluidError::Unsupported(format!(
+                "the {backend:?} transforms are not in this build (rebuild with \
+                 `--features fftw`, which needs the system's libfftw3)"
+            )));
+        }
         let dim = grid.dim();
         let line_axis = dim - 1;
         let block = unknowns(grid, ends);
@@ -242,6 +290,23 @@ impl DirectSolver {
             })
             .collect();
         let total = shape.iter().product();
+        #[cfg_attr(not(feature = "fftw"), allow(unused_mut))]
+        let mut modes = vec![0.0; total];
+        let transforms = match backend {
+            TransformBackend::Rust => LineTransforms::Rust(transforms),
+            #[cfg(feature = "fftw")]
+            TransformBackend::Fftw => LineTransforms::Fftw(
+                transforms
+                    .iter()
+                    .enumerate()
+                    .map(|(axis, transform)| {
+                        crate::fftw::BatchTransform::new(transform.kind(), &mut modes, shape, axis)
+                    })
+                    .collect(),
+            ),
+            #[cfg(not(feature = "fftw"))]
+            TransformBackend::Fftw => unreachable!("refused above"),
+        };
         Ok(DirectSolver {
             line_axis,
             line_ends,
@@ -250,7 +315,7 @@ impl DirectSolver {
             shape,
             transforms,
             modal,
-            modes: vec![0.0; total],
+            modes,
             lines: ModeLines::new(mode_count, shape[line_axis], periodic_line[0]),
         })
     }
@@ -276,14 +341,37 @@ impl DirectSolver {
     /// Solves `(identity I + laplacian L) x = r` in place.
     pub fn solve(&mut self, grid: &Grid, field: &mut [f64], identity: f64, laplacian: f64) {
         self.gather(grid, field);
-        for (axis, transform) in self.transforms.iter_mut().enumerate() {
-            transform.apply_along(&mut self.modes, self.shape, axis, Direction::Forward);
-        }
+        self.transform(Direction::Forward);
         self.solve_lines(identity, laplacian);
-        for (axis, transform) in self.transforms.iter_mut().enumerate().rev() {
-            transform.apply_along(&mut self.modes, self.shape, axis, Direction::Backward);
-        }
+        self.transform(Direction::Backward);
         self.scatter(grid, field);
+    }
+
+    /// Every transformed axis of the modal array, first to last forward,
+    /// last to first backward.
+    fn transform(&mut self, direction: Direction) {
+        let modes = &mut self.modes;
+        match &mut self.transforms {
+            LineTransforms::Rust(transforms) => {
+                let mut axes: Vec<_> = transforms.iter_mut().enumerate().collect();
+                if direction == Direction::Backward {
+                    axes.reverse();
+                }
+                for (axis, transform) in axes {
+                    transform.apply_along(modes, self.shape, axis, direction);
+                }
+            }
+            #[cfg(feature = "fftw")]
+            LineTransforms::Fftw(transforms) => {
+                let mut axes: Vec<_> = transforms.iter().collect();
+                if direction == Direction::Backward {
+                    axes.reverse();
+                }
+                for transform in axes {
+                    transform.apply(modes, direction);
+                }
+            }
+        }
     }
 
     fn gather(&mut self, grid: &Grid, field: &[f64]) {

@@ -19,7 +19,7 @@ use grainflow_core::Dimension;
 use grainflow_fluid::boundary::{fill_ghosts, EndCondition, EndKind, FieldEnds};
 use grainflow_fluid::grid::{clustered_faces, Clustering};
 use grainflow_fluid::operators::add_laplacian;
-use grainflow_fluid::{DirectSolver, FluidError, Grid, Location};
+use grainflow_fluid::{DirectSolver, FluidError, Grid, Location, TransformBackend};
 
 const TOLERANCE: f64 = 1e-10;
 
@@ -255,6 +255,48 @@ fn helmholtz_on_longer_lines() {
             let error = recovery_error(&grid, kinds, 1.0, -0.05);
             println!("helmholtz {cells:?} {kinds:?}: relative error {error:.2e}");
             assert!(error <= TOLERANCE, "{cells:?} {kinds:?}: {error}");
+        }
+    }
+}
+
+/// FFTW (cargo feature `fftw`) and the pure-Rust transforms solve the same
+/// systems to round-off: every transform kind, 2D and 3D, uniform and
+/// stretched. Without the feature, asking for FFTW is refused.
+#[test]
+fn fftw_and_rust_transforms_agree() {
+    let grid = Grid::new(Dimension::Three, [12, 10, 9], [0.0; 3], [1.0, 2.0, 3.0]);
+    let cases = [
+        [[P, P], [N, N], [Dq, Dq]],
+        [[Df, Df], [Dc, Dc], [N, N]],
+        [[N, N], [P, P], [Df, Df]],
+    ];
+    for kinds in cases {
+        if !TransformBackend::Fftw.is_available() {
+            let refused = DirectSolver::with_backend(&grid, &ends(kinds), TransformBackend::Fftw);
+            assert!(matches!(refused, Err(FluidError::Unsupported(_))));
+            continue;
+        }
+        for grid in grids(&grid, &kinds) {
+            let mut solutions = Vec::new();
+            for backend in [TransformBackend::Rust, TransformBackend::Fftw] {
+                let mut solver = DirectSolver::with_backend(&grid, &ends(kinds), backend).unwrap();
+                let block = *solver.unknowns();
+                let mut field = grid.zeros();
+                grid.for_each(&block, |index, _| field[index] = pseudo_random(index));
+                solver.solve(&grid, &mut field, 1.0, -0.05);
+                solutions.push(field);
+            }
+            let difference = solutions[0]
+                .iter()
+                .zip(&solutions[1])
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            let scale = solutions[0].iter().map(|a| a.abs()).fold(0.0, f64::max);
+            println!(
+                "{kinds:?}: FFTW against rustfft/rustdct {:.2e}",
+                difference / scale
+            );
+            assert!(difference <= 1e-12 * scale, "{kinds:?}: {difference:e}");
         }
     }
 }
