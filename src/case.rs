@@ -108,6 +108,11 @@ pub struct FluidSection {
     /// 2D); uniform without it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stretching: Option<StretchingSection>,
+    /// Transforms of the direct solvers: "rust" (rustfft/rustdct) or
+    /// "fftw" (a build with `--features fftw`); that build's default
+    /// without it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transforms: Option<String>,
 }
 
 /// How the last axis is stretched: a tanh map clustering cells at one or
@@ -1069,6 +1074,28 @@ impl Case {
                 &f.viscous,
                 "allowed: \"crank_nicolson\" or \"explicit\"",
             ));
+        }
+        match f.transforms.as_deref() {
+            None | Some("rust") => {}
+            Some("fftw") => {
+                if !grainflow_fluid::TransformBackend::Fftw.is_available() {
+                    return Err(invalid(
+                        "fluid.transforms",
+                        "fftw",
+                        "this grainflow was built without FFTW: rebuild with `cargo build \
+                         --release --features fftw` (needs the system's libfftw3), or allowed: \
+                         \"rust\"",
+                    ));
+                }
+            }
+            Some(other) => {
+                return Err(invalid(
+                    "fluid.transforms",
+                    other,
+                    "allowed: \"rust\" (rustfft/rustdct) or \"fftw\" (a build with \
+                     --features fftw)",
+                ))
+            }
         }
         if !f.pressure_gradient.is_empty() {
             check_len(

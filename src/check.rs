@@ -206,7 +206,11 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
     let _ = writeln!(
         out,
         "  {dim}D incompressible Navier–Stokes, staggered grid, RK3 + Crank–Nicolson, \
-         FFT/tridiagonal direct pressure solve"
+         FFT/tridiagonal direct pressure solve ({} transforms)",
+        match fluid_scene::transform_backend(case) {
+            grainflow_fluid::TransformBackend::Fftw => "FFTW",
+            grainflow_fluid::TransformBackend::Rust => "rustfft/rustdct",
+        }
     );
     let _ = writeln!(
         out,

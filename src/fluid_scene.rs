@@ -7,7 +7,8 @@
 use crate::case::{AnalysisSection, Case, InitialFlowSection};
 use grainflow_core::{Communicator, Dimension};
 use grainflow_fluid::{
-    clustered_faces, Boundaries, BoundaryCondition, Clustering, FlowSolver, Grid, ViscousScheme,
+    clustered_faces, Boundaries, BoundaryCondition, Clustering, FlowSolver, Grid, TransformBackend,
+    ViscousScheme,
 };
 use std::f64::consts::PI;
 
@@ -79,15 +80,25 @@ pub fn boundaries(case: &Case) -> Boundaries {
     boundaries
 }
 
+/// The transforms a case asks for (`fluid.transforms`), or the build's default.
+pub fn transform_backend(case: &Case) -> TransformBackend {
+    match case.fluid_section().transforms.as_deref() {
+        Some("rust") => TransformBackend::Rust,
+        Some("fftw") => TransformBackend::Fftw,
+        _ => TransformBackend::preferred(),
+    }
+}
+
 /// The flow of the scene at t = 0.
 pub fn build(case: &Case) -> Result<FlowSolver, String> {
     let f = case.fluid_section();
     let grid = grid(case);
-    let mut solver = FlowSolver::new(
+    let mut solver = FlowSolver::with_transforms(
         grid,
         boundaries(case),
         f.viscosity / f.density,
         Communicator::serial(),
+        transform_backend(case),
     )
     .map_err(|e| format!("fluid: {e}"))?;
     if f.viscous == "explicit" {

@@ -178,6 +178,15 @@ fn bad_fluid_tables_are_refused_with_the_key_and_nothing_is_written() {
         ("time.cfl=2.0", "time.cfl"),
         ("domain.periodic=[true, true]", "fluid.boundary.y"),
         ("time.dt=10.0", "CFL"),
+        ("fluid.transforms=\"fft\"", "fluid.transforms"),
+        (
+            if cfg!(feature = "fftw") {
+                "fluid.transforms=\"fast\""
+            } else {
+                "fluid.transforms=\"fftw\""
+            },
+            "fluid.transforms",
+        ),
     ] {
         let mut overrides = vec![assignment];
         if assignment.starts_with("time.dt") {

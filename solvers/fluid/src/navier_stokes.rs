@@ -39,7 +39,7 @@ use crate::boundary::{fill_ghosts, homogeneous, unknowns, Boundaries, FieldEnds}
 use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
 use crate::operators::{add_laplacian, convective_tendency, divergence, subtract_gradient};
-use crate::poisson::DirectSolver;
+use crate::poisson::{DirectSolver, TransformBackend};
 
 /// Stages of a step.
 pub const STAGES: usize = 3;
@@ -154,12 +154,30 @@ pub struct FlowSolver {
 }
 
 impl FlowSolver {
-    /// A fluid at rest on `grid` with walls `boundaries`.
+    /// A fluid at rest on `grid` with walls `boundaries`, its direct
+    /// solvers using [`TransformBackend::preferred`].
     pub fn new(
         grid: Grid,
         boundaries: Boundaries,
         viscosity: f64,
         communicator: Communicator,
+    ) -> Result<Self, FluidError> {
+        Self::with_transforms(
+            grid,
+            boundaries,
+            viscosity,
+            communicator,
+            TransformBackend::preferred(),
+        )
+    }
+
+    /// [`FlowSolver::new`] with the transforms of `backend`.
+    pub fn with_transforms(
+        grid: Grid,
+        boundaries: Boundaries,
+        viscosity: f64,
+        communicator: Communicator,
+        backend: TransformBackend,
     ) -> Result<Self, FluidError> {
         boundaries.validate(&grid)?;
         if !(viscosity.is_finite() && viscosity >= 0.0) {
@@ -182,9 +200,9 @@ impl FlowSolver {
         let pressure_ends = boundaries.pressure_ends(&grid);
         let velocity_solvers = velocity_ends
             .iter()
-            .map(|ends| DirectSolver::new(&grid, &homogeneous(ends)))
+            .map(|ends| DirectSolver::with_backend(&grid, &homogeneous(ends), backend))
             .collect::<Result<Vec<_>, _>>()?;
-        let pressure_solver = DirectSolver::new(&grid, &pressure_ends)?;
+        let pressure_solver = DirectSolver::with_backend(&grid, &pressure_ends, backend)?;
         let velocity_unknowns = velocity_ends
             .iter()
             .map(|ends| unknowns(&grid, ends))
