@@ -5,10 +5,19 @@ memory per cell, for a triply periodic vortex at 64^3 and 128^3 and a
 channel (periodic x and y, no-slip walls in z, pressure-driven) at
 128 x 64 x 64, on 1 and 2 threads. Each run starts from the case's flow,
 takes `--steps` steps, and reads the wall time of the steps from
-series.csv (the set-up is left out). Prints the medians over `--repeats`
-runs and writes them as JSON.
+series.csv (the set-up, FFTW's planning included, is left out). Prints the
+medians over `--repeats` runs and writes them as JSON.
 
-usage: scripts/bench/fluid_step.py [--repeats 3] [--steps 10] [--threads 1,2] [--json FILE]
+Variants are compared in the same command, their runs interleaved so that
+the machine's load falls on all of them alike: `--transforms rust,fftw`
+runs both transform backends (FFTW needs a binary built with
+`--features fftw`, given by `--binary`), and `--baseline BINARY` adds
+another build of grainflow (an earlier commit, say) with the default
+transforms.
+
+usage: scripts/bench/fluid_step.py [--repeats 3] [--steps 10] [--threads 1,2]
+           [--grids vortex_64,...] [--binary PATH] [--transforms rust,fftw]
+           [--baseline PATH] [--json FILE]
 """
 import argparse, json, os, statistics, subprocess, tempfile
 
@@ -28,45 +37,78 @@ GRIDS = {
 }
 
 
+def one_run(binary, root, case, cells, dt, steps, threads, extra):
+    """ns per cell-step of one run and its peak memory (bytes)."""
+    with tempfile.TemporaryDirectory() as out:
+        sets = [f"fluid.cells={cells}", f"time.dt={dt!r}", f"time.end={dt * steps!r}",
+                f"output.interval={dt!r}", "output.fields=false"] + extra
+        command = [binary, "run", os.path.join(root, f"cases/{case}.toml"), "--out", out,
+                   "--threads", str(threads)]
+        for s in sets:
+            command += ["--set", s]
+        _, memory = peak_rss_of(command, cwd=out)
+        lines = open(os.path.join(out, "series.csv")).read().split()
+        header = lines[0].split(",")
+        rows = [dict(zip(header, map(float, l.split(",")))) for l in lines[1:]]
+        seconds = rows[-1]["wall_seconds"] - rows[0]["wall_seconds"]
+        step_count = rows[-1]["step"] - rows[0]["step"]
+        n_cells = cells[0] * cells[1] * cells[2]
+        return 1e9 * seconds / (n_cells * step_count), memory
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--grids", default=",".join(GRIDS))
+    ap.add_argument("--binary", default=None, help="grainflow binary (default: build this checkout)")
+    ap.add_argument("--transforms", default=None, help="e.g. rust,fftw (default: the build's)")
+    ap.add_argument("--baseline", default=None, help="another grainflow binary to compare with")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
     root = os.path.abspath(os.path.join(os.path.dirname(__file__), "../.."))
-    subprocess.run(["cargo", "build", "--release", "-q"], cwd=root, check=True)
-    binary = os.path.join(root, "target/release/grainflow")
+    binary = args.binary
+    if binary is None:
+        subprocess.run(["cargo", "build", "--release", "-q"], cwd=root, check=True)
+        binary = os.path.join(root, "target/release/grainflow")
+    variants = []
+    for transform in (args.transforms.split(",") if args.transforms else [None]):
+        label = transform or "default"
+        extra = [f"fluid.transforms=\"{transform}\""] if transform else []
+        variants.append((label, binary, extra))
+    if args.baseline:
+        variants.append(("baseline", args.baseline, []))
     report = []
-    for name, (case, cells, extra) in GRIDS.items():
+    for name in args.grids.split(","):
+        case, cells, grid_sets = GRIDS[name]
         n_cells = cells[0] * cells[1] * cells[2]
         dt = 0.01 * 64 / max(cells)
-        entry = {"grid": name, "cells": cells}
         for threads in [int(t) for t in args.threads.split(",")]:
-            samples, memory = [], 0
+            samples = {label: [] for label, _, _ in variants}
+            memory = {}
             for _ in range(args.repeats):
-                with tempfile.TemporaryDirectory() as out:
-                    sets = [f"fluid.cells={cells}", f"time.dt={dt!r}", f"time.end={dt * args.steps!r}",
-                            f"output.interval={dt!r}", "output.fields=false"] + extra
-                    command = [binary, "run", os.path.join(root, f"cases/{case}.toml"), "--out", out,
-                               "--threads", str(threads)]
-                    for s in sets:
-                        command += ["--set", s]
-                    _, memory = peak_rss_of(command, cwd=out)
-                    lines = open(os.path.join(out, "series.csv")).read().split()
-                    header = lines[0].split(",")
-                    rows = [dict(zip(header, map(float, l.split(",")))) for l in lines[1:]]
-                    seconds = rows[-1]["wall_seconds"] - rows[0]["wall_seconds"]
-                    steps = rows[-1]["step"] - rows[0]["step"]
-                    samples.append(1e9 * seconds / (n_cells * steps))
-            entry[f"ns_per_cell_step_t{threads}"] = statistics.median(samples)
-            entry[f"samples_t{threads}"] = samples
-            entry["bytes_per_cell"] = memory / n_cells
-            print(f"{name:18s} {threads} thread(s): {statistics.median(samples):7.1f} ns per cell-step "
-                  f"(samples {', '.join(f'{s:.1f}' for s in samples)}), {memory / n_cells:.0f} B per cell",
-                  flush=True)
-        report.append(entry)
+                for label, variant_binary, extra in variants:
+                    ns, memory[label] = one_run(variant_binary, root, case, cells, dt, args.steps,
+                                                threads, grid_sets + extra)
+                    samples[label].append(ns)
+            entry = {"grid": name, "cells": cells, "threads": threads}
+            for label, _, _ in variants:
+                median = statistics.median(samples[label])
+                entry[label] = {"ns_per_cell_step": median, "samples": samples[label],
+                                "bytes_per_cell": memory[label] / n_cells}
+                print(f"{name:18s} {threads} thread(s) {label:9s}: {median:7.1f} ns per cell-step "
+                      f"(samples {', '.join(f'{s:.1f}' for s in samples[label])}), "
+                      f"{memory[label] / n_cells:.0f} B per cell", flush=True)
+            if len(variants) > 1:
+                first = variants[0][0]
+                for label, _, _ in variants[1:]:
+                    ratios = [b / a for a, b in zip(samples[first], samples[label])]
+                    entry[f"{label}_over_{first}"] = statistics.median(ratios)
+                    print(f"{'':18s} {label} / {first} per interleaved pair: median "
+                          f"{statistics.median(ratios):.3f} ({', '.join(f'{r:.3f}' for r in ratios)})",
+                          flush=True)
+            report.append(entry)
     if args.json:
         json.dump(report, open(args.json, "w"), indent=1)
 
