@@ -507,42 +507,49 @@ impl Grid {
         out: &mut [f64],
         value: impl Fn(usize, f64) -> f64 + Sync,
     ) {
-        self.par_update_planes(block, out, |index, _, current| value(index, current));
+        self.par_update_planes(block, out, |_| &value);
     }
 
-    /// [`Grid::par_update`] with `value(index, plane, out[index])`, `plane`
-    /// the padded index along the slowest active axis, which is the line
-    /// axis: what a stretched operator needs to find its weights.
-    pub fn par_update_planes(
-        &self,
-        block: &Block,
-        out: &mut [f64],
-        value: impl Fn(usize, usize, f64) -> f64 + Sync,
-    ) {
+    /// [`Grid::par_update`] with a kernel made per plane: `kernel(plane)`,
+    /// `plane` the padded index along the slowest active axis (the line
+    /// axis, the one that may be stretched), returns the point update
+    /// `value(index, out[index])` of that plane, so that the weights of a
+    /// stretched axis are looked up once per plane, not per point.
+    pub fn par_update_planes<K, V>(&self, block: &Block, out: &mut [f64], kernel: K)
+    where
+        K: Fn(usize) -> V + Sync,
+        V: Fn(usize, f64) -> f64,
+    {
         let slow = self.dim() - 1;
+        let plane = self.strides[slow];
+        let planes = block.start[slow]..block.end[slow];
+        let mut inner = *block;
+        inner.start[slow] = 0;
+        inner.end[slow] = 1;
         if rayon::current_num_threads() == 1 {
             // No thread to share with: the plain loop, without the
             // bookkeeping of parallel iterators.
-            self.for_each(block, |index, point| {
-                out[index] = value(index, point[slow], out[index])
-            });
+            for layer in planes {
+                let value = kernel(layer);
+                let first = layer * plane;
+                let values = &mut out[first..first + plane];
+                self.for_each(&inner, |local, _| {
+                    values[local] = value(first + local, values[local]);
+                });
+            }
             return;
         }
-        let plane = self.strides[slow];
         let plane_points: usize = (0..slow).map(|a| block.end[a] - block.start[a]).product();
-        let planes = block.start[slow]..block.end[slow];
         out[planes.start * plane..planes.end * plane]
             .par_chunks_mut(plane)
             .with_min_len(POINTS_PER_TASK.div_ceil(plane_points.max(1)))
             .enumerate()
             .for_each(|(offset, values)| {
                 let layer = planes.start + offset;
+                let value = kernel(layer);
                 let first = layer * plane;
-                let mut inner = *block;
-                inner.start[slow] = 0;
-                inner.end[slow] = 1;
                 self.for_each(&inner, |local, _| {
-                    values[local] = value(first + local, layer, values[local]);
+                    values[local] = value(first + local, values[local]);
                 });
             });
     }

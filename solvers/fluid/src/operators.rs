@@ -23,13 +23,16 @@ pub fn divergence(grid: &Grid, velocity: &[Vec<f64>], divergence: &mut [f64]) {
     let line = grid.line_axis();
     let line_velocity = &velocity[line];
     let line_stride = grid.stride(line);
-    grid.par_update_planes(&grid.cell_block(), divergence, |index, plane, _| {
-        let mut sum = 0.0;
-        for (axis, component) in velocity.iter().enumerate().take(line) {
-            let stride = grid.stride(axis);
-            sum += (component[index] - component[index - stride]) / grid.spacing[axis];
+    grid.par_update_planes(&grid.cell_block(), divergence, |plane| {
+        let width = grid.width(line, plane);
+        move |index, _| {
+            let mut sum = 0.0;
+            for (axis, component) in velocity.iter().enumerate().take(line) {
+                let stride = grid.stride(axis);
+                sum += (component[index] - component[index - stride]) / grid.spacing[axis];
+            }
+            sum + (line_velocity[index] - line_velocity[index - line_stride]) / width
         }
-        sum + (line_velocity[index] - line_velocity[index - line_stride]) / grid.width(line, plane)
     });
 }
 
@@ -44,9 +47,9 @@ pub fn subtract_gradient(
     velocity_component: &mut [f64],
 ) {
     let stride = grid.stride(component);
-    grid.par_update_planes(block, velocity_component, |index, plane, velocity| {
+    grid.par_update_planes(block, velocity_component, |plane| {
         let factor = scale / grid.gap(component, plane);
-        velocity - factor * (scalar[index + stride] - scalar[index])
+        move |index, velocity| velocity - factor * (scalar[index + stride] - scalar[index])
     });
 }
 
@@ -68,18 +71,19 @@ pub fn add_laplacian(
         strides[axis] = grid.stride(axis);
     }
     let line_stride = grid.stride(line);
-    grid.par_update_planes(block, out, |index, plane, out| {
-        let centre = field[index];
-        let mut sum = 0.0;
-        for axis in 0..line {
-            let s = strides[axis];
-            sum += weights[axis] * (field[index + s] - 2.0 * centre + field[index - s]);
+    grid.par_update_planes(block, out, |plane| {
+        let [below, above] = grid.line_laplacian(location, plane).map(|w| scale * w);
+        move |index, out| {
+            let centre = field[index];
+            let mut sum = 0.0;
+            for axis in 0..line {
+                let s = strides[axis];
+                sum += weights[axis] * (field[index + s] - 2.0 * centre + field[index - s]);
+            }
+            sum += above * (field[index + line_stride] - centre)
+                + below * (field[index - line_stride] - centre);
+            out + sum
         }
-        let [below, above] = grid.line_laplacian(location, plane);
-        sum += scale
-            * (above * (field[index + line_stride] - centre)
-                + below * (field[index - line_stride] - centre));
-        out + sum
     });
 }
 
@@ -103,22 +107,28 @@ pub fn convective_tendency(
     let sc = grid.stride(component);
     // One pass per flux direction keeps the inner loop branch-free. The
     // flux along the component's axis is differenced between centres.
-    grid.par_update_planes(block, tendency, |index, plane, _| {
-        let upper = along[index] + along[index + sc];
-        let lower = along[index - sc] + along[index];
-        -0.25 * (upper * upper - lower * lower) / grid.gap(component, plane)
+    grid.par_update_planes(block, tendency, |plane| {
+        let factor = 0.25 / grid.gap(component, plane);
+        move |index, _| {
+            let upper = along[index] + along[index + sc];
+            let lower = along[index - sc] + along[index];
+            -factor * (upper * upper - lower * lower)
+        }
     });
     // Across it, between the edges on either side of the face, which lie
     // on the face's own cell faces along that axis.
     for axis in (0..grid.dim()).filter(|&axis| axis != component) {
         let across = &velocity[axis];
         let sd = grid.stride(axis);
-        grid.par_update_planes(block, tendency, |index, plane, tendency| {
-            let upper = (along[index] + along[index + sd]) * (across[index] + across[index + sc]);
-            let lower =
-                (along[index - sd] + along[index]) * (across[index - sd] + across[index - sd + sc]);
+        grid.par_update_planes(block, tendency, |plane| {
             let factor = 0.25 / grid.width(axis, plane);
-            tendency - factor * (upper - lower)
+            move |index, tendency| {
+                let upper =
+                    (along[index] + along[index + sd]) * (across[index] + across[index + sc]);
+                let lower = (along[index - sd] + along[index])
+                    * (across[index - sd] + across[index - sd + sc]);
+                tendency - factor * (upper - lower)
+            }
         });
     }
 }
