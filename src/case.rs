@@ -1177,11 +1177,11 @@ impl Case {
                             dim,
                             &format!("allowed: a list of {dim} numbers [m/s]"),
                         )?;
-                        if v[axis] != 0.0 {
+                        if !v.iter().all(|x| x.is_finite()) {
                             return Err(invalid(
                                 &velocity_key,
                                 format!("{v:?}"),
-                                "allowed: a velocity in the plane of the wall (zero normal component)",
+                                "allowed: finite velocities [m/s]",
                             ));
                         }
                     }
@@ -1201,6 +1201,23 @@ impl Case {
                     }
                     (_, None) => {}
                 }
+            }
+            // Fluid through the faces (blowing, suction): as much must
+            // leave through one face as enters through the other.
+            let normal = |side: usize| {
+                (faces[side] == "moving")
+                    .then(|| f.boundary.velocity(axis, side))
+                    .flatten()
+                    .map_or(0.0, |v| v[axis])
+            };
+            if normal(0) != normal(1) {
+                return Err(invalid(
+                    &format!("fluid.boundary.{}_upper_velocity", axes[axis]),
+                    format!("normal component {} against {} below", normal(1), normal(0)),
+                    "allowed: a through-flow (blowing in through one face, suction out through \
+                     the other) with the same normal velocity on both faces of the axis, so that \
+                     as much fluid leaves as enters; a wall sliding in its plane has none",
+                ));
             }
         }
         let periodic = |axis: usize| self.domain.periodic.get(axis).copied().unwrap_or(false);
@@ -1277,6 +1294,19 @@ impl Case {
                         "analysis.kind",
                         "channel",
                         "needs walls on the faces of the last axis and periodic other axes",
+                    ));
+                }
+                let through_flow = f
+                    .boundary
+                    .velocity(last, 0)
+                    .is_some_and(|v| v.get(last).is_some_and(|&n| n != 0.0));
+                let held = (0..dim).any(|a| f.bulk_velocity.along(a).is_some());
+                if through_flow && held {
+                    return Err(invalid(
+                        "analysis.kind",
+                        "channel",
+                        "with fluid through the walls the profile is known under a pressure \
+                         gradient, not a held bulk velocity",
                     ));
                 }
             }

@@ -253,6 +253,13 @@ fn carried_phases(k: f64, origin: [f64; 3], stream: [f64; 3], x: [f64; 3], time:
 /// `b_n = 2 (U₀ − (−1)ⁿ U₁) / (nπ)` and for the parabola
 /// `(K/2)(y − y₀)(y − y₀ − H)` `b_n = −2 K H² (1 − (−1)ⁿ) / (nπ)³`: a wall set
 /// sliding under fluid at rest grows a boundary layer of thickness √(νt).
+///
+/// Walls that fluid crosses at V (blowing in through one, suction out
+/// through the other) carry the flow across the channel: the wall-normal
+/// velocity is V everywhere and the steady profile solves
+/// `u'' − (V/ν) u' = K`: `u = U₀ + (U₁ − U₀ + K H ν/V) (e^{Vs/ν} − 1)/(e^{VH/ν} − 1)
+/// − K s ν/V`, s = y − y₀ (the asymptotic suction profile when K = 0); it is
+/// compared at the end, without a start-up.
 pub struct ChannelProfile {
     pub wall_axis: usize,
     lower: f64,
@@ -262,6 +269,8 @@ pub struct ChannelProfile {
     wall_velocity: [[f64; 3]; 2],
     /// ν, when the flow follows the start-up from rest (none: steady only).
     start_up_viscosity: Option<f64>,
+    /// V/ν of a flow through the walls (1/m), zero without one.
+    through_flow: f64,
 }
 
 impl ChannelProfile {
@@ -298,8 +307,10 @@ impl ChannelProfile {
             }
             None => (gradient[c] / f.density - gravity[c]) / viscosity,
         });
+        let through_flow = wall_velocity[0][wall_axis] / viscosity;
         let from_rest = matches!(f.initial, InitialFlowSection::Rest)
-            && (0..3).all(|c| f.bulk_velocity.along(c).is_none());
+            && (0..3).all(|c| f.bulk_velocity.along(c).is_none())
+            && through_flow == 0.0;
         Some(ChannelProfile {
             wall_axis,
             lower: case.domain.lower[wall_axis],
@@ -307,6 +318,7 @@ impl ChannelProfile {
             curvature,
             wall_velocity,
             start_up_viscosity: from_rest.then_some(viscosity),
+            through_flow,
         })
     }
 
@@ -315,11 +327,22 @@ impl ChannelProfile {
     /// flow started from rest).
     pub fn velocity(&self, component: usize, y: f64, time: f64) -> f64 {
         if component == self.wall_axis {
-            return 0.0;
+            return self.wall_velocity[0][component];
         }
         let eta = (y - self.lower) / self.height;
         let [lower, upper] = self.wall_velocity.map(|v| v[component]);
         let curvature = self.curvature[component];
+        let a = self.through_flow;
+        if a != 0.0 {
+            let (s, height) = (y - self.lower, self.height);
+            // (e^{as} − 1)/(e^{aH} − 1) without overflow for large aH.
+            let shape = if a > 0.0 {
+                ((a * (s - height)).exp() - (-a * height).exp()) / (-(-a * height).exp_m1())
+            } else {
+                (a * s).exp_m1() / (a * height).exp_m1()
+            };
+            return lower + (upper - lower + curvature * height / a) * shape - curvature * s / a;
+        }
         let steady = 0.5 * curvature * (y - self.lower) * (y - self.lower - self.height)
             + lower * (1.0 - eta)
             + upper * eta;

@@ -123,7 +123,9 @@ fn main() {
         let mut solver = DirectSolver::new(&grid, &ends).unwrap();
         // A manufactured zero-mean solution and its right-hand side.
         let mut exact = grid.zeros();
-        grid.for_each(&grid.cell_block(), |index, _| exact[index] = pseudo_random(index));
+        grid.for_each(&grid.cell_block(), |index, _| {
+            exact[index] = pseudo_random(index)
+        });
         remove_mean(&grid, &mut exact);
         let mut rhs = grid.zeros();
         apply(&grid, &ends, &mut exact.clone(), &mut rhs);

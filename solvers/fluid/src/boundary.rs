@@ -52,8 +52,9 @@ pub enum BoundaryCondition {
     NoSlip,
     /// Impermeable wall without shear stress.
     FreeSlip,
-    /// Wall sliding in its own plane at this velocity (m/s); the component
-    /// normal to the wall must be zero.
+    /// Wall moving at this velocity (m/s): sliding in its plane, and with
+    /// a normal component a porous wall that fluid crosses (blowing,
+    /// suction), which the opposite face must match.
     MovingWall([f64; 3]),
 }
 
@@ -121,15 +122,16 @@ impl Boundaries {
                     "axis {axis}: periodic on one face only ({lower:?}, {upper:?})"
                 )));
             }
-            for condition in [lower, upper] {
-                if let BoundaryCondition::MovingWall(velocity) = condition {
-                    if velocity[axis] != 0.0 {
-                        return Err(FluidError::Boundary(format!(
-                            "axis {axis}: a moving wall slides in its plane; its normal velocity {} must be 0",
-                            velocity[axis]
-                        )));
-                    }
-                }
+            // Fluid may cross the faces of an axis (blowing through one,
+            // suction through the other) if as much leaves as enters: the
+            // projection's Neumann problem then has a solution.
+            let through = [lower, upper].map(|condition| wall_velocity(condition)[axis]);
+            if through[0] != through[1] {
+                return Err(FluidError::Boundary(format!(
+                    "axis {axis}: the normal velocities of its faces, {} and {}, differ: as much \
+                     fluid must leave through one as enters through the other",
+                    through[0], through[1]
+                )));
             }
         }
         let line_axis = dim - 1;
@@ -365,6 +367,12 @@ mod tests {
             BoundaryCondition::MovingWall([1.0, 0.0, 0.5]),
         );
         assert!(leaking.validate(&grid).is_err());
+        let through_flow = Boundaries::periodic().with(
+            2,
+            BoundaryCondition::MovingWall([0.0, 0.0, 0.5]),
+            BoundaryCondition::MovingWall([1.0, 0.0, 0.5]),
+        );
+        assert!(through_flow.validate(&grid).is_ok());
     }
 
     /// The value at the wall, half a cell beyond the first unknown, of the

@@ -21,7 +21,10 @@
 //! energy, CFL number, divergence) or refuses a step beyond [`CFL_LIMIT`].
 //!
 //! Limits of this version, each refused or stated where it applies: one
-//! rank (the transforms need whole lines); uniform spacing; wall velocities
+//! rank (the transforms need whole lines); uniform spacing except along the
+//! last axis, which may be stretched ([`Grid::stretched`]); fluid may
+//! cross the faces of an axis only as a through-flow (the same normal
+//! velocity on both, no open outflow); wall velocities
 //! constant in time (the viscous solve works on increments with
 //! homogeneous conditions); walls of different kinds on the two faces of
 //! an axis only along the last axis (z in 3D, y in 2D); the pressure after
