@@ -498,3 +498,50 @@ fn suction_profile_through_porous_walls() {
     assert!(clustered_orders[1] >= 1.9, "orders {clustered_orders:?}");
     assert!(gains.iter().all(|&g| g >= 2.0), "gains {gains:?}");
 }
+
+/// Pressure-driven flow in a square duct, no-slip walls on y (a
+/// transformed axis, linear wall ghost) and on z (the line axis, quadratic
+/// ghost) at once: against the series solution of `ν ∇²u = ∂⟨p⟩/∂x / ρ`
+/// on [0, a]², `u = (4 K a²/π³) Σ_{n odd} n⁻³ [1 − cosh(nπ(z − a/2)/a) /
+/// cosh(nπ/2)] sin(nπ y/a)`, `K = −∂⟨p⟩/∂x / (ρ ν)`: second order.
+#[test]
+fn duct_flow_with_walls_on_two_axes() {
+    let gradient = -1.0;
+    let exact = |c: usize, x: [f64; 3]| {
+        if c != 0 {
+            return 0.0;
+        }
+        let k = -gradient / VISCOSITY;
+        let mut sum = 0.0;
+        for n in (1..200).step_by(2) {
+            let n = n as f64;
+            let ratio = (n * PI * (x[2] - 0.5)).cosh() / (n * PI / 2.0).cosh();
+            sum += (1.0 - ratio) * (n * PI * x[1]).sin() / n.powi(3);
+        }
+        4.0 * k / PI.powi(3) * sum
+    };
+    let errors: Vec<f64> = [8, 16, 32]
+        .iter()
+        .map(|&cells| {
+            let grid = Grid::new(
+                Dimension::Three,
+                [4, cells, cells],
+                [0.0; 3],
+                [0.5, 1.0, 1.0],
+            );
+            let boundaries = Boundaries::periodic()
+                .with(1, BoundaryCondition::NoSlip, BoundaryCondition::NoSlip)
+                .with(2, BoundaryCondition::NoSlip, BoundaryCondition::NoSlip);
+            let mut solver = solver_with(grid, boundaries);
+            solver.mean_pressure_gradient = [gradient, 0.0, 0.0];
+            advance(&mut solver, 0.01, 300, 0.07);
+            max_velocity_error(&solver, exact) / 0.0737
+        })
+        .collect();
+    let orders = [order(errors[0], errors[1]), order(errors[1], errors[2])];
+    println!(
+        "square duct: relative errors {}, orders {orders:.3?}",
+        scientific(&errors)
+    );
+    assert!(orders[1] >= 1.9, "orders {orders:?}");
+}
