@@ -187,7 +187,8 @@ pub struct FluidBoundarySection {
     pub z_upper_velocity: Option<Vec<f64>>,
 }
 
-pub const FACE_KINDS: &str = "\"periodic\", \"no_slip\", \"free_slip\" or \"moving\"";
+pub const FACE_KINDS: &str =
+    "\"periodic\", \"no_slip\", \"free_slip\", \"moving\" or \"outflow\" (upper face of the last axis)";
 
 impl FluidBoundarySection {
     /// The `[lower, upper]` face kinds given for `axis`.
@@ -1158,6 +1159,26 @@ impl Case {
                 let side_name = ["lower", "upper"][side];
                 match face.as_str() {
                     "periodic" | "no_slip" | "free_slip" | "moving" => {}
+                    "outflow" => {
+                        if side != 1 || axis != dim - 1 {
+                            return Err(invalid(
+                                &key,
+                                format!("{faces:?}"),
+                                &format!(
+                                    "\"outflow\" is allowed only on the upper face of the last \
+                                     axis ({}), whose lines are solved by elimination",
+                                    axes[dim - 1]
+                                ),
+                            ));
+                        }
+                        if self.has_grains() {
+                            return Err(invalid(
+                                &key,
+                                format!("{faces:?}"),
+                                "\"outflow\" is for fluid-only scenes in this version",
+                            ));
+                        }
+                    }
                     other => return Err(invalid(&key, other, &format!("allowed: {FACE_KINDS}"))),
                 }
                 if (face == "periodic") != domain_periodic {
@@ -1210,7 +1231,7 @@ impl Case {
                     .flatten()
                     .map_or(0.0, |v| v[axis])
             };
-            if normal(0) != normal(1) {
+            if faces[1] != "outflow" && normal(0) != normal(1) {
                 return Err(invalid(
                     &format!("fluid.boundary.{}_upper_velocity", axes[axis]),
                     format!("normal component {} against {} below", normal(1), normal(0)),

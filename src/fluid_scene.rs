@@ -70,6 +70,7 @@ pub fn boundaries(case: &Case) -> Boundaries {
             "periodic" => BoundaryCondition::Periodic,
             "no_slip" => BoundaryCondition::NoSlip,
             "free_slip" => BoundaryCondition::FreeSlip,
+            "outflow" => BoundaryCondition::Outflow,
             "moving" => BoundaryCondition::MovingWall(axis_values(
                 f.boundary.velocity(axis, side).expect("validated"),
             )),
@@ -260,6 +261,11 @@ fn carried_phases(k: f64, origin: [f64; 3], stream: [f64; 3], x: [f64; 3], time:
 /// `u'' − (V/ν) u' = K`: `u = U₀ + (U₁ − U₀ + K H ν/V) (e^{Vs/ν} − 1)/(e^{VH/ν} − 1)
 /// − K s ν/V`, s = y − y₀ (the asymptotic suction profile when K = 0); it is
 /// compared at the end, without a start-up.
+///
+/// With an outflow as the upper face (zero gradient, u'(H) = 0) the steady
+/// profile is `u = U₀ + (K/a²)(e^{a(s − H)} − e^{−aH}) − K s/a`, a = V/ν,
+/// under an inflow V through the lower wall, and the half parabola
+/// `U₀ + (K/2) s (s − 2H)` without one.
 pub struct ChannelProfile {
     pub wall_axis: usize,
     lower: f64,
@@ -271,6 +277,8 @@ pub struct ChannelProfile {
     start_up_viscosity: Option<f64>,
     /// V/ν of a flow through the walls (1/m), zero without one.
     through_flow: f64,
+    /// Whether the upper face is an outflow.
+    outflow: bool,
 }
 
 impl ChannelProfile {
@@ -308,9 +316,14 @@ impl ChannelProfile {
             None => (gradient[c] / f.density - gravity[c]) / viscosity,
         });
         let through_flow = wall_velocity[0][wall_axis] / viscosity;
+        let outflow = f
+            .boundary
+            .faces(wall_axis)
+            .is_some_and(|faces| faces[1] == "outflow");
         let from_rest = matches!(f.initial, InitialFlowSection::Rest)
             && (0..3).all(|c| f.bulk_velocity.along(c).is_none())
-            && through_flow == 0.0;
+            && through_flow == 0.0
+            && !outflow;
         Some(ChannelProfile {
             wall_axis,
             lower: case.domain.lower[wall_axis],
@@ -319,6 +332,7 @@ impl ChannelProfile {
             wall_velocity,
             start_up_viscosity: from_rest.then_some(viscosity),
             through_flow,
+            outflow,
         })
     }
 
@@ -333,6 +347,15 @@ impl ChannelProfile {
         let [lower, upper] = self.wall_velocity.map(|v| v[component]);
         let curvature = self.curvature[component];
         let a = self.through_flow;
+        if self.outflow {
+            let (s, height) = (y - self.lower, self.height);
+            return if a == 0.0 {
+                lower + 0.5 * curvature * s * (s - 2.0 * height)
+            } else {
+                lower + curvature / (a * a) * ((a * (s - height)).exp() - (-a * height).exp())
+                    - curvature * s / a
+            };
+        }
         if a != 0.0 {
             let (s, height) = (y - self.lower, self.height);
             // (e^{as} − 1)/(e^{aH} − 1) without overflow for large aH.

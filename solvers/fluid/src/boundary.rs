@@ -32,7 +32,12 @@
 //!   shear), exact for a profile symmetric about the wall;
 //! - pressure (and the projection's correction) has a zero normal
 //!   gradient at every wall (`Neumann`), which with the normal velocity
-//!   fixed on the wall face makes the projection exact.
+//!   fixed on the wall face makes the projection exact;
+//! - an outflow face (upper end of the last axis only) mirrors every
+//!   velocity component (`Neumann`: zero normal gradient; the normal
+//!   velocity on the face is then an unknown of the solves) and sets the
+//!   pressure to zero on the face (`DirichletCell`, ghost `−p_n`), so the
+//!   projection adjusts the flux out to what enters.
 //!
 //! Only the viscous term sees the tangential ghost: the explicit Laplacian
 //! reads it and the Helmholtz solver builds the same closure into its
@@ -54,8 +59,16 @@ pub enum BoundaryCondition {
     FreeSlip,
     /// Wall moving at this velocity (m/s): sliding in its plane, and with
     /// a normal component a porous wall that fluid crosses (blowing,
-    /// suction), which the opposite face must match.
+    /// suction, an inflow), which the opposite face must match unless it is
+    /// an [`BoundaryCondition::Outflow`].
     MovingWall([f64; 3]),
+    /// An open face the fluid leaves through: zero normal gradient of every
+    /// velocity component, zero pressure on the face. Only the upper face
+    /// of the last axis (z in 3D, y in 2D), whose lines are solved by
+    /// elimination, where the normal velocity on the face is an unknown.
+    /// The outflow must stay an outflow: fluid drawn back in through it
+    /// carries no prescribed state.
+    Outflow,
 }
 
 /// Which discrete relation closes a line of unknowns at one end.
@@ -122,11 +135,21 @@ impl Boundaries {
                     "axis {axis}: periodic on one face only ({lower:?}, {upper:?})"
                 )));
             }
+            let line_axis = dim - 1;
+            if lower == BoundaryCondition::Outflow
+                || (upper == BoundaryCondition::Outflow && axis != line_axis)
+            {
+                return Err(FluidError::Boundary(format!(
+                    "axis {axis}: an outflow is allowed only on the upper face of the last axis \
+                     ({line_axis})"
+                )));
+            }
             // Fluid may cross the faces of an axis (blowing through one,
             // suction through the other) if as much leaves as enters: the
-            // projection's Neumann problem then has a solution.
+            // projection's Neumann problem then has a solution. An outflow
+            // takes whatever enters.
             let through = [lower, upper].map(|condition| wall_velocity(condition)[axis]);
-            if through[0] != through[1] {
+            if upper != BoundaryCondition::Outflow && through[0] != through[1] {
                 return Err(FluidError::Boundary(format!(
                     "axis {axis}: the normal velocities of its faces, {} and {}, differ: as much \
                      fluid must leave through one as enters through the other",
@@ -172,6 +195,10 @@ impl Boundaries {
             for side in 0..2 {
                 ends[axis][side] = match self.faces[axis][side] {
                     BoundaryCondition::Periodic => PERIODIC,
+                    BoundaryCondition::Outflow => EndCondition {
+                        kind: EndKind::Neumann,
+                        value: 0.0,
+                    },
                     condition if axis == component => EndCondition {
                         kind: EndKind::DirichletFace,
                         value: wall_velocity(condition)[component],
@@ -190,20 +217,31 @@ impl Boundaries {
         ends
     }
 
-    /// End conditions of pressure: zero normal gradient at every wall.
+    /// End conditions of pressure: zero normal gradient at every wall, zero
+    /// value on an outflow face.
     pub fn pressure_ends(&self, grid: &Grid) -> FieldEnds {
         let mut ends = [[PERIODIC; 2]; 3];
         for axis in 0..grid.dim() {
             for side in 0..2 {
-                if self.faces[axis][side] != BoundaryCondition::Periodic {
-                    ends[axis][side] = EndCondition {
+                ends[axis][side] = match self.faces[axis][side] {
+                    BoundaryCondition::Periodic => PERIODIC,
+                    BoundaryCondition::Outflow => EndCondition {
+                        kind: EndKind::DirichletCell,
+                        value: 0.0,
+                    },
+                    _ => EndCondition {
                         kind: EndKind::Neumann,
                         value: 0.0,
-                    };
-                }
+                    },
+                };
             }
         }
         ends
+    }
+
+    /// Whether the upper face of the last axis is an outflow.
+    pub fn has_outflow(&self, grid: &Grid) -> bool {
+        self.faces[grid.line_axis()][1] == BoundaryCondition::Outflow
     }
 }
 
@@ -227,12 +265,14 @@ pub fn homogeneous(ends: &FieldEnds) -> FieldEnds {
 
 /// The padded indices of a field's unknowns: every owned cell, except that
 /// along an axis with prescribed face values the boundary faces (0 and n)
-/// are not unknowns.
+/// are not unknowns; at an outflow face the normal velocity on the face is
+/// one.
 pub fn unknowns(grid: &Grid, ends: &FieldEnds) -> Block {
     let mut block = grid.cell_block();
     for (axis, end) in ends.iter().enumerate().take(grid.dim()) {
-        if end[0].kind == EndKind::DirichletFace {
-            debug_assert_eq!(end[1].kind, EndKind::DirichletFace);
+        // Face n is an unknown unless its value is prescribed (face 0, the
+        // lower end, never is one: the block starts at face 1).
+        if end[1].kind == EndKind::DirichletFace {
             block.end[axis] -= 1;
         }
     }
@@ -373,6 +413,19 @@ mod tests {
             BoundaryCondition::MovingWall([1.0, 0.0, 0.5]),
         );
         assert!(through_flow.validate(&grid).is_ok());
+        let inflow_outflow = Boundaries::periodic().with(
+            2,
+            BoundaryCondition::MovingWall([0.0, 0.0, 0.5]),
+            BoundaryCondition::Outflow,
+        );
+        assert!(inflow_outflow.validate(&grid).is_ok());
+        for (axis, lower, upper) in [
+            (2, BoundaryCondition::Outflow, BoundaryCondition::NoSlip),
+            (0, BoundaryCondition::NoSlip, BoundaryCondition::Outflow),
+        ] {
+            let misplaced = Boundaries::periodic().with(axis, lower, upper);
+            assert!(misplaced.validate(&grid).is_err(), "{misplaced:?}");
+        }
     }
 
     /// The value at the wall, half a cell beyond the first unknown, of the

@@ -23,8 +23,9 @@
 //! Limits of this version, each refused or stated where it applies: one
 //! rank (the transforms need whole lines); uniform spacing except along the
 //! last axis, which may be stretched ([`Grid::stretched`]); fluid may
-//! cross the faces of an axis only as a through-flow (the same normal
-//! velocity on both, no open outflow); wall velocities
+//! cross the faces of an axis as a through-flow (the same normal velocity
+//! on both) or leave through an outflow on the upper face of the last axis;
+//! wall velocities
 //! constant in time (the viscous solve works on increments with
 //! homogeneous conditions); walls of different kinds on the two faces of
 //! an axis only along the last axis (z in 3D, y in 2D); the pressure after

@@ -545,3 +545,53 @@ fn duct_flow_with_walls_on_two_axes() {
     );
     assert!(orders[1] >= 1.9, "orders {orders:?}");
 }
+
+/// An inflow through the lower wall (at rest, blowing in at V) and an open
+/// outflow at the top, under a streamwise pressure gradient: the fluid
+/// leaves at V (the projection sets the flux out), and the steady profile
+/// solves `u'' − (V/ν) u' = K` with `u(0) = 0` and `u'(H) = 0` (the outflow
+/// passes the profile on): `u = (K/a²)(e^{a(y − H)} − e^{−aH}) − K y/a`,
+/// `a = V/ν`. Second order; the outflow face's velocity is an unknown of
+/// the solves.
+#[test]
+fn inflow_through_a_wall_and_an_open_outflow() {
+    let (through, viscosity, gradient) = (1.0, 0.2, -1.0);
+    let a = through / viscosity;
+    let k = gradient / viscosity;
+    let exact = move |c: usize, x: [f64; 3]| match c {
+        0 => (k / (a * a)) * ((a * (x[1] - 1.0)).exp() - (-a).exp()) - k * x[1] / a,
+        _ => through,
+    };
+    let scale = exact(0, [0.0, 1.0, 0.0]).abs();
+    let errors: Vec<f64> = [16, 32, 64]
+        .iter()
+        .map(|&cells| {
+            let grid = Grid::new(Dimension::Two, [4, cells, 1], [0.0; 3], [0.25, 1.0, 1.0]);
+            let boundaries = Boundaries::periodic().with(
+                1,
+                BoundaryCondition::MovingWall([0.0, through, 0.0]),
+                BoundaryCondition::Outflow,
+            );
+            let mut solver =
+                FlowSolver::new(grid, boundaries, viscosity, Communicator::serial()).unwrap();
+            solver.mean_pressure_gradient = [gradient, 0.0, 0.0];
+            advance(&mut solver, 2e-4, 100, through);
+            advance(&mut solver, 2e-3, 6000, through);
+            // The flux out equals the flux in.
+            let grid = &solver.grid;
+            let outflow_face = grid.index(2, cells, 0);
+            assert!(
+                (solver.velocity[1][outflow_face] - through).abs() <= 1e-10,
+                "outflow velocity {}",
+                solver.velocity[1][outflow_face]
+            );
+            max_velocity_error(&solver, exact) / scale
+        })
+        .collect();
+    let orders = [order(errors[0], errors[1]), order(errors[1], errors[2])];
+    println!(
+        "inflow and outflow: relative errors {}, orders {orders:.3?}",
+        scientific(&errors)
+    );
+    assert!(orders[1] >= 1.9, "orders {orders:?}");
+}
