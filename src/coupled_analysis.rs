@@ -116,7 +116,14 @@ impl SphereInFluid {
             self.diameter,
             self.gravity,
         );
-        let added_mass = (rho_p - rho) * g / (rho_p + 0.5 * rho);
+        // Eq. 20, with the added-mass coefficient of a disc in 2D.
+        let dimension = if self.three_d {
+            Dimension::Three
+        } else {
+            Dimension::Two
+        };
+        let added_mass = (rho_p - rho) * g
+            / (rho_p + grainflow_ibm::settling::added_mass_coefficient(dimension) * rho);
         let window = 0.2 * (d / g).sqrt();
         let early: Vec<(f64, f64)> = self
             .history

@@ -105,8 +105,9 @@ pub struct CoupledSystem {
     pub coupling: Coupling,
     /// Largest DEM sub-step (s).
     pub dem_dt: f64,
-    /// The virtual-mass coefficient `C_v` (0.5, the added mass of a sphere,
-    /// with the inner-fluid-momentum load; 0 with the rigid inner fluid).
+    /// The virtual-mass coefficient `C_v` (the added-mass coefficient of
+    /// the grain, 1/2 for a sphere and 1 for a disc, with the
+    /// inner-fluid-momentum load; 0 with the rigid inner fluid).
     pub virtual_mass: f64,
     /// Velocity change of each particle over the last stage, by id.
     last_velocity_change: Vec<Vec3>,
@@ -131,11 +132,11 @@ impl CoupledSystem {
         let immersed = ImmersedBoundaries::new(&flow.grid, &dem.domain);
         let mut dem = dem;
         let n = dem.particles.n_owned;
+        let dimension = dem.dimension();
         let virtual_mass = match coupling {
-            Coupling::InnerFluidMomentum => 0.5,
+            Coupling::InnerFluidMomentum => crate::settling::added_mass_coefficient(dimension),
             Coupling::RigidInnerFluid => 0.0,
         };
-        let dimension = dem.dimension();
         let p = &mut dem.particles;
         for k in 0..n {
             if p.inverse_mass[k] > 0.0 {

@@ -1,6 +1,20 @@
 //! Reference results for one sphere settling from rest in a fluid, used by
 //! the analyses that compare a run with them.
 
+use grainflow_core::Dimension;
+
+/// The added-mass coefficient `C_a` of a grain accelerating in a fluid at
+/// rest (added mass `C_a ρ V_p`, potential flow): 1/2 for a sphere, 1 for a
+/// disc (a circular cylinder per unit length). A grain released from rest
+/// starts at `a₀ = (ρ_p − ρ) g / (ρ_p + C_a ρ)` (Izard et al. 2014, eq. 20
+/// for the sphere).
+pub fn added_mass_coefficient(dimension: Dimension) -> f64 {
+    match dimension {
+        Dimension::Three => 0.5,
+        Dimension::Two => 1.0,
+    }
+}
+
 /// Least-squares `a₀` of `v = a₀ t + c t^{3/2}` through `(t, v)` samples:
 /// the early-time motion from rest under a constant force, added mass
 /// and the leading history (Basset) term.
