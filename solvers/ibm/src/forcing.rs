@@ -183,30 +183,61 @@ impl ImmersedBoundaries {
         let dim = grid.dim();
         let volume = grid.cell_volume();
 
-        // 1. Fractions and rigid velocities of all bodies on the faces.
+        // 1. Fractions and rigid velocities of all bodies on the faces. The
+        // planes of the slowest axis are shared among threads; each face
+        // sums its bodies in list order, whatever the number of threads.
+        let slow = dim - 1;
+        let plane = grid.stride(slow);
         let mut touched: Vec<Option<Block>> = vec![None; dim];
-        for body in &bodies.list {
-            for component in 0..dim {
-                let total = &mut self.total_fraction[component];
-                let target = &mut self.solid_velocity[component];
-                let stencil = visit_faces(
-                    self.width,
-                    grid,
-                    &unknowns[component],
-                    component,
-                    body,
-                    |index, r, alpha| {
-                        total[index] += alpha;
-                        target[index] += alpha * body.velocity_at(&r)[component];
-                    },
-                );
+        for component in 0..dim {
+            let stencils: Vec<Block> = bodies
+                .list
+                .iter()
+                .map(|body| face_stencil(self.width, grid, &unknowns[component], component, body))
+                .collect();
+            for stencil in &stencils {
+                if (0..dim).any(|a| stencil.end[a] <= stencil.start[a]) {
+                    continue;
+                }
                 touched[component] = Some(match touched[component] {
-                    None => stencil,
+                    None => *stencil,
                     Some(union) => Block {
                         start: [0, 1, 2].map(|a| union.start[a].min(stencil.start[a])),
                         end: [0, 1, 2].map(|a| union.end[a].max(stencil.end[a])),
                     },
                 });
+            }
+            let width = self.width;
+            let fill_plane = |layer: usize, total: &mut [f64], target: &mut [f64]| {
+                let first = layer * plane;
+                for (body, stencil) in bodies.list.iter().zip(&stencils) {
+                    if layer < stencil.start[slow] || layer >= stencil.end[slow] {
+                        continue;
+                    }
+                    let mut slab = *stencil;
+                    slab.start[slow] = layer;
+                    slab.end[slow] = layer + 1;
+                    visit_stencil(width, grid, &slab, component, body, |index, r, alpha| {
+                        total[index - first] += alpha;
+                        target[index - first] += alpha * body.velocity_at(&r)[component];
+                    });
+                }
+            };
+            let (total, target) = (
+                &mut self.total_fraction[component],
+                &mut self.solid_velocity[component],
+            );
+            if rayon::current_num_threads() == 1 {
+                let planes = total.chunks_mut(plane).zip(target.chunks_mut(plane));
+                for (layer, (total, target)) in planes.enumerate() {
+                    fill_plane(layer, total, target);
+                }
+            } else {
+                total
+                    .par_chunks_mut(plane)
+                    .zip(target.par_chunks_mut(plane))
+                    .enumerate()
+                    .for_each(|(layer, (total, target))| fill_plane(layer, total, target));
             }
         }
 
@@ -374,12 +405,18 @@ fn visit_faces(
     block: &Block,
     component: usize,
     body: &Body,
-    mut visit: impl FnMut(usize, Vec3, f64),
+    visit: impl FnMut(usize, Vec3, f64),
 ) -> Block {
-    let dim = grid.dim();
+    let stencil = face_stencil(width, grid, block, component, body);
+    visit_stencil(width, grid, &stencil, component, body, visit);
+    stencil
+}
+
+/// The box of faces of `component` in `block` within the support of `body`.
+fn face_stencil(width: f64, grid: &Grid, block: &Block, component: usize, body: &Body) -> Block {
     let reach = support(body.radius, width);
     let mut stencil = *block;
-    for axis in 0..dim {
+    for axis in 0..grid.dim() {
         let (h, ghost) = (grid.spacing[axis], grid.ghost(axis) as f64);
         let offset = if axis == component { 1.0 } else { 0.5 };
         // Padded index of coordinate x: (x − lower)/h + ghost − offset.
@@ -394,8 +431,22 @@ fn visit_faces(
         };
         stencil.end[axis] = stencil.end[axis].max(stencil.start[axis]);
     }
+    stencil
+}
+
+/// Calls `visit(index, r, α)` for every face of `component` in `stencil`
+/// where the solid fraction of `body` is positive.
+fn visit_stencil(
+    width: f64,
+    grid: &Grid,
+    stencil: &Block,
+    component: usize,
+    body: &Body,
+    mut visit: impl FnMut(usize, Vec3, f64),
+) {
+    let dim = grid.dim();
     let location = Location::Face(component);
-    grid.for_each(&stencil, |index, point| {
+    grid.for_each(stencil, |index, point| {
         let mut r = Vec3::zeros();
         for axis in 0..dim {
             r[axis] = grid.coordinate(location, axis, point[axis]) - body.centre[axis];
@@ -405,5 +456,4 @@ fn visit_faces(
             visit(index, r, alpha);
         }
     });
-    stencil
 }
