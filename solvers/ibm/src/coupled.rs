@@ -187,32 +187,24 @@ impl CoupledSystem {
             let stage_dt = stage_fraction(stage) * dt;
             let clock = Instant::now();
             // The particles stand still until the DEM runs.
-            let bodies = self.immersed.bodies(&self.dem.particles);
-            let before = self.immersed.inner_momentum(
-                &self.flow.grid,
-                &unknowns,
-                &self.flow.velocity,
-                &bodies,
-            );
+            let bodies = self
+                .immersed
+                .bodies(&self.dem.particles, &self.flow.grid, &unknowns);
+            let before =
+                self.immersed
+                    .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies);
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);
-            let forcing = self.immersed.apply(
-                &self.flow.grid,
-                &unknowns,
-                &mut self.flow.velocity,
-                &bodies,
-                stage_dt,
-            );
+            let forcing =
+                self.immersed
+                    .apply(&self.flow.grid, &mut self.flow.velocity, &bodies, stage_dt);
             let clock = self.lap(clock, Part::Forcing);
             max_divergence = max_divergence.max(self.flow.project(stage, dt));
             let clock = self.lap(clock, Part::Flow);
-            let after = self.immersed.inner_momentum(
-                &self.flow.grid,
-                &unknowns,
-                &self.flow.velocity,
-                &bodies,
-            );
+            let after = self
+                .immersed
+                .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies);
             let loads = self.hydrodynamic_loads(&forcing, &before, &after, stage_dt);
             for (k, &id) in self.dem.particles.id[..loads.force.len()]
                 .iter()

@@ -31,6 +31,8 @@
 //! with several ranks, a subdomain edge: the owner then adds the partial
 //! loads of the other ranks).
 
+use std::ops::Range;
+
 use grainflow_core::{Dimension, Domain, Vec3};
 use grainflow_dem::Particles;
 use grainflow_fluid::{Block, Grid, Location};
@@ -55,7 +57,7 @@ impl Loads {
 }
 
 /// One particle, or one of its periodic images, as the grid sees it.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Body {
     /// Owned index of the particle.
     particle: usize,
@@ -63,6 +65,19 @@ struct Body {
     velocity: Vec3,
     angular_velocity: Vec3,
     radius: f64,
+    /// Its solid fraction on the faces of each velocity component, made
+    /// once per stage: the forcing, the loads and the inner momentum all
+    /// read it (the tanh of eq. 8 is the costly part of each).
+    fractions: Vec<FaceFractions>,
+}
+
+/// The solid fraction of one body on the faces of one component: `alpha`
+/// over the box `stencil` (the faces within the body's support), in the
+/// order of [`Grid::for_each`].
+#[derive(Clone, Debug)]
+struct FaceFractions {
+    stencil: Block,
+    alpha: Vec<f64>,
 }
 
 impl Body {
@@ -123,21 +138,14 @@ impl ImmersedBoundaries {
 
     /// `Σ_faces α_p dV` of each owned particle: the volume the grid sees
     /// (area in 2D), averaged over the components.
-    pub fn grid_volume(&self, grid: &Grid, unknowns: &[Block], bodies: &Bodies) -> Vec<f64> {
+    pub fn grid_volume(&self, grid: &Grid, bodies: &Bodies) -> Vec<f64> {
         let dim = grid.dim();
         let mut volume = vec![0.0; bodies.count];
         for body in &bodies.list {
             for component in 0..dim {
-                visit_faces(
-                    self.width,
-                    grid,
-                    &unknowns[component],
-                    component,
-                    body,
-                    |_, _, alpha| {
-                        volume[body.particle] += alpha * grid.cell_volume() / dim as f64;
-                    },
-                );
+                visit_faces(grid, body, component, ALL_PLANES, |_, _, alpha| {
+                    volume[body.particle] += alpha * grid.cell_volume() / dim as f64;
+                });
             }
         }
         volume
@@ -145,25 +153,15 @@ impl ImmersedBoundaries {
 
     /// The fluid's momentum and angular momentum (about each centre) inside
     /// each owned particle, `∫ α_p u dV` and `∫ r × α_p u dV`, per unit density.
-    pub fn inner_momentum(
-        &self,
-        grid: &Grid,
-        unknowns: &[Block],
-        velocity: &[Vec<f64>],
-        bodies: &Bodies,
-    ) -> Loads {
+    pub fn inner_momentum(&self, grid: &Grid, velocity: &[Vec<f64>], bodies: &Bodies) -> Loads {
         let volume = grid.cell_volume();
         let per_body: Vec<(Vec3, Vec3)> = bodies
             .list
             .par_iter()
             .map(|body| {
-                moments(
-                    self.width,
-                    grid,
-                    unknowns,
-                    body,
-                    |component, index, _, alpha| alpha * velocity[component][index] * volume,
-                )
+                moments(grid, body, |component, index, _, alpha| {
+                    alpha * velocity[component][index] * volume
+                })
             })
             .collect();
         self.gather(bodies, &per_body)
@@ -175,7 +173,6 @@ impl ImmersedBoundaries {
     pub fn apply(
         &mut self,
         grid: &Grid,
-        unknowns: &[Block],
         velocity: &mut [Vec<f64>],
         bodies: &Bodies,
         stage_dt: f64,
@@ -190,37 +187,32 @@ impl ImmersedBoundaries {
         let plane = grid.stride(slow);
         let mut touched: Vec<Option<Block>> = vec![None; dim];
         for component in 0..dim {
-            let stencils: Vec<Block> = bodies
-                .list
-                .iter()
-                .map(|body| face_stencil(self.width, grid, &unknowns[component], component, body))
-                .collect();
-            for stencil in &stencils {
+            for body in &bodies.list {
+                let stencil = body.fractions[component].stencil;
                 if (0..dim).any(|a| stencil.end[a] <= stencil.start[a]) {
                     continue;
                 }
                 touched[component] = Some(match touched[component] {
-                    None => *stencil,
+                    None => stencil,
                     Some(union) => Block {
                         start: [0, 1, 2].map(|a| union.start[a].min(stencil.start[a])),
                         end: [0, 1, 2].map(|a| union.end[a].max(stencil.end[a])),
                     },
                 });
             }
-            let width = self.width;
             let fill_plane = |layer: usize, total: &mut [f64], target: &mut [f64]| {
                 let first = layer * plane;
-                for (body, stencil) in bodies.list.iter().zip(&stencils) {
-                    if layer < stencil.start[slow] || layer >= stencil.end[slow] {
-                        continue;
-                    }
-                    let mut slab = *stencil;
-                    slab.start[slow] = layer;
-                    slab.end[slow] = layer + 1;
-                    visit_stencil(width, grid, &slab, component, body, |index, r, alpha| {
-                        total[index - first] += alpha;
-                        target[index - first] += alpha * body.velocity_at(&r)[component];
-                    });
+                for body in &bodies.list {
+                    visit_faces(
+                        grid,
+                        body,
+                        component,
+                        layer..layer + 1,
+                        |index, r, alpha| {
+                            total[index - first] += alpha;
+                            target[index - first] += alpha * body.velocity_at(&r)[component];
+                        },
+                    );
                 }
             };
             let (total, target) = (
@@ -248,17 +240,11 @@ impl ImmersedBoundaries {
             .par_iter()
             .map(|body| {
                 // The particle receives −f: the opposite of what it gives.
-                moments(
-                    self.width,
-                    grid,
-                    unknowns,
-                    body,
-                    |component, index, r, alpha| {
-                        let weight = alpha / total[component][index].max(1.0);
-                        let slip = body.velocity_at(&r)[component] - velocity[component][index];
-                        -weight * slip / stage_dt * volume
-                    },
-                )
+                moments(grid, body, |component, index, r, alpha| {
+                    let weight = alpha / total[component][index].max(1.0);
+                    let slip = body.velocity_at(&r)[component] - velocity[component][index];
+                    -weight * slip / stage_dt * volume
+                })
             })
             .collect();
 
@@ -312,8 +298,9 @@ impl ImmersedBoundaries {
     }
 
     /// The owned particles and the periodic images of those whose support
-    /// crosses a periodic edge of the domain.
-    pub fn bodies(&self, particles: &Particles) -> Bodies {
+    /// crosses a periodic edge of the domain, with their solid fractions
+    /// on the faces of the velocity unknowns `unknowns` of `grid`.
+    pub fn bodies(&self, particles: &Particles, grid: &Grid, unknowns: &[Block]) -> Bodies {
         let mut list = Vec::with_capacity(particles.n_owned);
         for p in 0..particles.n_owned {
             let centre = particles.position[p];
@@ -343,11 +330,27 @@ impl ImmersedBoundaries {
                             velocity: particles.velocity[p],
                             angular_velocity: particles.angular_velocity[p],
                             radius: particles.radius[p],
+                            fractions: Vec::new(),
                         });
                     }
                 }
             }
         }
+        let width = self.width;
+        list.par_iter_mut().for_each(|body| {
+            body.fractions = (0..grid.dim())
+                .map(|component| {
+                    face_fractions(
+                        width,
+                        grid,
+                        &unknowns[component],
+                        component,
+                        body.centre,
+                        body.radius,
+                    )
+                })
+                .collect();
+        });
         Bodies {
             count: particles.n_owned,
             list,
@@ -373,20 +376,18 @@ impl ImmersedBoundaries {
     }
 }
 
-/// `(Σ q e_c, Σ r × q e_c)` over the faces of every component `c` within
-/// the support of `body`, with `q = value(c, index, r, α)`: a vector
-/// integral over a particle and its moment about the centre.
+/// `(Σ q, Σ r × q)` over the faces of every component where `body` is
+/// present, `q` the vector with `value(component, index, r, α)` along the
+/// component: the force and torque of a face field on the body.
 fn moments(
-    width: f64,
     grid: &Grid,
-    unknowns: &[Block],
     body: &Body,
     mut value: impl FnMut(usize, usize, Vec3, f64) -> f64,
 ) -> (Vec3, Vec3) {
     let mut sum = Vec3::zeros();
     let mut moment = Vec3::zeros();
-    for (component, block) in unknowns.iter().enumerate() {
-        visit_faces(width, grid, block, component, body, |index, r, alpha| {
+    for component in 0..grid.dim() {
+        visit_faces(grid, body, component, ALL_PLANES, |index, r, alpha| {
             let mut q = Vec3::zeros();
             q[component] = value(component, index, r, alpha);
             sum += q;
@@ -396,33 +397,67 @@ fn moments(
     (sum, moment)
 }
 
-/// Calls `visit(index, r, α)` for every face of `component` in `block`
-/// within the support of `body` (r: offset from its centre); returns
-/// the box of faces visited.
+/// Every plane of the slowest axis.
+const ALL_PLANES: Range<usize> = 0..usize::MAX;
+
+/// Calls `visit(index, r, α)` for every face of `component` where `body`
+/// has a positive solid fraction, within `planes` (padded indices along
+/// the slowest active axis); `r` is the face's offset from the centre.
 fn visit_faces(
+    grid: &Grid,
+    body: &Body,
+    component: usize,
+    planes: Range<usize>,
+    mut visit: impl FnMut(usize, Vec3, f64),
+) {
+    let dim = grid.dim();
+    let slow = dim - 1;
+    let fractions = &body.fractions[component];
+    let mut stencil = fractions.stencil;
+    let first = planes.start.max(stencil.start[slow]);
+    let last = planes.end.min(stencil.end[slow]);
+    if first >= last {
+        return;
+    }
+    let plane_faces: usize = (0..slow)
+        .map(|a| stencil.end[a] - stencil.start[a])
+        .product();
+    let mut k = (first - stencil.start[slow]) * plane_faces;
+    stencil.start[slow] = first;
+    stencil.end[slow] = last;
+    let location = Location::Face(component);
+    grid.for_each(&stencil, |index, point| {
+        let alpha = fractions.alpha[k];
+        k += 1;
+        if alpha > 0.0 {
+            let mut r = Vec3::zeros();
+            for axis in 0..dim {
+                r[axis] = grid.coordinate(location, axis, point[axis]) - body.centre[axis];
+            }
+            visit(index, r, alpha);
+        }
+    });
+}
+
+/// The solid fraction of a body at `centre` of `radius` on the faces of
+/// `component` in `block` within its support.
+fn face_fractions(
     width: f64,
     grid: &Grid,
     block: &Block,
     component: usize,
-    body: &Body,
-    visit: impl FnMut(usize, Vec3, f64),
-) -> Block {
-    let stencil = face_stencil(width, grid, block, component, body);
-    visit_stencil(width, grid, &stencil, component, body, visit);
-    stencil
-}
-
-/// The box of faces of `component` in `block` within the support of `body`.
-fn face_stencil(width: f64, grid: &Grid, block: &Block, component: usize, body: &Body) -> Block {
-    let reach = support(body.radius, width);
+    centre: Vec3,
+    radius: f64,
+) -> FaceFractions {
+    let reach = support(radius, width);
     let mut stencil = *block;
     for axis in 0..grid.dim() {
         let (h, ghost) = (grid.spacing[axis], grid.ghost(axis) as f64);
         let offset = if axis == component { 1.0 } else { 0.5 };
         // Padded index of coordinate x: (x − lower)/h + ghost − offset.
         let index_of = |x: f64| (x - grid.lower[axis]) / h + ghost - offset;
-        let first = index_of(body.centre[axis] - reach).ceil().max(0.0) as usize;
-        let last = index_of(body.centre[axis] + reach).floor();
+        let first = index_of(centre[axis] - reach).ceil().max(0.0) as usize;
+        let last = index_of(centre[axis] + reach).floor();
         stencil.start[axis] = first.max(block.start[axis]);
         stencil.end[axis] = if last < 0.0 {
             stencil.start[axis]
@@ -431,29 +466,14 @@ fn face_stencil(width: f64, grid: &Grid, block: &Block, component: usize, body: 
         };
         stencil.end[axis] = stencil.end[axis].max(stencil.start[axis]);
     }
-    stencil
-}
-
-/// Calls `visit(index, r, α)` for every face of `component` in `stencil`
-/// where the solid fraction of `body` is positive.
-fn visit_stencil(
-    width: f64,
-    grid: &Grid,
-    stencil: &Block,
-    component: usize,
-    body: &Body,
-    mut visit: impl FnMut(usize, Vec3, f64),
-) {
-    let dim = grid.dim();
     let location = Location::Face(component);
-    grid.for_each(stencil, |index, point| {
-        let mut r = Vec3::zeros();
-        for axis in 0..dim {
-            r[axis] = grid.coordinate(location, axis, point[axis]) - body.centre[axis];
+    let mut alpha = Vec::with_capacity((0..3).map(|a| stencil.end[a] - stencil.start[a]).product());
+    grid.for_each(&stencil, |_, point| {
+        let mut r = [0.0; 3];
+        for axis in 0..grid.dim() {
+            r[axis] = grid.coordinate(location, axis, point[axis]) - centre[axis];
         }
-        let alpha = solid_fraction([r.x, r.y, r.z], body.radius, width);
-        if alpha > 0.0 {
-            visit(index, r, alpha);
-        }
+        alpha.push(solid_fraction(r, radius, width));
     });
+    FaceFractions { stencil, alpha }
 }

@@ -53,9 +53,9 @@ fn a_sphere_across_periodic_edges_acts_like_one_inside() {
         let mut immersed = ImmersedBoundaries::new(&grid, &domain);
         let particles = one_particle(centre);
         let unknowns: Vec<_> = (0..3).map(|c| *flow.velocity_unknowns(c)).collect();
-        let bodies = immersed.bodies(&particles);
-        let volume = immersed.grid_volume(&grid, &unknowns, &bodies)[0];
-        let loads = immersed.apply(&grid, &unknowns, &mut flow.velocity, &bodies, 0.1);
+        let bodies = immersed.bodies(&particles, &grid, &unknowns);
+        let volume = immersed.grid_volume(&grid, &bodies)[0];
+        let loads = immersed.apply(&grid, &mut flow.velocity, &bodies, 0.1);
         let momentum: Vec<f64> = (0..3)
             .map(|c| {
                 let field = &flow.velocity[c];
