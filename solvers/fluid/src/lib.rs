@@ -5,11 +5,14 @@
 //! tridiagonal) Poisson and Helmholtz solvers.
 //!
 //! Modules, one job each:
-//! - [`grid`]: the staggered grid of a subdomain, flat fields with one ghost layer;
+//! - [`grid`]: the staggered grid of a subdomain, flat fields with one ghost
+//!   layer, uniform or stretched along its last axis;
 //! - [`boundary`]: conditions on the domain faces and the ghost values they set;
 //! - [`operators`]: divergence, gradient, Laplacian, convection;
 //! - [`transform`]: the 1D transforms that diagonalise the second difference;
-//! - [`poisson`]: direct solvers for `(a I + b L) x = r`;
+//! - [`poisson`]: direct solvers for `(a I + b L) x = r`, their transforms
+//!   by rustfft/rustdct or, with the cargo feature `fftw`, by FFTW (module
+//!   `fftw`: one plan per axis over all its lines);
 //! - [`navier_stokes`]: the time step.
 //!
 //! A flow is a [`Grid`] (cells and corners of the subdomain), its
