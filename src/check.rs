@@ -231,8 +231,10 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
     );
     let line = grid.line_axis();
     if !grid.is_uniform(line) {
-        let widths: Vec<f64> = grid.interior(line).map(|i| grid.width(line, i)).collect();
-        let widest = widths.iter().copied().fold(0.0, f64::max);
+        let widest = grid
+            .interior(line)
+            .map(|i| grid.width(line, i))
+            .fold(0.0, f64::max);
         let growth = grid.max_growth(line);
         let _ = writeln!(
             out,

@@ -369,14 +369,9 @@ impl CoupledOutputs {
             self.particles.run.started.elapsed().as_secs_f64(),
         ])?;
         if let Some(fields) = &mut self.fields {
-            let grid = &system.flow.grid;
-            let unknowns: Vec<_> = (0..grid.dim())
-                .map(|c| *system.flow.velocity_unknowns(c))
-                .collect();
-            let bodies = system
+            let solid = system
                 .immersed
-                .bodies(&system.dem.particles, grid, &unknowns);
-            let solid = system.immersed.cell_solid_fraction(grid, &bodies);
+                .cell_solid_fraction(&system.flow.grid, &system.dem.particles);
             fields.write(&mut system.flow, density, &[("solid_fraction", &solid)])?;
         }
         Ok(())

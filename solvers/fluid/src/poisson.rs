@@ -134,18 +134,7 @@ impl LineRows {
         // What the ghost beyond each end puts on its row: `ghost = a x_near
         // + b x_far` (homogeneous), so the row's diagonal gains `a` times
         // the coupling to the ghost and its inner neighbour `b` times it.
-        let last = length - 1;
         for side in 0..2 {
-            let (row, inner) = if side == 0 {
-                (0, 1)
-            } else {
-                (last, last.wrapping_sub(1))
-            };
-            let coupling = if side == 0 {
-                rows.lower[row]
-            } else {
-                rows.upper[row]
-            };
             let [near, far] = match ends[side] {
                 EndKind::Neumann => [1.0, 0.0],
                 EndKind::DirichletCell => [-1.0, 0.0],
@@ -155,15 +144,17 @@ impl LineRows {
                 }
                 EndKind::DirichletFace | EndKind::Periodic => [0.0, 0.0],
             };
+            // The end row couples outwards to the ghost, inwards to the
+            // row next to it (which the quadratic ghost also reads).
+            let (row, outward, inward) = if side == 0 {
+                (0, &rows.lower, &mut rows.upper)
+            } else {
+                (length - 1, &rows.upper, &mut rows.lower)
+            };
+            let coupling = outward[row];
+            debug_assert!(far == 0.0 || length >= 2);
             rows.shift[row] += near * coupling;
-            if far != 0.0 {
-                if side == 0 {
-                    rows.upper[row] += far * coupling;
-                } else {
-                    rows.lower[row] += far * coupling;
-                }
-                debug_assert!(inner < length);
-            }
+            inward[row] += far * coupling;
         }
         rows
     }

@@ -267,10 +267,10 @@ impl ImmersedBoundaries {
     /// `Σ_p α_p` capped at 1 at every owned cell centre, in the order of
     /// [`Grid::for_each`] over the cell block: the solid fraction field for
     /// output.
-    pub fn cell_solid_fraction(&self, grid: &Grid, bodies: &Bodies) -> Vec<f64> {
+    pub fn cell_solid_fraction(&self, grid: &Grid, particles: &Particles) -> Vec<f64> {
         let cells = grid.cell_block();
         let mut field = grid.zeros();
-        for body in &bodies.list {
+        for body in &self.images(particles).list {
             let reach = support(body.radius, self.width);
             let mut stencil = cells;
             for axis in 0..grid.dim() {
@@ -301,6 +301,28 @@ impl ImmersedBoundaries {
     /// crosses a periodic edge of the domain, with their solid fractions
     /// on the faces of the velocity unknowns `unknowns` of `grid`.
     pub fn bodies(&self, particles: &Particles, grid: &Grid, unknowns: &[Block]) -> Bodies {
+        let mut bodies = self.images(particles);
+        let width = self.width;
+        bodies.list.par_iter_mut().for_each(|body| {
+            body.fractions = (0..grid.dim())
+                .map(|component| {
+                    face_fractions(
+                        width,
+                        grid,
+                        &unknowns[component],
+                        component,
+                        body.centre,
+                        body.radius,
+                    )
+                })
+                .collect();
+        });
+        bodies
+    }
+
+    /// The owned particles and their periodic images, without their solid
+    /// fractions on the faces (what the cell-centred output needs).
+    fn images(&self, particles: &Particles) -> Bodies {
         let mut list = Vec::with_capacity(particles.n_owned);
         for p in 0..particles.n_owned {
             let centre = particles.position[p];
@@ -336,21 +358,6 @@ impl ImmersedBoundaries {
                 }
             }
         }
-        let width = self.width;
-        list.par_iter_mut().for_each(|body| {
-            body.fractions = (0..grid.dim())
-                .map(|component| {
-                    face_fractions(
-                        width,
-                        grid,
-                        &unknowns[component],
-                        component,
-                        body.centre,
-                        body.radius,
-                    )
-                })
-                .collect();
-        });
         Bodies {
             count: particles.n_owned,
             list,
