@@ -59,6 +59,18 @@ pub struct Case {
     pub output: OutputSection,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub analysis: Option<AnalysisSection>,
+    /// How the scene is shared among MPI ranks (default: the process grid
+    /// with the least area of cuts).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parallel: Option<ParallelSection>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParallelSection {
+    /// Ranks along each axis; their product must be the number of ranks
+    /// the run is started on.
+    pub process_grid: Vec<usize>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -662,6 +674,15 @@ impl Case {
         }
         if !d.gravity.is_empty() {
             check_len("domain.gravity", &d.gravity, dim, &need)?;
+        }
+        if let Some(parallel) = &self.parallel {
+            if parallel.process_grid.len() != dim || parallel.process_grid.contains(&0) {
+                return Err(invalid(
+                    "parallel.process_grid",
+                    format!("{:?}", parallel.process_grid),
+                    &format!("allowed: {dim} positive rank counts, one per axis"),
+                ));
+            }
         }
 
         match (&self.particles, &self.contact, &self.fluid) {

@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 use grainflow::case::Case;
 use grainflow::{check, simulation, RunError};
+use grainflow_core::Communicator;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -42,6 +43,30 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // With the feature `mpi`, every process is a rank of the MPI job (one
+    // rank when started without mpirun); the universe finalises MPI at exit.
+    #[cfg(feature = "mpi")]
+    let universe = match grainflow_core::communicator::mpi_backend::initialize() {
+        Some(universe) => universe,
+        None => {
+            eprintln!("error: MPI could not be initialised");
+            return ExitCode::from(5);
+        }
+    };
+    #[cfg(feature = "mpi")]
+    let communicator = Communicator::world(universe.world());
+    #[cfg(not(feature = "mpi"))]
+    let communicator = Communicator::serial();
+    if communicator.size() > 1 {
+        // A panic on one rank must stop the others, not leave them waiting.
+        let abort_on = communicator.clone();
+        let default_hook = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            default_hook(info);
+            abort_on.abort_others(&format!("{info}"));
+        }));
+    }
+    let root = communicator.is_root();
     match cli.command {
         Command::Run {
             case,
@@ -66,24 +91,35 @@ fn main() -> ExitCode {
                 PathBuf::from("out")
                     .join(case.file_stem().map(|s| s.to_owned()).unwrap_or_default())
             });
-            match simulation::run(&loaded, &out, true) {
+            // Case errors and instabilities are found by every rank alike
+            // (the checks are global); an output error is one rank's own and
+            // stops the job.
+            match simulation::run_on(&loaded, &out, true, communicator.clone()) {
                 Ok(summary) => {
-                    println!("{}", serde_json::to_string_pretty(&summary.json).unwrap());
+                    if root {
+                        println!("{}", serde_json::to_string_pretty(&summary.json).unwrap());
+                    }
                     ExitCode::SUCCESS
                 }
                 Err(RunError::Case(message)) => {
-                    eprintln!("error: {message}");
+                    if root {
+                        eprintln!("error: {message}");
+                    }
                     ExitCode::from(2)
                 }
                 Err(RunError::Unstable(message)) => {
-                    eprintln!(
-                        "error: {message}\nthe outputs in {} hold the last good state",
-                        out.display()
-                    );
+                    if root {
+                        eprintln!(
+                            "error: {message}\nthe outputs in {} hold the last good state",
+                            out.display()
+                        );
+                    }
                     ExitCode::from(3)
                 }
                 Err(RunError::Io(e)) => {
-                    eprintln!("error: writing {}: {e}", out.display());
+                    let message = format!("writing {}: {e}", out.display());
+                    communicator.abort_others(&message);
+                    eprintln!("error: {message}");
                     ExitCode::from(4)
                 }
             }

@@ -3,11 +3,18 @@
 //! with the ParaView index `particles.pvd`, and `summary.json`.
 //! [`RunDirectory`] holds what every scene writes; [`Outputs`] adds the
 //! particle outputs (a fluid scene adds its fields in `fluid_simulation`).
+//!
+//! On several MPI ranks the root writes the shared files (log, series,
+//! tracked particles, summary, indices) from global reductions and gathers;
+//! each rank writes its own piece of every particle output
+//! (`particles/particles_NNNNNN_RRRR.vtp`), which the root's
+//! `particles_NNNNNN.pvtp` assembles for ParaView.
 
 use crate::case::Case;
 use crate::RunError;
+use grainflow_core::Communicator;
 use grainflow_dem::DemSystem;
-use grainflow_io::{CsvSeries, ParticleFrame, PvdIndex};
+use grainflow_io::{write_particle_pieces_index, CsvSeries, ParticleFrame, PvdIndex};
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -17,20 +24,33 @@ use std::path::{Path, PathBuf};
 pub struct RunDirectory {
     pub dir: PathBuf,
     pub started: std::time::Instant,
-    log: File,
-    /// `t,id,x,y,z,vx,vy,vz,wx,wy,wz` of the tracked particles.
-    pub tracked: CsvSeries,
+    /// The log (on the root rank only).
+    log: Option<File>,
+    /// `t,id,x,y,z,vx,vy,vz,wx,wy,wz` of the tracked particles (on the
+    /// root rank only).
+    pub tracked: Option<CsvSeries>,
 }
 
 impl RunDirectory {
     pub fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
+        Self::create_on(dir, case, true)
+    }
+
+    /// The run directory seen from one rank: the root creates the shared
+    /// files, the others only make sure the directory exists.
+    pub fn create_on(dir: &Path, case: &Case, root: bool) -> std::io::Result<Self> {
         std::fs::create_dir_all(dir)?;
-        std::fs::write(dir.join("case.toml"), case.to_toml())?;
-        let log = File::create(dir.join("log.txt"))?;
-        let tracked = CsvSeries::create(
-            &dir.join("tracked.csv"),
-            &["t", "id", "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz"],
-        )?;
+        let (log, tracked) = if root {
+            std::fs::write(dir.join("case.toml"), case.to_toml())?;
+            let log = File::create(dir.join("log.txt"))?;
+            let tracked = CsvSeries::create(
+                &dir.join("tracked.csv"),
+                &["t", "id", "x", "y", "z", "vx", "vy", "vz", "wx", "wy", "wz"],
+            )?;
+            (Some(log), Some(tracked))
+        } else {
+            (None, None)
+        };
         Ok(RunDirectory {
             dir: dir.to_path_buf(),
             started: std::time::Instant::now(),
@@ -39,13 +59,23 @@ impl RunDirectory {
         })
     }
 
+    /// Whether this rank writes the shared files.
+    pub fn is_root(&self) -> bool {
+        self.log.is_some()
+    }
+
     /// A line in `log.txt`.
     pub fn log(&mut self, line: &str) {
-        let _ = writeln!(self.log, "{line}");
-        let _ = self.log.flush();
+        if let Some(log) = &mut self.log {
+            let _ = writeln!(log, "{line}");
+            let _ = log.flush();
+        }
     }
 
     pub fn write_summary(&self, summary: &serde_json::Value) -> std::io::Result<()> {
+        if !self.is_root() {
+            return Ok(());
+        }
         let text = serde_json::to_string_pretty(summary).expect("json");
         std::fs::write(self.dir.join("summary.json"), text + "\n")
     }
@@ -72,14 +102,38 @@ impl RunDirectory {
 
 pub struct Outputs {
     pub run: RunDirectory,
-    series: CsvSeries,
+    communicator: Communicator,
+    /// `series.csv` (root only).
+    series: Option<CsvSeries>,
+    /// Whether particle files are written.
+    particle_files: bool,
+    /// `particles.pvd` (root only).
     particles: Option<PvdIndex>,
     frames: usize,
 }
 
 impl Outputs {
     pub fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
-        let run = RunDirectory::create(dir, case)?;
+        Self::create_on(dir, case, Communicator::serial())
+    }
+
+    /// The outputs of a run seen from one rank of `communicator`.
+    pub fn create_on(dir: &Path, case: &Case, communicator: Communicator) -> std::io::Result<Self> {
+        let root = communicator.is_root();
+        let run = RunDirectory::create_on(dir, case, root)?;
+        if case.output.particles {
+            std::fs::create_dir_all(dir.join("particles"))?;
+        }
+        if !root {
+            return Ok(Outputs {
+                run,
+                communicator,
+                series: None,
+                particle_files: case.output.particles,
+                particles: None,
+                frames: 0,
+            });
+        }
         let series = CsvSeries::create(
             &dir.join("series.csv"),
             &[
@@ -96,45 +150,59 @@ impl Outputs {
                 "wall_seconds",
             ],
         )?;
-        let particles = if case.output.particles {
-            std::fs::create_dir_all(dir.join("particles"))?;
-            Some(PvdIndex::new(dir.join("particles.pvd")))
-        } else {
-            None
-        };
+        let particles = case
+            .output
+            .particles
+            .then(|| PvdIndex::new(dir.join("particles.pvd")));
         Ok(Outputs {
             run,
-            series,
+            communicator,
+            series: Some(series),
+            particle_files: case.output.particles,
             particles,
             frames: 0,
         })
     }
 
-    /// A row of `series.csv` and, if enabled, a particle file.
+    /// A row of `series.csv` and, if enabled, a particle file (collective).
     pub fn write_frame(&mut self, system: &DemSystem, dt: f64) -> std::io::Result<()> {
         let (translational, rotational) = system.particles.kinetic_energy();
+        let c = &self.communicator;
+        let (translational, rotational) = (c.sum(translational), c.sum(rotational));
+        let max_speed = system.max_speed();
         let last = system.last;
-        self.series.row(&[
-            system.time,
-            dt,
-            system.steps as f64,
-            translational,
-            rotational,
-            last.particle_contacts as f64,
-            last.wall_contacts as f64,
-            last.max_overlap_ratio,
-            system.max_speed(),
-            system.neighbours.builds as f64,
-            self.run.started.elapsed().as_secs_f64(),
-        ])?;
-        if let Some(index) = &mut self.particles {
+        if let Some(series) = &mut self.series {
+            series.row(&[
+                system.time,
+                dt,
+                system.steps as f64,
+                translational,
+                rotational,
+                last.particle_contacts as f64,
+                last.wall_contacts as f64,
+                last.max_overlap_ratio,
+                max_speed,
+                system.neighbours.builds as f64,
+                self.run.started.elapsed().as_secs_f64(),
+            ])?;
+        }
+        if self.particle_files {
             let p = &system.particles;
             let n = p.n_owned;
             let as_arrays = |v: &[grainflow_core::Vec3]| {
                 v[..n].iter().map(|x| [x.x, x.y, x.z]).collect::<Vec<_>>()
             };
             let fixed: Vec<u8> = (0..n).map(|k| p.is_fixed(k) as u8).collect();
-            let name = format!("particles/particles_{:06}.vtp", self.frames);
+            let ranks = self.communicator.size();
+            let name = if ranks == 1 {
+                format!("particles/particles_{:06}.vtp", self.frames)
+            } else {
+                format!(
+                    "particles/particles_{:06}_{:04}.vtp",
+                    self.frames,
+                    self.communicator.rank()
+                )
+            };
             ParticleFrame {
                 id: &p.id[..n],
                 position: &as_arrays(&p.position),
@@ -145,7 +213,18 @@ impl Outputs {
                 fixed: &fixed,
             }
             .write(&self.run.dir.join(&name))?;
-            index.add(system.time, &name)?;
+            if let Some(index) = &mut self.particles {
+                if ranks == 1 {
+                    index.add(system.time, &name)?;
+                } else {
+                    let pieces: Vec<String> = (0..ranks)
+                        .map(|r| format!("particles_{:06}_{r:04}.vtp", self.frames))
+                        .collect();
+                    let name = format!("particles/particles_{:06}.pvtp", self.frames);
+                    write_particle_pieces_index(&self.run.dir.join(&name), &pieces)?;
+                    index.add(system.time, &name)?;
+                }
+            }
         }
         self.frames += 1;
         Ok(())
@@ -157,6 +236,19 @@ impl Outputs {
     pub fn write_final_particles(&self, system: &DemSystem) -> std::io::Result<()> {
         let p = &system.particles;
         let dim = system.domain.dimension.count();
+        // [id, x, y, z, radius, vx, vy, vz] of each mobile grain, on the root.
+        let mut local = Vec::new();
+        for k in (0..p.n_owned).filter(|&k| !p.is_fixed(k)) {
+            local.push(f64::from_bits(p.id[k]));
+            local.extend(p.position[k].iter());
+            local.push(p.radius[k]);
+            local.extend(p.velocity[k].iter());
+        }
+        let Some(pieces) = self.communicator.gather(&local) else {
+            return Ok(());
+        };
+        let mut grains: Vec<&[f64]> = pieces.iter().flat_map(|m| m.chunks_exact(8)).collect();
+        grains.sort_by_key(|g| g[0].to_bits());
         let mut file = std::io::BufWriter::new(std::fs::File::create(
             self.run.dir.join("final_particles.csv"),
         )?);
@@ -166,38 +258,46 @@ impl Outputs {
             "x,y,z,radius,vx,vy,vz"
         };
         writeln!(file, "{header}")?;
-        let mut order: Vec<usize> = (0..p.n_owned).filter(|&k| !p.is_fixed(k)).collect();
-        order.sort_by_key(|&k| p.id[k]);
-        for k in order {
-            let mut row: Vec<String> = (0..dim)
-                .map(|a| format!("{:.17e}", p.position[k][a]))
-                .collect();
-            row.push(format!("{:.17e}", p.radius[k]));
-            row.extend((0..dim).map(|a| format!("{:.17e}", p.velocity[k][a])));
+        for grain in grains {
+            let mut row: Vec<String> = (0..dim).map(|a| format!("{:.17e}", grain[1 + a])).collect();
+            row.push(format!("{:.17e}", grain[4]));
+            row.extend((0..dim).map(|a| format!("{:.17e}", grain[5 + a])));
             writeln!(file, "{}", row.join(","))?;
         }
         Ok(())
     }
 
-    /// Rows of `tracked.csv` for the tracked ids.
+    /// Rows of `tracked.csv` for the tracked ids, in the order of `ids`
+    /// (collective: each rank hands the root the tracked grains it owns).
     pub fn write_tracked(&mut self, system: &DemSystem, ids: &[u64]) -> std::io::Result<()> {
+        if ids.is_empty() {
+            return Ok(());
+        }
         let p = &system.particles;
+        // [id, x, v, ω] of each tracked grain owned here.
+        let mut local = Vec::new();
         for &id in ids {
             if let Some(k) = system.index_of(id) {
-                let (x, v, w) = (p.position[k], p.velocity[k], p.angular_velocity[k]);
-                self.run.tracked.row(&[
-                    system.time,
-                    id as f64,
-                    x.x,
-                    x.y,
-                    x.z,
-                    v.x,
-                    v.y,
-                    v.z,
-                    w.x,
-                    w.y,
-                    w.z,
-                ])?;
+                local.push(id as f64);
+                for v in [p.position[k], p.velocity[k], p.angular_velocity[k]] {
+                    local.extend(v.iter());
+                }
+            }
+        }
+        let Some(pieces) = self.communicator.gather(&local) else {
+            return Ok(());
+        };
+        let rows: Vec<&[f64]> = pieces.iter().flat_map(|m| m.chunks_exact(10)).collect();
+        let tracked = self
+            .run
+            .tracked
+            .as_mut()
+            .expect("the root writes tracked.csv");
+        for &id in ids {
+            if let Some(state) = rows.iter().find(|r| r[0] == id as f64) {
+                let mut row = vec![system.time];
+                row.extend_from_slice(state);
+                tracked.row(&row)?;
             }
         }
         Ok(())

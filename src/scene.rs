@@ -2,7 +2,7 @@
 
 use crate::case::{BlockSection, Case};
 use grainflow_contact::{ConicSolver, HardContact, Method};
-use grainflow_core::{Dimension, Domain, Vec3};
+use grainflow_core::{fits, process_grid, Communicator, Dimension, Domain, Vec3};
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
 use grainflow_dem::particles::NewParticle;
 use grainflow_dem::Lubrication;
@@ -364,8 +364,14 @@ pub fn hard_contact(case: &Case) -> Option<HardContact> {
     Some(hard)
 }
 
-/// The scene's DEM system, with its particles placed.
+/// The scene's DEM system on one rank, with its particles placed.
 pub fn build(case: &Case) -> Result<DemSystem, String> {
+    build_on(case, Communicator::serial())
+}
+
+/// The scene's DEM system shared among the ranks of `communicator`: each
+/// rank holds the particles of its box of the process grid.
+pub fn build_on(case: &Case, communicator: Communicator) -> Result<DemSystem, String> {
     let domain = domain(case);
     let placed = particles(case)?;
     check_inside(&domain, &placed)?;
@@ -377,8 +383,44 @@ pub fn build(case: &Case) -> Result<DemSystem, String> {
     if let Some(hard) = hard_contact(case) {
         system.listing_gap = hard.threshold;
     }
+    let max_radius = placed.iter().map(|p| p.radius).fold(0.0, f64::max);
+    let range = system.range_for(max_radius);
+    let ranks = process_grid_of(case, &system.domain, communicator.size(), range)?;
+    system.decompose(communicator, ranks);
     system.add_particles(&placed);
     Ok(system)
+}
+
+/// The process grid of a case on `size` ranks: `parallel.process_grid` if
+/// given, else the one with the least area of cuts. Every box must be at
+/// least one interaction range wide along a split axis.
+pub fn process_grid_of(
+    case: &Case,
+    domain: &Domain,
+    size: usize,
+    range: f64,
+) -> Result<[usize; 3], String> {
+    let Some(parallel) = &case.parallel else {
+        return process_grid(domain, size, range);
+    };
+    let mut ranks = [1; 3];
+    ranks[..parallel.process_grid.len()].copy_from_slice(&parallel.process_grid);
+    if ranks.iter().product::<usize>() != size {
+        return Err(format!(
+            "parallel.process_grid = {:?} holds {} ranks, but the run has {size}; allowed: \
+             counts whose product is the number of ranks",
+            parallel.process_grid,
+            ranks.iter().product::<usize>()
+        ));
+    }
+    if !fits(domain, ranks, range) {
+        return Err(format!(
+            "parallel.process_grid = {:?} makes boxes narrower than the interaction range \
+             {range:.3e} m along a split axis; allowed: fewer ranks along the short axes",
+            parallel.process_grid
+        ));
+    }
+    Ok(ranks)
 }
 
 fn check_inside(domain: &Domain, placed: &[NewParticle]) -> Result<(), String> {

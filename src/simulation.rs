@@ -7,6 +7,7 @@ use crate::dry_stepping::DryStepper;
 use crate::output::Outputs;
 use crate::stability::{self, TimeStepVerdict};
 use crate::{coupled_simulation, fluid_simulation, scene, RunError};
+use grainflow_core::Communicator;
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
 use std::io::IsTerminal;
@@ -75,17 +76,58 @@ pub fn check_time_step(dt: f64, contact_time: f64) -> Result<Option<String>, Run
 /// The loop runs on a worker of a thread pool, so that parallel loops too
 /// small to split run inline instead of waking the pool every step.
 pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
+    run_on(case, out, show_progress, Communicator::serial())
+}
+
+/// [`run`] on the ranks of `communicator` (every rank calls it).
+pub fn run_on(
+    case: &Case,
+    out: &Path,
+    show_progress: bool,
+    communicator: Communicator,
+) -> Result<Summary, RunError> {
     if rayon::current_thread_index().is_some() {
-        return run_here(case, out, show_progress);
+        return run_here(case, out, show_progress, communicator);
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(rayon::current_num_threads())
         .build()
         .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
-    pool.install(|| run_here(case, out, show_progress))
+    pool.install(|| run_here(case, out, show_progress, communicator))
 }
 
-fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
+/// Refuses, before anything is written, what does not run on several ranks
+/// yet.
+fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
+    if ranks == 1 {
+        return Ok(());
+    }
+    let refuse = |what: &str| {
+        Err(RunError::Case(format!(
+            "{what} runs on one rank in this version; started on {ranks} ranks: run it \
+             without mpirun (its threads use every core of a node); allowed on several \
+             ranks: dry scenes with contact.model = \"soft\" and no [analysis]"
+        )))
+    };
+    if case.fluid.is_some() {
+        return refuse("a scene with a [fluid]");
+    }
+    if scene::hard_contact(case).is_some() {
+        return refuse("hard contact (contact.model = \"cocd\" or \"nscd\")");
+    }
+    if case.analysis.is_some() {
+        return refuse("a scene with an [analysis]");
+    }
+    Ok(())
+}
+
+fn run_here(
+    case: &Case,
+    out: &Path,
+    show_progress: bool,
+    communicator: Communicator,
+) -> Result<Summary, RunError> {
+    check_ranks(case, communicator.size())?;
     if !case.has_grains() {
         return fluid_simulation::run(case, out, show_progress);
     }
@@ -93,23 +135,35 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
         return coupled_simulation::run(case, out, show_progress);
     }
     let started = Instant::now();
-    let mut system = scene::build(case).map_err(RunError::Case)?;
+    let root = communicator.is_root();
+    let mut system = scene::build_on(case, communicator.clone()).map_err(RunError::Case)?;
     let (mut stepper, dt, warning) = DryStepper::new(case, &mut system)?;
 
-    let mut outputs = Outputs::create(out, case).map_err(RunError::Io)?;
+    let mut outputs = Outputs::create_on(out, case, communicator.clone()).map_err(RunError::Io)?;
+    let p = &system.particles;
+    let particles = communicator.sum_count(p.n_owned);
+    let glued = communicator.sum_count((0..p.n_owned).filter(|&k| p.is_fixed(k)).count());
     outputs.run.log(&format!(
-        "grainflow {}: {} particles ({} glued), {}D, dry scene (no fluid grid)",
+        "grainflow {}: {particles} particles ({glued} glued), {}D, dry scene (no fluid grid)",
         env!("CARGO_PKG_VERSION"),
-        system.particles.n_owned,
-        (0..system.particles.n_owned)
-            .filter(|&k| system.particles.is_fixed(k))
-            .count(),
         system.domain.dimension.count()
     ));
+    if communicator.size() > 1 {
+        let s = &system.subdomain;
+        outputs.run.log(&format!(
+            "{} MPI ranks in a process grid of {} x {} x {}",
+            communicator.size(),
+            s.ranks[0],
+            s.ranks[1],
+            s.ranks[2]
+        ));
+    }
     outputs.run.log(&stepper.describe(dt));
     if let Some(w) = &warning {
         outputs.run.log(w);
-        eprintln!("{w}");
+        if root {
+            eprintln!("{w}");
+        }
     }
 
     let end = case.time.end;
@@ -124,7 +178,10 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
     let mut analysis = Analysis::new(case.analysis.as_ref(), &system);
     let mut moving = false;
 
-    let progress = Progress::new(show_progress && std::io::stderr().is_terminal(), end);
+    let progress = Progress::new(
+        root && show_progress && std::io::stderr().is_terminal(),
+        end,
+    );
     let mut next_output = 0.0;
     let mut next_tracked = 0.0;
     let mut stop_reason = "end time reached".to_string();
@@ -213,12 +270,13 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
             .map_err(RunError::Io)?;
     }
     metrics.extend(stepper.metrics());
-    let particle_steps = system.particles.n_owned as f64 * system.steps as f64;
+    let particle_steps = particles as f64 * system.steps as f64;
     let json = json!({
         "analysis": case.analysis,
         "status": if failure.is_some() { "unstable" } else { "ok" },
         "stop_reason": failure.clone().unwrap_or(stop_reason.clone()),
-        "particles": system.particles.n_owned,
+        "particles": particles,
+        "ranks": communicator.size(),
         "dimension": system.domain.dimension.count(),
         "steps": system.steps,
         "dt": dt,
@@ -229,7 +287,7 @@ fn run_here(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, Run
         "particle_steps_per_second": particle_steps / wall_seconds,
         "neighbour_builds": system.neighbours.builds,
         "threads": rayon::current_num_threads(),
-        "peak_memory_bytes": peak_memory_bytes(),
+        "peak_memory_bytes": communicator.max(peak_memory_bytes().unwrap_or(0) as f64) as u64,
         "metrics": metrics,
     });
     outputs.run.finish(

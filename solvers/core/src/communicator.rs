@@ -1,19 +1,47 @@
-//! The communicator: global reductions and the rank layout.
+//! The communicator: global reductions, the exchanges of the domain
+//! decomposition, and the rank layout.
 //!
-//! The serial communicator is a single rank. The MPI communicator (a later
-//! cargo feature) will provide the same calls; solvers only use these.
+//! The serial communicator is a single rank: its reductions return the local
+//! value and its exchanges are copies to itself. With the cargo feature `mpi`
+//! the same calls go through MPI (rsmpi). Solvers only use these calls, so
+//! one code path serves 1 and N ranks.
+//!
+//! MPI is initialised with the `Serialized` threading level: grainflow calls
+//! it from the thread that runs the time loop, never from inside a parallel
+//! loop, so calls never overlap.
 
 /// A group of ranks sharing one scene.
 #[derive(Clone, Debug)]
 pub struct Communicator {
     rank: usize,
     size: usize,
+    #[cfg(feature = "mpi")]
+    world: Option<std::sync::Arc<mpi_backend::World>>,
 }
 
 impl Communicator {
     /// One rank owning the whole domain.
     pub fn serial() -> Self {
-        Communicator { rank: 0, size: 1 }
+        Communicator {
+            rank: 0,
+            size: 1,
+            #[cfg(feature = "mpi")]
+            world: None,
+        }
+    }
+
+    /// Every rank of the MPI job (`MPI_COMM_WORLD`). MPI must have been
+    /// initialised (see [`mpi_backend::initialize`]).
+    #[cfg(feature = "mpi")]
+    pub fn world(world: mpi::topology::SimpleCommunicator) -> Self {
+        use mpi::traits::Communicator as _;
+        let rank = world.rank() as usize;
+        let size = world.size() as usize;
+        Communicator {
+            rank,
+            size,
+            world: Some(std::sync::Arc::new(mpi_backend::World(world))),
+        }
     }
 
     pub fn rank(&self) -> usize {
@@ -31,21 +59,249 @@ impl Communicator {
 
     /// Sum of a value over all ranks.
     pub fn sum(&self, local: f64) -> f64 {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return world.sum(local);
+        }
         local
     }
 
     /// Sum of a count over all ranks.
     pub fn sum_count(&self, local: usize) -> usize {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return world.sum_count(local as u64) as usize;
+        }
         local
     }
 
     /// Maximum of a value over all ranks.
     pub fn max(&self, local: f64) -> f64 {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return world.max(local);
+        }
         local
     }
 
     /// Whether any rank reports true.
     pub fn any(&self, local: bool) -> bool {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return world.sum_count(u64::from(local)) > 0;
+        }
         local
+    }
+
+    /// One stage of a neighbour exchange: sends `outgoing` to rank
+    /// `destination` and returns what rank `source` sent (empty without a
+    /// source). Every rank calls it with the same `stage` number; a rank
+    /// that is its own neighbour (a periodic axis of one rank) copies.
+    pub fn shift(
+        &self,
+        stage: u16,
+        outgoing: &[f64],
+        destination: Option<usize>,
+        source: Option<usize>,
+    ) -> Vec<f64> {
+        let to_self = destination == Some(self.rank);
+        let from_self = source == Some(self.rank);
+        assert_eq!(
+            to_self, from_self,
+            "a rank that sends to itself must also receive from itself"
+        );
+        if to_self {
+            return outgoing.to_vec();
+        }
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return world.shift(stage, outgoing, destination, source);
+        }
+        let _ = stage;
+        assert!(
+            destination.is_none() && source.is_none(),
+            "the serial communicator has no other rank"
+        );
+        Vec::new()
+    }
+
+    /// Sends `outgoing[r]` to every rank r and returns what each rank sent
+    /// here, indexed by sender (`outgoing.len()` must be the number of ranks).
+    pub fn exchange(&self, outgoing: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+        assert_eq!(outgoing.len(), self.size, "one message per rank");
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return world.exchange(&outgoing);
+        }
+        outgoing
+    }
+
+    /// Collects every rank's `local` on the root, indexed by rank (None on
+    /// the other ranks).
+    pub fn gather(&self, local: &[f64]) -> Option<Vec<Vec<f64>>> {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return world.gather(local);
+        }
+        Some(vec![local.to_vec()])
+    }
+
+    /// Stops every rank of the job after printing `message` (a failure on
+    /// one rank must not leave the others waiting in a collective call).
+    /// On one rank it returns, so the caller reports the error itself.
+    pub fn abort_others(&self, message: &str) {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            if self.size > 1 {
+                eprintln!("error on rank {} of {}: {message}", self.rank, self.size);
+                eprintln!("stopping all ranks");
+                world.abort(1);
+            }
+        }
+        let _ = message;
+    }
+}
+
+/// The MPI side of [`Communicator`].
+#[cfg(feature = "mpi")]
+pub mod mpi_backend {
+    use mpi::collective::SystemOperation;
+    use mpi::datatype::{Partition, PartitionMut};
+    use mpi::traits::*;
+    use mpi::Count;
+
+    /// `MPI_COMM_WORLD`, shareable between threads: grainflow serialises
+    /// its MPI calls (one thread drives the time loop), which the
+    /// `Serialized` threading level allows.
+    pub struct World(pub mpi::topology::SimpleCommunicator);
+
+    // SAFETY: MPI is initialised with `Threading::Serialized` (see
+    // `initialize`), which allows calls from any thread as long as they do
+    // not overlap; grainflow makes them only from the time-loop thread.
+    unsafe impl Send for World {}
+    unsafe impl Sync for World {}
+
+    impl std::fmt::Debug for World {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "MPI world of {} ranks", self.0.size())
+        }
+    }
+
+    /// Initialises MPI for grainflow; the universe finalises MPI when dropped.
+    pub fn initialize() -> Option<mpi::environment::Universe> {
+        let (universe, _) = mpi::initialize_with_threading(mpi::Threading::Serialized)?;
+        Some(universe)
+    }
+
+    impl World {
+        pub fn sum(&self, local: f64) -> f64 {
+            let mut total = 0.0;
+            self.0
+                .all_reduce_into(&local, &mut total, SystemOperation::sum());
+            total
+        }
+
+        pub fn sum_count(&self, local: u64) -> u64 {
+            let mut total = 0u64;
+            self.0
+                .all_reduce_into(&local, &mut total, SystemOperation::sum());
+            total
+        }
+
+        pub fn max(&self, local: f64) -> f64 {
+            let mut largest = 0.0;
+            self.0
+                .all_reduce_into(&local, &mut largest, SystemOperation::max());
+            largest
+        }
+
+        pub fn shift(
+            &self,
+            stage: u16,
+            outgoing: &[f64],
+            destination: Option<usize>,
+            source: Option<usize>,
+        ) -> Vec<f64> {
+            let tag = i32::from(stage);
+            mpi::request::scope(|scope| {
+                let sent = destination.map(|rank| {
+                    self.0
+                        .process_at_rank(rank as i32)
+                        .immediate_send_with_tag(scope, outgoing, tag)
+                });
+                let received = source.map(|rank| {
+                    self.0
+                        .process_at_rank(rank as i32)
+                        .receive_vec_with_tag::<f64>(tag)
+                        .0
+                });
+                if let Some(request) = sent {
+                    request.wait();
+                }
+                received.unwrap_or_default()
+            })
+        }
+
+        pub fn exchange(&self, outgoing: &[Vec<f64>]) -> Vec<Vec<f64>> {
+            let send_counts: Vec<Count> = outgoing.iter().map(|m| m.len() as Count).collect();
+            let mut receive_counts = vec![0 as Count; outgoing.len()];
+            self.0
+                .all_to_all_into(&send_counts[..], &mut receive_counts[..]);
+            let send_displs = displacements(&send_counts);
+            let receive_displs = displacements(&receive_counts);
+            let flat: Vec<f64> = outgoing.concat();
+            let total: usize = receive_counts.iter().map(|&c| c as usize).sum();
+            let mut received = vec![0.0; total];
+            {
+                let send = Partition::new(&flat[..], &send_counts[..], &send_displs[..]);
+                let mut receive =
+                    PartitionMut::new(&mut received[..], &receive_counts[..], &receive_displs[..]);
+                self.0.all_to_all_varcount_into(&send, &mut receive);
+            }
+            split(&received, &receive_counts, &receive_displs)
+        }
+
+        pub fn gather(&self, local: &[f64]) -> Option<Vec<Vec<f64>>> {
+            let root = self.0.process_at_rank(0);
+            let count = local.len() as Count;
+            if self.0.rank() != 0 {
+                root.gather_into(&count);
+                root.gather_varcount_into(local);
+                return None;
+            }
+            let mut counts = vec![0 as Count; self.0.size() as usize];
+            root.gather_into_root(&count, &mut counts[..]);
+            let displs = displacements(&counts);
+            let total: usize = counts.iter().map(|&c| c as usize).sum();
+            let mut received = vec![0.0; total];
+            {
+                let mut receive = PartitionMut::new(&mut received[..], &counts[..], &displs[..]);
+                root.gather_varcount_into_root(local, &mut receive);
+            }
+            Some(split(&received, &counts, &displs))
+        }
+
+        pub fn abort(&self, code: i32) -> ! {
+            self.0.abort(code)
+        }
+    }
+
+    fn displacements(counts: &[Count]) -> Vec<Count> {
+        counts
+            .iter()
+            .scan(0, |offset, &c| {
+                let start = *offset;
+                *offset += c;
+                Some(start)
+            })
+            .collect()
+    }
+
+    fn split(flat: &[f64], counts: &[Count], displs: &[Count]) -> Vec<Vec<f64>> {
+        counts
+            .iter()
+            .zip(displs)
+            .map(|(&c, &d)| flat[d as usize..(d + c) as usize].to_vec())
+            .collect()
     }
 }

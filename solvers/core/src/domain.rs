@@ -46,13 +46,26 @@ impl Domain {
     }
 }
 
-/// The part of the domain a rank owns: particles whose centre lies in
-/// `[lower, upper)` are owned here; copies of others within the interaction
-/// range are ghosts.
+/// The part of the domain a rank owns, in a Cartesian process grid of
+/// `ranks[0] × ranks[1] × ranks[2]` equal boxes: particles whose centre
+/// lies in `[lower, upper)` are owned here (the ranks at the ends of an
+/// axis also own what lies beyond the domain's faces); copies of others
+/// within the interaction range are ghosts.
 #[derive(Clone, Debug)]
 pub struct Subdomain {
     pub lower: Vec3,
     pub upper: Vec3,
+    /// Ranks along each axis.
+    pub ranks: [usize; 3],
+    /// This rank's position in the process grid.
+    pub coords: [usize; 3],
+}
+
+/// The lower or upper neighbour along an axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    Lower,
+    Upper,
 }
 
 impl Subdomain {
@@ -61,6 +74,140 @@ impl Subdomain {
         Subdomain {
             lower: domain.lower,
             upper: domain.upper,
+            ranks: [1, 1, 1],
+            coords: [0, 0, 0],
         }
     }
+
+    /// The box of `rank` in a process grid of `ranks` (x fastest:
+    /// rank = (c_z n_y + c_y) n_x + c_x).
+    pub fn of_rank(domain: &Domain, ranks: [usize; 3], rank: usize) -> Self {
+        let coords = [
+            rank % ranks[0],
+            (rank / ranks[0]) % ranks[1],
+            rank / (ranks[0] * ranks[1]),
+        ];
+        assert!(coords[2] < ranks[2], "rank {rank} outside the process grid");
+        let extent = domain.extent();
+        let mut lower = domain.lower;
+        let mut upper = domain.upper;
+        for axis in 0..3 {
+            let width = extent[axis] / ranks[axis] as f64;
+            lower[axis] = domain.lower[axis] + width * coords[axis] as f64;
+            if coords[axis] + 1 < ranks[axis] {
+                upper[axis] = domain.lower[axis] + width * (coords[axis] + 1) as f64;
+            }
+        }
+        Subdomain {
+            lower,
+            upper,
+            ranks,
+            coords,
+        }
+    }
+
+    /// Number of ranks in the process grid.
+    pub fn rank_count(&self) -> usize {
+        self.ranks.iter().product()
+    }
+
+    /// Rank at process-grid coordinates `coords`.
+    pub fn rank_at(&self, coords: [usize; 3]) -> usize {
+        (coords[2] * self.ranks[1] + coords[1]) * self.ranks[0] + coords[0]
+    }
+
+    /// Process-grid coordinates of the rank owning position `x` (the same
+    /// formula decides ownership everywhere, so every position has exactly
+    /// one owner).
+    pub fn owner_coords(&self, domain: &Domain, x: &Vec3) -> [usize; 3] {
+        let extent = domain.extent();
+        let mut coords = [0; 3];
+        for axis in 0..3 {
+            let n = self.ranks[axis];
+            if n > 1 {
+                let c = ((x[axis] - domain.lower[axis]) / extent[axis] * n as f64).floor();
+                coords[axis] = (c.max(0.0) as usize).min(n - 1);
+            }
+        }
+        coords
+    }
+
+    /// Rank owning position `x`.
+    pub fn owner(&self, domain: &Domain, x: &Vec3) -> usize {
+        self.rank_at(self.owner_coords(domain, x))
+    }
+
+    /// Whether this rank owns position `x`.
+    pub fn owns(&self, domain: &Domain, x: &Vec3) -> bool {
+        self.owner_coords(domain, x) == self.coords
+    }
+
+    /// The neighbouring rank on `side` along `axis`, across a periodic face
+    /// if need be (None at a wall of the domain).
+    pub fn neighbour(&self, domain: &Domain, axis: usize, side: Side) -> Option<usize> {
+        let n = self.ranks[axis];
+        let c = self.coords[axis];
+        let next = match side {
+            Side::Lower if c > 0 => c - 1,
+            Side::Upper if c + 1 < n => c + 1,
+            Side::Lower if domain.periodic[axis] => n - 1,
+            Side::Upper if domain.periodic[axis] => 0,
+            _ => return None,
+        };
+        let mut coords = self.coords;
+        coords[axis] = next;
+        Some(self.rank_at(coords))
+    }
+}
+
+/// The process grid for `size` ranks: among the factorisations
+/// n_x n_y n_z = size (n_z = 1 in 2D) whose boxes are at least `min_width`
+/// wide along every split axis, the one with the least area of cuts between
+/// boxes (the ghost volume, hence the communication, scales with it). Ties
+/// go to the first in (n_x, n_y, n_z) order.
+pub fn process_grid(domain: &Domain, size: usize, min_width: f64) -> Result<[usize; 3], String> {
+    let dims = domain.dimension.count();
+    let extent = domain.extent();
+    let mut best: Option<(f64, [usize; 3])> = None;
+    for nx in (1..=size).filter(|&n| size.is_multiple_of(n)) {
+        for ny in (1..=size / nx).filter(|&n| (size / nx).is_multiple_of(n)) {
+            let nz = size / nx / ny;
+            let ranks = [nx, ny, nz];
+            if dims == 2 && nz > 1 {
+                continue;
+            }
+            if !fits(domain, ranks, min_width) {
+                continue;
+            }
+            let mut area = 0.0;
+            for (axis, &n) in ranks.iter().enumerate().take(dims) {
+                let cuts = match (n, domain.periodic[axis]) {
+                    (1, _) => 0,
+                    (n, true) => n,
+                    (n, false) => n - 1,
+                };
+                let face: f64 = (0..dims)
+                    .filter(|&b| b != axis)
+                    .map(|b| extent[b])
+                    .product();
+                area += cuts as f64 * face;
+            }
+            if best.is_none_or(|(a, _)| area < a) {
+                best = Some((area, ranks));
+            }
+        }
+    }
+    best.map(|(_, ranks)| ranks).ok_or_else(|| {
+        format!(
+            "{size} ranks cannot split the domain into boxes at least one interaction range \
+             ({min_width:.3e} m) wide along every split axis; allowed: fewer ranks"
+        )
+    })
+}
+
+/// Whether boxes of a process grid are at least `min_width` wide along
+/// every split axis (a ghost then comes from the next box only).
+pub fn fits(domain: &Domain, ranks: [usize; 3], min_width: f64) -> bool {
+    let extent = domain.extent();
+    (0..3).all(|axis| ranks[axis] == 1 || extent[axis] / ranks[axis] as f64 >= min_width)
 }

@@ -1,72 +1,159 @@
 //! Ghost copies of particles near the subdomain's edges.
 //!
-//! On one rank the only ghosts are periodic images: a particle within the
-//! interaction range of a periodic face is copied, shifted by the period, to
-//! the other side. Ghosts are rebuilt with the neighbour list and refreshed
-//! from their sources every step in between.
+//! Ghosts come in stages, axis by axis (x, y, then z), each axis in two
+//! directions: a rank sends the particles within the interaction range of
+//! its lower face to its lower neighbour, then those within range of its
+//! upper face to its upper neighbour, shifted by the period where the face
+//! is a periodic end of the domain. The candidates of an axis include the
+//! ghosts received along the axes before it, so that edge and corner copies
+//! reach the diagonal neighbours in two or three hops. A periodic axis of a
+//! single rank sends to itself: its ghosts are the periodic images. Every
+//! box must be at least one interaction range wide, so that a ghost always
+//! comes from the next box.
+//!
+//! The stages are recorded at each neighbour build; between builds the same
+//! stages refresh the ghosts' motion in the same order.
 
-use crate::particles::Particles;
-use grainflow_core::{Domain, Vec3};
+use crate::particles::{Particles, PACKED_MOTION, PACKED_STATE};
+use grainflow_core::{Communicator, Domain, Side, Subdomain, Vec3};
+
+/// One direction of one axis of the exchange.
+#[derive(Clone, Debug)]
+struct Stage {
+    destination: Option<usize>,
+    source: Option<usize>,
+    /// Displacement of the copies sent (a period across a periodic end).
+    shift: Vec3,
+    /// Local particles (owned or ghosts of earlier axes) sent.
+    sent: Vec<usize>,
+    /// Ghosts received: `first..first + count`.
+    first: usize,
+    count: usize,
+}
 
 #[derive(Clone, Debug, Default)]
 pub struct Ghosts {
-    /// Owned index each ghost copies, in ghost order.
+    stages: Vec<Stage>,
+    /// The owned particle each ghost copies when it is an image of one of
+    /// this rank's particles, `usize::MAX` when it copies another rank's.
     pub source: Vec<usize>,
-    /// Displacement of each ghost from its source (a multiple of the period).
-    pub shift: Vec<Vec3>,
 }
 
 impl Ghosts {
-    /// Drops old ghosts and creates the periodic images within `range` of a
-    /// periodic face (corners and edges included).
-    pub fn build(&mut self, particles: &mut Particles, domain: &Domain, range: f64) {
+    /// Drops old ghosts and receives the copies of every particle within
+    /// `range` of this subdomain (collective: every rank calls it).
+    pub fn build(
+        &mut self,
+        particles: &mut Particles,
+        domain: &Domain,
+        subdomain: &Subdomain,
+        communicator: &Communicator,
+        range: f64,
+    ) {
         particles.clear_ghosts();
+        self.stages.clear();
         self.source.clear();
-        self.shift.clear();
         let extent = domain.extent();
-        for owned in 0..particles.n_owned {
-            let x = particles.position[owned];
-            // Per axis: the shifts that bring an image within range.
-            let mut candidates: [[f64; 2]; 3] = [[0.0, f64::NAN]; 3];
-            for axis in 0..3 {
-                if !domain.periodic[axis] {
-                    continue;
-                }
-                if x[axis] - domain.lower[axis] < range {
-                    candidates[axis][1] = extent[axis];
-                } else if domain.upper[axis] - x[axis] < range {
-                    candidates[axis][1] = -extent[axis];
-                }
+        let rank = communicator.rank();
+        let mut message = Vec::new();
+        for axis in 0..domain.dimension.count() {
+            if subdomain.ranks[axis] == 1 && !domain.periodic[axis] {
+                continue;
             }
-            for sx in candidates[0] {
-                for sy in candidates[1] {
-                    for sz in candidates[2] {
-                        if sx.is_nan() || sy.is_nan() || sz.is_nan() {
-                            continue;
+            let candidates = particles.len();
+            for side in [Side::Lower, Side::Upper] {
+                let destination = subdomain.neighbour(domain, axis, side);
+                let source = subdomain.neighbour(domain, axis, opposite(side));
+                let last = subdomain.ranks[axis] - 1;
+                let mut shift = Vec3::zeros();
+                let sent: Vec<usize> = match side {
+                    Side::Lower => {
+                        if subdomain.coords[axis] == 0 {
+                            shift[axis] = extent[axis];
                         }
-                        if sx == 0.0 && sy == 0.0 && sz == 0.0 {
-                            continue;
-                        }
-                        let shift = Vec3::new(sx, sy, sz);
-                        self.source.push(owned);
-                        self.shift.push(shift);
-                        particles.push_ghost(owned, shift);
+                        let face = subdomain.lower[axis] + range;
+                        (0..candidates)
+                            .filter(|&k| particles.position[k][axis] < face)
+                            .collect()
                     }
+                    Side::Upper => {
+                        if subdomain.coords[axis] == last {
+                            shift[axis] = -extent[axis];
+                        }
+                        let face = subdomain.upper[axis] - range;
+                        (0..candidates)
+                            .filter(|&k| particles.position[k][axis] >= face)
+                            .collect()
+                    }
+                };
+                let sent = if destination.is_some() {
+                    sent
+                } else {
+                    Vec::new()
+                };
+                message.clear();
+                for &k in &sent {
+                    particles.pack_state(k, shift, &mut message);
                 }
+                let tag = self.stages.len() as u16;
+                let received = communicator.shift(tag, &message, destination, source);
+                let first = particles.len();
+                for packed in received.chunks_exact(PACKED_STATE) {
+                    particles.push_packed(packed, false);
+                }
+                let count = particles.len() - first;
+                if destination == Some(rank) {
+                    // Images of this rank's particles: their owned source.
+                    let n_owned = particles.n_owned;
+                    for &k in &sent {
+                        let owned = if k < n_owned {
+                            k
+                        } else {
+                            self.source[k - n_owned]
+                        };
+                        self.source.push(owned);
+                    }
+                } else {
+                    self.source.extend(std::iter::repeat_n(usize::MAX, count));
+                }
+                self.stages.push(Stage {
+                    destination,
+                    source,
+                    shift,
+                    sent,
+                    first,
+                    count,
+                });
             }
         }
     }
 
-    /// Copies the current state of each source onto its ghost.
-    pub fn refresh(&self, particles: &mut Particles) {
-        let first_ghost = particles.n_owned;
-        for (k, (&source, shift)) in self.source.iter().zip(&self.shift).enumerate() {
-            let ghost = first_ghost + k;
-            particles.position[ghost] = particles.position[source] + shift;
-            particles.velocity[ghost] = particles.velocity[source];
-            particles.angular_velocity[ghost] = particles.angular_velocity[source];
-            particles.force[ghost] = particles.force[source];
-            particles.torque[ghost] = particles.torque[source];
+    /// Copies the current motion of each ghost's particle onto it, stage by
+    /// stage as built (collective).
+    pub fn refresh(&self, particles: &mut Particles, communicator: &Communicator) {
+        let mut message = Vec::new();
+        for (tag, stage) in self.stages.iter().enumerate() {
+            message.clear();
+            for &k in &stage.sent {
+                particles.pack_motion(k, stage.shift, &mut message);
+            }
+            let received =
+                communicator.shift(tag as u16, &message, stage.destination, stage.source);
+            assert_eq!(
+                received.len(),
+                stage.count * PACKED_MOTION,
+                "a neighbour refreshed a different set of ghosts than it built"
+            );
+            for (k, packed) in received.chunks_exact(PACKED_MOTION).enumerate() {
+                particles.unpack_motion(stage.first + k, packed);
+            }
         }
+    }
+}
+
+fn opposite(side: Side) -> Side {
+    match side {
+        Side::Lower => Side::Upper,
+        Side::Upper => Side::Lower,
     }
 }

@@ -347,8 +347,33 @@ impl PreviousList {
             .collect();
     }
 
+    /// Follows a migration: the owned particles `kept` (old indices, in
+    /// their new order) stay, then come particles from other ranks with
+    /// their open contacts (partner id, ξ seen from them), which become rows
+    /// of their own.
+    pub fn retain_and_adopt(&mut self, kept: &[usize], adopted: &[Vec<(u64, Vec3)>]) {
+        let mut old_index: Vec<usize> = kept
+            .iter()
+            .map(|&k| self.old_index.get(k).copied().unwrap_or(usize::MAX))
+            .collect();
+        if self.offsets.is_empty() {
+            self.offsets.push(0);
+        }
+        for open in adopted {
+            old_index.push(self.offsets.len() - 1);
+            for &(id, history) in open {
+                self.partner.push(self.ids.len() as u32);
+                self.ids.push(id);
+                self.mirror.push(u32::MAX);
+                self.history.push(history);
+            }
+            self.offsets.push(self.partner.len() as u32);
+        }
+        self.old_index = old_index;
+    }
+
     /// The open contacts (partner id, ξ) of the current owned particle i.
-    fn open_contacts_of(&self, i: usize, open: &mut Vec<(u64, Vec3)>) {
+    pub fn open_contacts_of(&self, i: usize, open: &mut Vec<(u64, Vec3)>) {
         open.clear();
         let Some(&old) = self.old_index.get(i) else {
             return;

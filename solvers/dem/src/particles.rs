@@ -4,6 +4,11 @@
 use grainflow_core::{Dimension, Vec3};
 use std::f64::consts::PI;
 
+/// Numbers per particle in a [`Particles::pack_state`] message.
+pub const PACKED_STATE: usize = 26;
+/// Numbers per particle in a [`Particles::pack_motion`] message.
+pub const PACKED_MOTION: usize = 15;
+
 #[derive(Clone, Debug, Default)]
 pub struct Particles {
     /// Owned particles are `[0, n_owned)`; ghosts are `[n_owned, len())`.
@@ -154,6 +159,86 @@ impl Particles {
         apply(&mut self.torque, order);
         apply(&mut self.external_force, order);
         apply(&mut self.external_torque, order);
+    }
+
+    /// Keeps the owned particles `kept` (in that order), dropping the others;
+    /// ghosts must have been cleared.
+    pub fn retain_owned(&mut self, kept: &[usize]) {
+        self.permute_owned(kept);
+        self.n_owned = kept.len();
+    }
+
+    /// Appends the whole state of particle `k`, displaced by `shift`, to a
+    /// message ([`PACKED_STATE`] numbers; the id travels as its bits).
+    pub fn pack_state(&self, k: usize, shift: Vec3, message: &mut Vec<f64>) {
+        message.push(f64::from_bits(self.id[k]));
+        message.extend((self.position[k] + shift).iter());
+        message.extend(self.velocity[k].iter());
+        message.extend(self.angular_velocity[k].iter());
+        message.extend([
+            self.radius[k],
+            self.mass[k],
+            self.inverse_mass[k],
+            self.inverse_inertia[k],
+        ]);
+        for v in [
+            &self.force[k],
+            &self.torque[k],
+            &self.external_force[k],
+            &self.external_torque[k],
+        ] {
+            message.extend(v.iter());
+        }
+    }
+
+    /// Appends a particle from a [`Particles::pack_state`] message: an owned
+    /// one (no ghosts may exist yet) or a ghost.
+    pub fn push_packed(&mut self, packed: &[f64], owned: bool) {
+        assert!(
+            !owned || self.n_owned == self.len(),
+            "owned particles are added before ghosts"
+        );
+        let vector = |at: usize| Vec3::new(packed[at], packed[at + 1], packed[at + 2]);
+        self.id.push(packed[0].to_bits());
+        self.position.push(vector(1));
+        self.velocity.push(vector(4));
+        self.angular_velocity.push(vector(7));
+        self.radius.push(packed[10]);
+        self.mass.push(packed[11]);
+        self.inverse_mass.push(packed[12]);
+        self.inverse_inertia.push(packed[13]);
+        self.force.push(vector(14));
+        self.torque.push(vector(17));
+        self.external_force.push(vector(20));
+        self.external_torque.push(vector(23));
+        if owned {
+            self.n_owned += 1;
+        }
+    }
+
+    /// Appends what changes between neighbour builds (position displaced by
+    /// `shift`, velocities, force and torque) of particle `k` to a message
+    /// ([`PACKED_MOTION`] numbers).
+    pub fn pack_motion(&self, k: usize, shift: Vec3, message: &mut Vec<f64>) {
+        message.extend((self.position[k] + shift).iter());
+        for v in [
+            &self.velocity[k],
+            &self.angular_velocity[k],
+            &self.force[k],
+            &self.torque[k],
+        ] {
+            message.extend(v.iter());
+        }
+    }
+
+    /// Sets particle `k` from a [`Particles::pack_motion`] message.
+    pub fn unpack_motion(&mut self, k: usize, packed: &[f64]) {
+        let vector = |at: usize| Vec3::new(packed[at], packed[at + 1], packed[at + 2]);
+        self.position[k] = vector(0);
+        self.velocity[k] = vector(3);
+        self.angular_velocity[k] = vector(6);
+        self.force[k] = vector(9);
+        self.torque[k] = vector(12);
     }
 
     /// Largest radius among owned particles (0 when empty).

@@ -14,8 +14,8 @@
 use crate::contact_law::{ContactLaw, ContactPoint};
 use crate::ghosts::Ghosts;
 use crate::lubrication::Lubrication;
-use crate::neighbours::{CellBins, CellGrid, NeighbourList, LUBRICATED, TOUCHING};
-use crate::particles::{NewParticle, Particles};
+use crate::neighbours::{CellBins, CellGrid, NeighbourList, PreviousList, LUBRICATED, TOUCHING};
+use crate::particles::{NewParticle, Particles, PACKED_STATE};
 use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
 use rayon::prelude::*;
@@ -95,6 +95,8 @@ pub struct DemSystem {
     /// in contact, left by pass 1 of the force loop for pass 2.
     pair_force: Vec<Vec3>,
     pair_partner_torque: Vec<Vec3>,
+    /// Largest radius over all ranks at the last neighbour build.
+    max_radius: f64,
     pub time: f64,
     pub steps: u64,
     pub last: StepDiagnostics,
@@ -122,6 +124,7 @@ impl DemSystem {
             contacts: Vec::new(),
             pair_force: Vec::new(),
             pair_partner_torque: Vec::new(),
+            max_radius: 0.0,
             time: 0.0,
             steps: 0,
             last: StepDiagnostics::default(),
@@ -129,11 +132,29 @@ impl DemSystem {
         }
     }
 
+    /// Shares the scene among the ranks of `communicator` in a process grid
+    /// of `ranks` boxes (before any particle is added).
+    pub fn decompose(&mut self, communicator: Communicator, ranks: [usize; 3]) {
+        assert!(
+            self.particles.is_empty(),
+            "decompose before adding particles"
+        );
+        assert_eq!(
+            ranks.iter().product::<usize>(),
+            communicator.size(),
+            "one box per rank"
+        );
+        self.subdomain = Subdomain::of_rank(&self.domain, ranks, communicator.rank());
+        self.communicator = communicator;
+    }
+
     pub fn dimension(&self) -> Dimension {
         self.domain.dimension
     }
 
-    /// Adds owned particles (before the first step or between steps).
+    /// Adds particles (before the first step or between steps; collective:
+    /// every rank passes the same list and keeps those it owns). Ids follow
+    /// the order of the list over all ranks.
     pub fn add_particles(&mut self, new: &[NewParticle]) {
         self.particles.clear_ghosts();
         for particle in new {
@@ -144,7 +165,11 @@ impl DemSystem {
                 p.angular_velocity.x = 0.0;
                 p.angular_velocity.y = 0.0;
             }
-            self.particles.push(self.domain.dimension, self.next_id, &p);
+            let mut centre = p.position;
+            self.domain.wrap(&mut centre);
+            if self.subdomain.owns(&self.domain, &centre) {
+                self.particles.push(self.domain.dimension, self.next_id, &p);
+            }
             self.next_id += 1;
         }
         self.wall_history
@@ -161,8 +186,23 @@ impl DemSystem {
     }
 
     /// Interaction range of a ghost: the largest pair distance in the list.
-    fn interaction_range(&self) -> f64 {
-        2.0 * self.particles.max_radius() + self.neighbours.gap + self.neighbours.skin
+    pub fn interaction_range(&self) -> f64 {
+        self.range_for(self.max_radius)
+    }
+
+    /// The interaction range with grains of radius up to `max_radius`: the
+    /// largest listed pair distance, 2 r + gap + skin.
+    pub fn range_for(&self, max_radius: f64) -> f64 {
+        2.0 * max_radius + self.listed_gap(max_radius) + self.neighbours.skin
+    }
+
+    /// The gap between surfaces up to which pairs interact: lubrication,
+    /// contact gap and hard-contact listing, whichever reaches farthest.
+    fn listed_gap(&self, max_radius: f64) -> f64 {
+        self.lubrication
+            .map_or(0.0, |law| law.reach(max_radius))
+            .max(self.contact_gap)
+            .max(self.listing_gap)
     }
 
     fn cell_grid(&self) -> CellGrid {
@@ -178,20 +218,18 @@ impl DemSystem {
         )
     }
 
-    /// Migration, locality sort, ghosts and pair list.
+    /// Migration, locality sort, ghosts and pair list (collective).
     pub fn rebuild(&mut self) {
         // The old list, with the ids of all particles (owned and ghosts) it
         // refers to, carries the open contacts over to the new one.
         let mut previous = self.neighbours.take_previous(&self.particles);
-        self.neighbours.gap = self
-            .lubrication
-            .map_or(0.0, |law| law.reach(self.particles.max_radius()))
-            .max(self.contact_gap)
-            .max(self.listing_gap);
+        self.max_radius = self.communicator.max(self.particles.max_radius());
+        self.neighbours.gap = self.listed_gap(self.max_radius);
         self.particles.clear_ghosts();
         for x in &mut self.particles.position {
             self.domain.wrap(x);
         }
+        self.migrate(&mut previous);
         let grid = self.cell_grid();
 
         // Sort owned particles by cell so that neighbours sit close in memory.
@@ -211,9 +249,88 @@ impl DemSystem {
         }
 
         let range = self.interaction_range();
-        self.ghosts.build(&mut self.particles, &self.domain, range);
+        self.ghosts.build(
+            &mut self.particles,
+            &self.domain,
+            &self.subdomain,
+            &self.communicator,
+            range,
+        );
         self.neighbours.build(&self.particles, &grid, &previous);
         self.list_wall_candidates();
+    }
+
+    /// Hands each owned particle whose centre has left this subdomain to the
+    /// rank that owns it now, with its wall histories and the tangential
+    /// history of its open contacts, and takes in those that arrive here
+    /// (collective).
+    fn migrate(&mut self, previous: &mut PreviousList) {
+        let n = self.particles.n_owned;
+        let stride = self.wall_stride();
+        let rank = self.communicator.rank();
+        let mut outgoing = vec![Vec::new(); self.communicator.size()];
+        let mut kept = Vec::with_capacity(n);
+        let mut open = Vec::new();
+        for k in 0..n {
+            let owner = self
+                .subdomain
+                .owner(&self.domain, &self.particles.position[k]);
+            if owner == rank {
+                kept.push(k);
+                continue;
+            }
+            let message = &mut outgoing[owner];
+            self.particles.pack_state(k, Vec3::zeros(), message);
+            message.push(f64::from_bits(
+                self.wall_touching.get(k).copied().unwrap_or(0),
+            ));
+            for history in &self.wall_history[k * stride..(k + 1) * stride] {
+                message.extend(history.iter());
+            }
+            previous.open_contacts_of(k, &mut open);
+            message.push(open.len() as f64);
+            for (id, history) in &open {
+                message.push(f64::from_bits(*id));
+                message.extend(history.iter());
+            }
+        }
+        let arrived = self.communicator.exchange(outgoing);
+        if kept.len() == n && arrived.iter().all(|m| m.is_empty()) {
+            return;
+        }
+        self.particles.retain_owned(&kept);
+        self.wall_touching.resize(n, 0);
+        self.wall_touching = kept.iter().map(|&k| self.wall_touching[k]).collect();
+        let old = std::mem::take(&mut self.wall_history);
+        self.wall_history = kept
+            .iter()
+            .flat_map(|&k| old[k * stride..(k + 1) * stride].iter().copied())
+            .collect();
+        let mut adopted = Vec::new();
+        for message in &arrived {
+            let mut at = 0;
+            while at < message.len() {
+                self.particles
+                    .push_packed(&message[at..at + PACKED_STATE], true);
+                at += PACKED_STATE;
+                self.wall_touching.push(message[at].to_bits());
+                at += 1;
+                for w in 0..stride {
+                    let h = &message[at + 3 * w..at + 3 * w + 3];
+                    self.wall_history.push(Vec3::new(h[0], h[1], h[2]));
+                }
+                at += 3 * stride;
+                let contacts = message[at] as usize;
+                at += 1;
+                let open: Vec<(u64, Vec3)> = message[at..at + 4 * contacts]
+                    .chunks_exact(4)
+                    .map(|c| (c[0].to_bits(), Vec3::new(c[1], c[2], c[3])))
+                    .collect();
+                at += 4 * contacts;
+                adopted.push(open);
+            }
+        }
+        previous.retain_and_adopt(&kept, &adopted);
     }
 
     /// Marks, for each owned particle, the walls it may touch before the
@@ -246,13 +363,14 @@ impl DemSystem {
         }
         let moved_beyond_skin = self.kick_and_drift(dt);
         self.time += dt;
-        if moved_beyond_skin {
+        if self.communicator.any(moved_beyond_skin) {
             self.rebuild();
         } else {
-            self.ghosts.refresh(&mut self.particles);
+            self.ghosts.refresh(&mut self.particles, &self.communicator);
         }
         let mut diagnostics = self.compute_forces(dt);
-        diagnostics.non_finite = self.kick(0.5 * dt);
+        let non_finite = self.kick(0.5 * dt);
+        diagnostics.non_finite = self.communicator.any(non_finite);
         self.steps += 1;
         self.last = diagnostics;
         diagnostics
@@ -286,13 +404,13 @@ impl DemSystem {
             .reduce(|| (false, false), |a, b| (a.0 || b.0, a.1 || b.1));
         self.time += dt;
         self.steps += 1;
-        if non_finite {
+        if self.communicator.any(non_finite) {
             return true;
         }
-        if moved_beyond_skin {
+        if self.communicator.any(moved_beyond_skin) {
             self.rebuild();
         } else {
-            self.ghosts.refresh(&mut self.particles);
+            self.ghosts.refresh(&mut self.particles, &self.communicator);
         }
         false
     }

@@ -6,4 +6,4 @@ pub mod csv;
 pub mod vtk;
 
 pub use csv::CsvSeries;
-pub use vtk::{CellLayout, FieldFrame, ParticleFrame, PvdIndex};
+pub use vtk::{write_particle_pieces_index, CellLayout, FieldFrame, ParticleFrame, PvdIndex};

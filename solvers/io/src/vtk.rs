@@ -91,6 +91,47 @@ impl ParticleFrame<'_> {
     }
 }
 
+/// The `.pvtp` index of one particle output written in pieces, one per
+/// rank: ParaView opens it as a single dataset. `pieces` are the piece
+/// files' paths relative to the index.
+pub fn write_particle_pieces_index(path: &Path, pieces: &[String]) -> std::io::Result<()> {
+    let mut out = BufWriter::new(File::create(path)?);
+    writeln!(out, r#"<?xml version="1.0"?>"#)?;
+    writeln!(
+        out,
+        r#"<VTKFile type="PPolyData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
+    )?;
+    writeln!(out, r#"<PPolyData GhostLevel="0">"#)?;
+    writeln!(out, r#"<PPointData Scalars="radius" Vectors="velocity">"#)?;
+    for (name, kind, components) in [
+        ("radius", "Float64", 1),
+        ("id", "UInt64", 1),
+        ("fixed", "UInt8", 1),
+        ("velocity", "Float64", 3),
+        ("angular_velocity", "Float64", 3),
+        ("force", "Float64", 3),
+    ] {
+        writeln!(
+            out,
+            r#"<PDataArray type="{kind}" Name="{name}" NumberOfComponents="{components}"/>"#
+        )?;
+    }
+    writeln!(out, "</PPointData>")?;
+    writeln!(
+        out,
+        r#"<PPoints><PDataArray type="Float64" Name="position" NumberOfComponents="3"/></PPoints>"#
+    )?;
+    for piece in pieces {
+        writeln!(out, r#"<Piece Source="{piece}"/>"#)?;
+    }
+    writeln!(
+        out,
+        "</PPolyData>
+</VTKFile>"
+    )?;
+    out.flush()
+}
+
 /// How the cells of a field file are laid out.
 pub enum CellLayout<'a> {
     /// Cells of size `spacing` from `origin`: an ImageData file (`.vti`).
