@@ -212,7 +212,8 @@ impl Outputs {
                 radius: &p.radius[..n],
                 fixed: &fixed,
             }
-            .write(&self.run.dir.join(&name))?;
+            .write(&self.run.dir.join(&name))
+            .map_err(|e| std::io::Error::new(e.kind(), format!("{name}: {e}")))?;
             if let Some(index) = &mut self.particles {
                 if ranks == 1 {
                     index.add(system.time, &name)?;

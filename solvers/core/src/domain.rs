@@ -211,3 +211,75 @@ pub fn fits(domain: &Domain, ranks: [usize; 3], min_width: f64) -> bool {
     let extent = domain.extent();
     (0..3).all(|axis| ranks[axis] == 1 || extent[axis] / ranks[axis] as f64 >= min_width)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn column(periodic_y: bool) -> Domain {
+        Domain {
+            dimension: Dimension::Three,
+            lower: Vec3::new(-2.0, 0.0, 0.0),
+            upper: Vec3::new(2.0, 0.12, 1.0),
+            periodic: [false, periodic_y, false],
+            gravity: Vec3::zeros(),
+        }
+    }
+
+    /// The least area of cuts: a long flat box is cut across its length;
+    /// a periodic axis counts one more cut than a walled one.
+    #[test]
+    fn the_process_grid_cuts_the_least_area() {
+        let domain = column(true);
+        assert_eq!(process_grid(&domain, 1, 0.01).unwrap(), [1, 1, 1]);
+        // Cuts across x: 0.12 m² each; across z: 0.48 m²; across y: 4 m².
+        assert_eq!(process_grid(&domain, 2, 0.01).unwrap(), [2, 1, 1]);
+        assert_eq!(process_grid(&domain, 4, 0.01).unwrap(), [4, 1, 1]);
+        assert_eq!(process_grid(&domain, 6, 0.01).unwrap(), [6, 1, 1]);
+        // Boxes narrower than the range are not allowed: with a range of
+        // 0.7 m, x takes at most 5 ranks, z and y one.
+        assert_eq!(process_grid(&domain, 4, 0.7).unwrap(), [4, 1, 1]);
+        let refused = process_grid(&domain, 6, 0.7).unwrap_err();
+        assert!(refused.contains("6 ranks"), "{refused}");
+        // A tall box is cut across its height.
+        let tall = Domain {
+            upper: Vec3::new(-1.9, 0.12, 1.0),
+            ..domain.clone()
+        };
+        assert_eq!(process_grid(&tall, 2, 0.01).unwrap(), [1, 1, 2]);
+        assert!(!fits(&domain, [1, 2, 1], 0.07));
+        assert!(fits(&domain, [1, 2, 1], 0.06));
+    }
+
+    /// Every position has one owner, whose box holds it; neighbours wrap
+    /// across periodic ends only.
+    #[test]
+    fn each_position_has_one_owner_and_boxes_tile_the_domain() {
+        let domain = column(true);
+        let ranks = [4, 2, 1];
+        let boxes: Vec<Subdomain> = (0..8)
+            .map(|r| Subdomain::of_rank(&domain, ranks, r))
+            .collect();
+        for (k, x) in [-2.0, -1.0, -0.3, 0.0, 0.999, 1.0, 1.9999, 2.0, 2.5]
+            .iter()
+            .enumerate()
+        {
+            let position = Vec3::new(*x, 0.013 * k as f64, 0.5);
+            let owners: Vec<usize> = (0..8)
+                .filter(|&r| boxes[r].owns(&domain, &position))
+                .collect();
+            assert_eq!(owners.len(), 1, "{position:?}");
+            let b = &boxes[owners[0]];
+            assert_eq!(b.owner(&domain, &position), owners[0]);
+            let inside_x = (b.coords[0] == 0 || position.x >= b.lower.x)
+                && (b.coords[0] == 3 || position.x < b.upper.x);
+            assert!(inside_x, "{position:?} in {b:?}");
+        }
+        let corner = &boxes[0];
+        assert_eq!(corner.neighbour(&domain, 0, Side::Lower), None);
+        assert_eq!(corner.neighbour(&domain, 0, Side::Upper), Some(1));
+        assert_eq!(corner.neighbour(&domain, 1, Side::Lower), Some(4));
+        assert_eq!(corner.neighbour(&domain, 1, Side::Upper), Some(4));
+        assert_eq!(corner.neighbour(&domain, 2, Side::Upper), None);
+    }
+}

@@ -1,0 +1,410 @@
+//! The DEM on several MPI ranks gives the serial run's results (built with
+//! the feature `mpi`; needs `mpirun` of Open MPI on the PATH, which
+//! `.ci/run` installs). Four ranks are oversubscribed on a small machine.
+//!
+//! Round-off differences (another order of summing a grain's contact forces)
+//! grow in a dense granular flow like any perturbation of its state, by
+//! about ten orders of magnitude over 2,000 steps of this collapse: the
+//! comparisons are made after 100 steps, where the bound 1e-10 of the
+//! decomposition's contract applies.
+
+#![cfg(feature = "mpi")]
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A 3D column of 400 spheres between two gates on a floor, periodic along
+/// y; `{BLOCK}`, `{GATES}` and `{TIME}` are filled in by the tests.
+const COLUMN: &str = r#"
+[domain]
+dimension = 3
+lower = [-0.3, 0.0, 0.0]
+upper = [0.3, 0.06, 0.3]
+periodic = [false, true, false]
+gravity = [0.0, 0.0, -9.81]
+
+[particles]
+density = 2500.0
+radius = 5.0e-3
+radius_spread = 0.1
+seed = 7
+{TRACKED}
+
+{BLOCK}
+
+[contact]
+model = "soft"
+restitution = 0.5
+contact_time = 1.0e-4
+friction = 0.5
+rolling_friction = 0.05
+
+[[walls]]
+name = "floor"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+
+[[walls]]
+name = "gate_left"
+point = [-0.05, 0.0, 0.0]
+normal = [1.0, 0.0, 0.0]
+{GATES}
+
+[[walls]]
+name = "gate_right"
+point = [0.05, 0.0, 0.0]
+normal = [-1.0, 0.0, 0.0]
+{GATES}
+
+[time]
+{TIME}
+dt_over_contact_time = 0.05
+
+[output]
+interval = 0.1
+"#;
+
+const GRAINS: usize = 400;
+
+/// The column's grains placed at random between the gates.
+const RANDOM_BLOCK: &str = "[[particles.block]]\nkind = \"random\"\nlower = [-0.05, 0.0, 0.0]\n\
+                            upper = [0.05, 0.06, 0.15]\ncount = 400";
+
+/// `grainflow run CASE --out OUT [--set ...]` on `ranks` MPI ranks (without
+/// mpirun for one), stopped if it has not ended within `limit`: (exit code,
+/// stderr); a run that outlives the limit fails the test.
+fn run(
+    case: &Path,
+    out: &Path,
+    ranks: usize,
+    overrides: &[&str],
+    limit: Duration,
+) -> (i32, String) {
+    let binary = env!("CARGO_BIN_EXE_grainflow");
+    let mut command = if ranks == 1 {
+        Command::new(binary)
+    } else {
+        let mut c = Command::new("mpirun");
+        c.args(["--oversubscribe", "-n", &ranks.to_string(), binary]);
+        c
+    };
+    command
+        .args([
+            "run",
+            case.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("RAYON_NUM_THREADS", "1")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    for assignment in overrides {
+        command.args(["--set", assignment]);
+    }
+    let mut child = command
+        .spawn()
+        .expect("mpirun starts (is Open MPI installed?)");
+    let started = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            let mut stderr = String::new();
+            use std::io::Read;
+            child
+                .stderr
+                .take()
+                .unwrap()
+                .read_to_string(&mut stderr)
+                .unwrap();
+            return (status.code().unwrap_or(-1), stderr);
+        }
+        if started.elapsed() > limit {
+            let _ = child.kill();
+            panic!("{ranks} ranks still running after {limit:?}: a hang");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// The last rows of `tracked.csv`: id → (x, v, ω) at the final time.
+fn final_states(out: &Path) -> (f64, BTreeMap<u64, Vec<f64>>) {
+    let text = std::fs::read_to_string(out.join("tracked.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let end = rows.iter().map(|r| r[0]).fold(f64::MIN, f64::max);
+    let states = rows
+        .iter()
+        .filter(|r| r[0] == end)
+        .map(|r| (r[1] as u64, r[2..11].to_vec()))
+        .collect();
+    (end, states)
+}
+
+/// Largest deviation of `other` from `reference` over every grain and
+/// component, relative to the component's largest magnitude.
+fn deviation(reference: &BTreeMap<u64, Vec<f64>>, other: &BTreeMap<u64, Vec<f64>>) -> f64 {
+    assert_eq!(
+        reference.keys().collect::<Vec<_>>(),
+        other.keys().collect::<Vec<_>>(),
+        "the same grains are tracked"
+    );
+    let mut largest: f64 = 0.0;
+    for component in 0..9 {
+        let scale = reference
+            .values()
+            .map(|s| s[component].abs())
+            .fold(f64::MIN_POSITIVE, f64::max);
+        for (id, state) in reference {
+            let error = (state[component] - other[id][component]).abs() / scale;
+            largest = largest.max(error);
+        }
+    }
+    largest
+}
+
+fn tracked_all(count: usize) -> String {
+    let ids: Vec<String> = (0..count).map(|k| k.to_string()).collect();
+    format!("tracked = [{}]", ids.join(", "))
+}
+
+/// A column settled for 0.3 s on one rank, then released: 100 steps of the
+/// collapse on 1, 2 and 4 ranks (among them process grids split along the
+/// periodic axis and across the height).
+#[test]
+fn a_column_collapse_on_2_and_4_ranks_matches_the_serial_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let fill = dir.path().join("fill.toml");
+    std::fs::write(
+        &fill,
+        COLUMN
+            .replace("{TRACKED}", "")
+            .replace("{BLOCK}", RANDOM_BLOCK)
+            .replace("{GATES}", "")
+            .replace("{TIME}", "end = 0.3"),
+    )
+    .unwrap();
+    let settled = dir.path().join("settled");
+    let (code, stderr) = run(&fill, &settled, 1, &[], Duration::from_secs(300));
+    assert_eq!(code, 0, "{stderr}");
+
+    let collapse = dir.path().join("collapse.toml");
+    let file_block = format!(
+        "[[particles.block]]\nkind = \"file\"\npath = \"{}\"",
+        settled.join("final_particles.csv").display()
+    );
+    std::fs::write(
+        &collapse,
+        COLUMN
+            .replace("{TRACKED}", &tracked_all(GRAINS))
+            .replace("{BLOCK}", &file_block)
+            .replace("{GATES}", "remove_at = 0.0")
+            .replace("{TIME}", "end = 5.0e-4")
+            .replace("interval = 0.1", "interval = 5.0e-4"),
+    )
+    .unwrap();
+    // 100 steps of 0.05 t_c = 5e-6 s.
+    let serial = dir.path().join("serial");
+    let (code, stderr) = run(&collapse, &serial, 1, &[], Duration::from_secs(120));
+    assert_eq!(code, 0, "{stderr}");
+    let (end, reference) = final_states(&serial);
+    assert!((end - 5.0e-4).abs() < 1e-12, "{end}");
+    assert_eq!(reference.len(), GRAINS);
+
+    for (ranks, grid) in [(2, None), (4, Some("[2,2,1]")), (4, Some("[2,1,2]"))] {
+        let out = dir
+            .path()
+            .join(format!("ranks_{ranks}_{}", grid.unwrap_or("auto")));
+        let setting = grid.map(|g| format!("parallel.process_grid={g}"));
+        let overrides: Vec<&str> = setting.iter().map(|s| s.as_str()).collect();
+        let (code, stderr) = run(&collapse, &out, ranks, &overrides, Duration::from_secs(120));
+        assert_eq!(code, 0, "{ranks} ranks {grid:?}: {stderr}");
+        let (other_end, states) = final_states(&out);
+        assert_eq!(other_end, end);
+        let largest = deviation(&reference, &states);
+        println!("{ranks} ranks, process grid {grid:?}: largest relative deviation {largest:.3e}");
+        assert!(
+            largest <= 1e-10,
+            "{ranks} ranks {grid:?}: deviation {largest:e}"
+        );
+        // Each rank wrote its piece of the particle output; the root an index.
+        for rank in 0..ranks {
+            let piece = out.join(format!("particles/particles_000000_{rank:04}.vtp"));
+            assert!(piece.exists(), "{}", piece.display());
+        }
+        let index = std::fs::read_to_string(out.join("particles/particles_000001.pvtp")).unwrap();
+        assert_eq!(index.matches("<Piece Source=").count(), ranks);
+    }
+}
+
+/// Two spheres, one crossing the boundary between two ranks at x = 0 and
+/// striking the other obliquely there (friction, sliding then rolling): on
+/// two ranks the grain changes owner while the contact spans the ranks,
+/// and both move exactly as in the serial run.
+#[test]
+fn a_grain_crossing_ranks_and_a_contact_across_them_match_the_serial_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let grains = dir.path().join("pair.csv");
+    std::fs::write(
+        &grains,
+        "x,y,z,radius,vx,vy,vz\n\
+         -0.012,0.0,0.0,0.006,0.5,0.1,0.05\n\
+         0.004,0.004,0.001,0.003,0.0,0.0,0.0\n",
+    )
+    .unwrap();
+    let case = dir.path().join("pair.toml");
+    std::fs::write(
+        &case,
+        format!(
+            r#"
+[domain]
+dimension = 3
+lower = [-0.05, -0.05, -0.05]
+upper = [0.05, 0.05, 0.05]
+[particles]
+density = 2500.0
+radius = 5.0e-3
+tracked = [0, 1]
+[[particles.block]]
+kind = "file"
+path = "{}"
+[contact]
+model = "soft"
+restitution = 0.7
+contact_time = 1.0e-4
+friction = 0.4
+rolling_friction = 0.05
+[time]
+end = 0.04
+dt_over_contact_time = 0.02
+[output]
+interval = 0.01
+tracked_interval = 1.0e-4
+"#,
+            grains.display()
+        ),
+    )
+    .unwrap();
+    let serial = dir.path().join("serial");
+    let (code, stderr) = run(&case, &serial, 1, &[], Duration::from_secs(120));
+    assert_eq!(code, 0, "{stderr}");
+    let parallel = dir.path().join("parallel");
+    let grid = ["parallel.process_grid=[2,1,1]"];
+    let (code, stderr) = run(&case, &parallel, 2, &grid, Duration::from_secs(120));
+    assert_eq!(code, 0, "{stderr}");
+
+    let rows = |out: &Path| std::fs::read_to_string(out.join("tracked.csv")).unwrap();
+    let (serial_rows, parallel_rows) = (rows(&serial), rows(&parallel));
+    // The scene does what the test is about: grain 0 starts on rank 0 and
+    // ends on rank 1, and the pair touches while their centres lie on
+    // either side of x = 0.
+    let states: Vec<Vec<f64>> = serial_rows
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let first_x = states.iter().find(|r| r[1] == 0.0).unwrap()[2];
+    let last_x = states.iter().rev().find(|r| r[1] == 0.0).unwrap()[2];
+    assert!(first_x < 0.0 && last_x > 0.0, "{first_x} {last_x}");
+    let spanning = states.chunks(2).any(|pair| {
+        let (a, b) = (&pair[0], &pair[1]);
+        let distance =
+            ((a[2] - b[2]).powi(2) + (a[3] - b[3]).powi(2) + (a[4] - b[4]).powi(2)).sqrt();
+        distance < 0.009 && a[2].signum() != b[2].signum()
+    });
+    assert!(spanning, "the contact must span the two ranks");
+    let spin = states.last().unwrap()[8..11]
+        .iter()
+        .map(|w| w.abs())
+        .fold(0.0, f64::max);
+    assert!(spin > 1.0, "friction must spin the grains: {spin}");
+    // Bit for bit: same rows, every number printed round-trip exact.
+    assert_eq!(serial_rows, parallel_rows);
+}
+
+/// A rank that cannot write its piece of the particle output stops the
+/// whole job with a message naming it, instead of leaving the other rank
+/// waiting in the next exchange.
+#[test]
+fn a_rank_that_fails_stops_the_whole_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = dir.path().join("column.toml");
+    std::fs::write(
+        &case,
+        COLUMN
+            .replace("{TRACKED}", "")
+            .replace("{BLOCK}", RANDOM_BLOCK)
+            .replace("{GATES}", "")
+            .replace("{TIME}", "end = 10.0"),
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    // A directory where rank 1 writes its first particle piece.
+    std::fs::create_dir_all(out.join("particles/particles_000000_0001.vtp")).unwrap();
+    let grid = ["parallel.process_grid=[2,1,1]"];
+    let (code, stderr) = run(&case, &out, 2, &grid, Duration::from_secs(60));
+    assert_ne!(code, 0, "{stderr}");
+    assert!(stderr.contains("error on rank 1 of 2"), "{stderr}");
+    assert!(
+        stderr.contains("particles_000000_0001.vtp") || stderr.contains("writing"),
+        "{stderr}"
+    );
+}
+
+/// What does not run on several ranks yet is refused before anything is
+/// written, on every rank alike; so is a process grid that does not match
+/// the ranks.
+#[test]
+fn scenes_not_shared_among_ranks_are_refused_before_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let column = dir.path().join("column.toml");
+    std::fs::write(
+        &column,
+        COLUMN
+            .replace("{TRACKED}", "")
+            .replace("{BLOCK}", RANDOM_BLOCK)
+            .replace("{GATES}", "")
+            .replace("{TIME}", "end = 0.01"),
+    )
+    .unwrap();
+    let cases = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases");
+    for (case, overrides, expected) in [
+        (
+            cases.join("taylor_green_2d.toml"),
+            vec![],
+            "a scene with a [fluid]",
+        ),
+        (
+            cases.join("column_collapse_cocd_2d.toml"),
+            vec![],
+            "hard contact",
+        ),
+        (
+            cases.join("column_collapse_3d.toml"),
+            vec![],
+            "an [analysis]",
+        ),
+        (
+            column,
+            vec!["parallel.process_grid=[3,1,1]"],
+            "parallel.process_grid = [3, 1, 1] holds 3 ranks, but the run has 2",
+        ),
+    ] {
+        let out = dir.path().join("out");
+        let (code, stderr) = run(&case, &out, 2, &overrides, Duration::from_secs(60));
+        let name = case.display();
+        assert_eq!(code, 2, "{name}: {stderr}");
+        assert!(stderr.contains(expected), "{name}: {stderr}");
+        assert_eq!(
+            stderr.matches("error:").count(),
+            1,
+            "{name}: one message: {stderr}"
+        );
+        assert!(!out.exists(), "{name}: nothing is written");
+    }
+}
