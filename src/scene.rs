@@ -385,23 +385,26 @@ pub fn build_on(case: &Case, communicator: Communicator) -> Result<DemSystem, St
     }
     let max_radius = placed.iter().map(|p| p.radius).fold(0.0, f64::max);
     let range = system.range_for(max_radius);
-    let ranks = process_grid_of(case, &system.domain, communicator.size(), range)?;
+    let centres: Vec<Vec3> = placed.iter().map(|p| p.position).collect();
+    let ranks = process_grid_of(case, &system.domain, communicator.size(), range, &centres)?;
     system.decompose(communicator, ranks);
     system.add_particles(&placed);
     Ok(system)
 }
 
 /// The process grid of a case on `size` ranks: `parallel.process_grid` if
-/// given, else the one with the least area of cuts. Every box must be at
+/// given (and more than one rank runs), else the one that shares the grains at `positions` best with the
+/// least area of cuts. Every box must be at
 /// least one interaction range wide along a split axis.
 pub fn process_grid_of(
     case: &Case,
     domain: &Domain,
     size: usize,
     range: f64,
+    positions: &[Vec3],
 ) -> Result<[usize; 3], String> {
-    let Some(parallel) = &case.parallel else {
-        return process_grid(domain, size, range);
+    let Some(parallel) = case.parallel.as_ref().filter(|_| size > 1) else {
+        return process_grid(domain, size, range, positions);
     };
     let mut ranks = [1; 3];
     ranks[..parallel.process_grid.len()].copy_from_slice(&parallel.process_grid);

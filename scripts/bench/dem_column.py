@@ -18,8 +18,14 @@ once, from a single run, as it has no restart here). Prints ns per
 particle-step for each code and thread count, their ratios, and peak memory
 per particle, and writes the table as JSON.
 
+With --ranks 1,2 the settling window is timed instead on MPI ranks of
+one thread each (grainflow built with the feature `mpi`, LAMMPS under
+mpirun), interleaved, each code's strong-scaling efficiency t1 / (r t_r)
+reported beside its time.
+
 usage: scripts/bench/dem_column.py [--sizes 20000,100000] [--repeats 3]
-         [--threads 1,2] [--dense] [--shared ../shared] [--work DIR] [--json FILE]
+         [--threads 1,2] [--dense] [--ranks 1,2] [--shared ../shared]
+         [--work DIR] [--json FILE]
 """
 import argparse, json, os, re, shutil, statistics, subprocess, sys, time
 
@@ -122,15 +128,26 @@ particles = false
     return case
 
 
-def grainflow_windows(binary, work, n, csv, box, threads, windows):
+MPI_ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+
+
+def on_ranks(command, ranks):
+    """The command on `ranks` MPI ranks (itself for one)."""
+    if ranks == 1:
+        return command
+    return ["mpirun", "--oversubscribe", "--bind-to", "none", "-n", str(ranks)] + command
+
+
+def grainflow_windows(binary, work, n, csv, box, threads, windows, ranks=1):
     """Runs grainflow once and returns [(ns per particle-step, contacts)] for
     each (first_step, last_step) window, and the peak memory in bytes."""
     last = max(w[1] for w in windows)
     interval = 200
     case = grainflow_case(work, n, csv, box, last, interval)
-    out = os.path.join(work, f"gf{n}_t{threads}")
+    out = os.path.join(work, f"gf{n}_t{threads}_r{ranks}")
     shutil.rmtree(out, ignore_errors=True)
-    _, rss = peak_rss_of([binary, "run", case, "--out", out, "--threads", str(threads)], cwd=work)
+    command = on_ranks([binary, "run", case, "--out", out, "--threads", str(threads)], ranks)
+    _, rss = peak_rss_of(command, cwd=work, env=MPI_ENV)
     rows = {}
     lines = open(os.path.join(out, "series.csv")).read().splitlines()
     header = lines[0].split(",")
@@ -159,8 +176,11 @@ def main():
     ap.add_argument("--dense", action="store_true", help="also time the dense window (t = 0.1 s)")
     ap.add_argument("--shared", default=os.path.join(os.path.dirname(__file__), "../../../shared"))
     ap.add_argument("--work", default="/tmp/grainflow-bench")
+    ap.add_argument("--ranks", default=None, help="time the settling window on these MPI rank counts")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
+    if args.ranks:
+        return ranks_scaling(args)
     root = os.path.abspath(os.path.join(os.path.dirname(__file__), "../.."))
     subprocess.run(["cargo", "build", "--release", "-q"], cwd=root, check=True)
     binary = os.path.join(root, "target/release/grainflow")
@@ -252,6 +272,51 @@ def main():
                 ours = e.get(f"grainflow_{window}_ns_t1")
                 print(f"N={e['particles']:>6} {window:>8} LIGGGHTS 1 rank:       {other:7.1f} ns, "
                       f"LIGGGHTS/grainflow 1 thread = {other / ours:.2f}")
+    if args.json:
+        json.dump(report, open(args.json, "w"), indent=1)
+
+
+def ranks_scaling(args):
+    """The settling window on MPI ranks of one thread: grainflow and LAMMPS."""
+    root = os.path.abspath(os.path.join(os.path.dirname(__file__), "../.."))
+    subprocess.run(["cargo", "build", "--release", "-q", "--features", "mpi"], cwd=root, check=True)
+    binary = os.path.join(root, "target/release/grainflow")
+    lmp = shutil.which("lmp")
+    os.makedirs(args.work, exist_ok=True)
+    shared = os.path.abspath(args.shared)
+    inputs = os.path.join(shared, "bench/lammps")
+    rank_counts = [int(r) for r in args.ranks.split(",")]
+    report = []
+    for n in [int(s) for s in args.sizes.split(",")]:
+        data, csv, box = generate(shared, args.work, n)
+        samples = {}
+        for _ in range(args.repeats):
+            for r in rank_counts:
+                (w,), _ = grainflow_windows(binary, args.work, n, csv, box, 1, [(1000, 3000)], ranks=r)
+                samples.setdefault(f"grainflow_r{r}", []).append(w[0])
+                if lmp:
+                    log, _ = peak_rss_of(on_ranks([lmp, "-in", os.path.join(inputs, "in.column"), "-var",
+                                                   "datafile", data, "-var", "nwarm", "1000", "-var", "nrun",
+                                                   "2000", "-log", "none"], r), cwd=args.work, env=MPI_ENV)
+                    samples.setdefault(f"lammps_r{r}", []).append(lammps_loop_ns(log, n, 2000))
+        entry = {"particles": n, "samples_ns_per_particle_step": samples}
+        for key, values in samples.items():
+            entry[key] = statistics.median(values)
+        print(f"{n} particles, settling window, ns per particle-step (wall), median of {args.repeats}:")
+        for code in ["grainflow", "lammps"]:
+            if f"{code}_r1" not in entry:
+                continue
+            for r in rank_counts:
+                t = entry[f"{code}_r{r}"]
+                efficiency = entry[f"{code}_r1"] / (r * t)
+                entry[f"{code}_efficiency_r{r}"] = efficiency
+                print(f"  {code:9s} {r} ranks: {t:6.1f} ns, strong-scaling efficiency {efficiency:.3f}")
+        for r in rank_counts:
+            if f"lammps_r{r}" in entry:
+                ratio = entry[f"grainflow_r{r}"] / entry[f"lammps_r{r}"]
+                entry[f"grainflow_over_lammps_r{r}"] = ratio
+                print(f"  grainflow / LAMMPS on {r} ranks: {ratio:.3f}")
+        report.append(entry)
     if args.json:
         json.dump(report, open(args.json, "w"), indent=1)
 

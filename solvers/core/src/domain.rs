@@ -162,13 +162,20 @@ impl Subdomain {
 
 /// The process grid for `size` ranks: among the factorisations
 /// n_x n_y n_z = size (n_z = 1 in 2D) whose boxes are at least `min_width`
-/// wide along every split axis, the one with the least area of cuts between
-/// boxes (the ghost volume, hence the communication, scales with it). Ties
-/// go to the first in (n_x, n_y, n_z) order.
-pub fn process_grid(domain: &Domain, size: usize, min_width: f64) -> Result<[usize; 3], String> {
+/// wide along every split axis, those whose busiest box holds the fewest of
+/// the grains at `positions` (within 2 %: the work is shared), and among
+/// them the one with the least area of cuts between boxes (the ghost
+/// volume, hence the communication, scales with it). Ties go to the first
+/// in (n_x, n_y, n_z) order.
+pub fn process_grid(
+    domain: &Domain,
+    size: usize,
+    min_width: f64,
+    positions: &[Vec3],
+) -> Result<[usize; 3], String> {
     let dims = domain.dimension.count();
     let extent = domain.extent();
-    let mut best: Option<(f64, [usize; 3])> = None;
+    let mut feasible: Vec<(usize, f64, [usize; 3])> = Vec::new();
     for nx in (1..=size).filter(|&n| size.is_multiple_of(n)) {
         for ny in (1..=size / nx).filter(|&n| (size / nx).is_multiple_of(n)) {
             let nz = size / nx / ny;
@@ -192,9 +199,15 @@ pub fn process_grid(domain: &Domain, size: usize, min_width: f64) -> Result<[usi
                     .product();
                 area += cuts as f64 * face;
             }
-            if best.is_none_or(|(a, _)| area < a) {
-                best = Some((area, ranks));
-            }
+            feasible.push((busiest_box(domain, ranks, positions), area, ranks));
+        }
+    }
+    let least_load = feasible.iter().map(|f| f.0).min().unwrap_or(0);
+    let balanced = |load: usize| load as f64 <= 1.02 * least_load as f64;
+    let mut best: Option<(f64, [usize; 3])> = None;
+    for &(load, area, ranks) in &feasible {
+        if balanced(load) && best.is_none_or(|(a, _)| area < a) {
+            best = Some((area, ranks));
         }
     }
     best.map(|(_, ranks)| ranks).ok_or_else(|| {
@@ -203,6 +216,18 @@ pub fn process_grid(domain: &Domain, size: usize, min_width: f64) -> Result<[usi
              ({min_width:.3e} m) wide along every split axis; allowed: fewer ranks"
         )
     })
+}
+
+/// The number of `positions` in the fullest box of a process grid.
+fn busiest_box(domain: &Domain, ranks: [usize; 3], positions: &[Vec3]) -> usize {
+    let grid = Subdomain::of_rank(domain, ranks, 0);
+    let mut counts = vec![0usize; grid.rank_count()];
+    for x in positions {
+        let mut x = *x;
+        domain.wrap(&mut x);
+        counts[grid.owner(domain, &x)] += 1;
+    }
+    counts.into_iter().max().unwrap_or(0)
 }
 
 /// Whether boxes of a process grid are at least `min_width` wide along
@@ -231,22 +256,28 @@ mod tests {
     #[test]
     fn the_process_grid_cuts_the_least_area() {
         let domain = column(true);
-        assert_eq!(process_grid(&domain, 1, 0.01).unwrap(), [1, 1, 1]);
+        assert_eq!(process_grid(&domain, 1, 0.01, &[]).unwrap(), [1, 1, 1]);
         // Cuts across x: 0.12 m² each; across z: 0.48 m²; across y: 4 m².
-        assert_eq!(process_grid(&domain, 2, 0.01).unwrap(), [2, 1, 1]);
-        assert_eq!(process_grid(&domain, 4, 0.01).unwrap(), [4, 1, 1]);
-        assert_eq!(process_grid(&domain, 6, 0.01).unwrap(), [6, 1, 1]);
+        assert_eq!(process_grid(&domain, 2, 0.01, &[]).unwrap(), [2, 1, 1]);
+        assert_eq!(process_grid(&domain, 4, 0.01, &[]).unwrap(), [4, 1, 1]);
+        assert_eq!(process_grid(&domain, 6, 0.01, &[]).unwrap(), [6, 1, 1]);
         // Boxes narrower than the range are not allowed: with a range of
         // 0.7 m, x takes at most 5 ranks, z and y one.
-        assert_eq!(process_grid(&domain, 4, 0.7).unwrap(), [4, 1, 1]);
-        let refused = process_grid(&domain, 6, 0.7).unwrap_err();
+        assert_eq!(process_grid(&domain, 4, 0.7, &[]).unwrap(), [4, 1, 1]);
+        let refused = process_grid(&domain, 6, 0.7, &[]).unwrap_err();
         assert!(refused.contains("6 ranks"), "{refused}");
         // A tall box is cut across its height.
         let tall = Domain {
             upper: Vec3::new(-1.9, 0.12, 1.0),
             ..domain.clone()
         };
-        assert_eq!(process_grid(&tall, 2, 0.01).unwrap(), [1, 1, 2]);
+        assert_eq!(process_grid(&tall, 2, 0.01, &[]).unwrap(), [1, 1, 2]);
+        // Grains in the lower third of the tall box: a cut across the
+        // height would leave a rank idle, so x is cut instead.
+        let low: Vec<Vec3> = (0..100)
+            .map(|k| Vec3::new(-2.0 + 0.001 * k as f64, 0.06, 0.003 * k as f64))
+            .collect();
+        assert_eq!(process_grid(&tall, 2, 0.01, &low).unwrap(), [2, 1, 1]);
         assert!(!fits(&domain, [1, 2, 1], 0.07));
         assert!(fits(&domain, [1, 2, 1], 0.06));
     }
