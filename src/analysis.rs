@@ -50,6 +50,17 @@ impl Analysis {
         }
     }
 
+    /// Whether [`Analysis::after_step`] records anything at `time` (on
+    /// several ranks the grains are gathered only then).
+    pub fn wants_grains(&self, time: f64) -> bool {
+        match self {
+            Analysis::None | Analysis::Silo { .. } => false,
+            Analysis::BinaryCollision(_) | Analysis::Bouncing(_) => true,
+            Analysis::ColumnCollapse(c) => c.wants_grains(time),
+            Analysis::StaticBox(b) => time >= b.settle,
+        }
+    }
+
     /// Called after every step.
     pub fn after_step(&mut self, system: &DemSystem) {
         match self {
@@ -593,6 +604,15 @@ impl ColumnCollapse {
             .filter(|&k| p.inverse_mass[k] > 0.0)
             .map(|k| p.position[k][v] + p.radius[k] - floor)
             .fold(0.0, f64::max)
+    }
+
+    fn wants_grains(&self, time: f64) -> bool {
+        let released = time >= self.release_time;
+        let profile_due = self
+            .profile_times
+            .last()
+            .is_some_and(|&t| time >= self.release_time + t);
+        (released && self.initial_height.is_none()) || profile_due
     }
 
     fn after_step(&mut self, system: &DemSystem) {

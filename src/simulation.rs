@@ -106,7 +106,7 @@ fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
         Err(RunError::Case(format!(
             "{what} runs on one rank in this version; started on {ranks} ranks: run it \
              without mpirun (its threads use every core of a node); allowed on several \
-             ranks: dry scenes with contact.model = \"soft\" and no [analysis]"
+             ranks: dry scenes with contact.model = \"soft\""
         )))
     };
     if case.fluid.is_some() {
@@ -114,9 +114,6 @@ fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
     }
     if scene::hard_contact(case).is_some() {
         return refuse("hard contact (contact.model = \"cocd\" or \"nscd\")");
-    }
-    if case.analysis.is_some() {
-        return refuse("a scene with an [analysis]");
     }
     Ok(())
 }
@@ -175,7 +172,20 @@ fn run_here(
         .filter_map(|w| w.remove_at)
         .fold(0.0, f64::max);
     let rest_after = case.time.rest_after.unwrap_or(last_removal);
-    let mut analysis = Analysis::new(case.analysis.as_ref(), &system);
+    // On several ranks the analyses run on the root over the gathered
+    // grains, gathered only at the steps they record.
+    let distributed = communicator.size() > 1;
+    let analysed = case.analysis.is_some();
+    let mut analysis = if !distributed {
+        Analysis::new(case.analysis.as_ref(), &system)
+    } else if analysed {
+        match system.gathered() {
+            Some(whole) => Analysis::new(case.analysis.as_ref(), &whole),
+            None => Analysis::None,
+        }
+    } else {
+        Analysis::None
+    };
     let mut moving = false;
 
     let progress = Progress::new(
@@ -200,7 +210,13 @@ fn run_here(
     while system.time < end - 0.5 * dt {
         failure = stepper.step(&mut system, dt, case.time.overlap_limit);
         if failure.is_none() {
-            analysis.after_step(&system);
+            if !distributed {
+                analysis.after_step(&system);
+            } else if analysed && communicator.any(analysis.wants_grains(system.time)) {
+                if let Some(whole) = system.gathered() {
+                    analysis.after_step(&whole);
+                }
+            }
         }
         if failure.is_some() {
             break;
@@ -264,7 +280,13 @@ fn run_here(
     let wall_seconds = started.elapsed().as_secs_f64();
     let mut metrics = Map::new();
     if failure.is_none() {
-        metrics = analysis.finish(&system, out).map_err(RunError::Io)?;
+        metrics = if !distributed {
+            analysis.finish(&system, out).map_err(RunError::Io)?
+        } else if let Some(whole) = analysed.then(|| system.gathered()).flatten() {
+            analysis.finish(&whole, out).map_err(RunError::Io)?
+        } else {
+            Map::new()
+        };
         outputs
             .write_final_particles(&system)
             .map_err(RunError::Io)?;

@@ -190,6 +190,17 @@ impl NeighbourList {
         }
     }
 
+    /// The open contacts (partner id, ξ seen from i) of owned particle i.
+    pub fn open_contacts(&self, i: usize, particles: &Particles, open: &mut Vec<(u64, Vec3)>) {
+        open.clear();
+        for e in self.range(i) {
+            let history = self.history_of(e);
+            if history != Vec3::zeros() {
+                open.push((particles.id[self.partner[e] as usize], history));
+            }
+        }
+    }
+
     /// Takes the current list out, to carry its open contacts into the next
     /// build (before particles are reordered or ghosts rebuilt).
     pub fn take_previous(&mut self, particles: &Particles) -> PreviousList {

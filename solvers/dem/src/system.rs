@@ -222,7 +222,12 @@ impl DemSystem {
     pub fn rebuild(&mut self) {
         // The old list, with the ids of all particles (owned and ghosts) it
         // refers to, carries the open contacts over to the new one.
-        let mut previous = self.neighbours.take_previous(&self.particles);
+        let previous = self.neighbours.take_previous(&self.particles);
+        self.rebuild_from(previous);
+    }
+
+    /// [`DemSystem::rebuild`] carrying the open contacts of `previous`.
+    fn rebuild_from(&mut self, mut previous: PreviousList) {
         self.max_radius = self.communicator.max(self.particles.max_radius());
         self.neighbours.gap = self.listed_gap(self.max_radius);
         self.particles.clear_ghosts();
@@ -279,20 +284,8 @@ impl DemSystem {
                 kept.push(k);
                 continue;
             }
-            let message = &mut outgoing[owner];
-            self.particles.pack_state(k, Vec3::zeros(), message);
-            message.push(f64::from_bits(
-                self.wall_touching.get(k).copied().unwrap_or(0),
-            ));
-            for history in &self.wall_history[k * stride..(k + 1) * stride] {
-                message.extend(history.iter());
-            }
             previous.open_contacts_of(k, &mut open);
-            message.push(open.len() as f64);
-            for (id, history) in &open {
-                message.push(f64::from_bits(*id));
-                message.extend(history.iter());
-            }
+            self.pack_grain(k, &open, &mut outgoing[owner]);
         }
         let arrived = self.communicator.exchange(outgoing);
         if kept.len() == n && arrived.iter().all(|m| m.is_empty()) {
@@ -308,29 +301,80 @@ impl DemSystem {
             .collect();
         let mut adopted = Vec::new();
         for message in &arrived {
-            let mut at = 0;
-            while at < message.len() {
-                self.particles
-                    .push_packed(&message[at..at + PACKED_STATE], true);
-                at += PACKED_STATE;
-                self.wall_touching.push(message[at].to_bits());
-                at += 1;
-                for w in 0..stride {
-                    let h = &message[at + 3 * w..at + 3 * w + 3];
-                    self.wall_history.push(Vec3::new(h[0], h[1], h[2]));
-                }
-                at += 3 * stride;
-                let contacts = message[at] as usize;
-                at += 1;
-                let open: Vec<(u64, Vec3)> = message[at..at + 4 * contacts]
-                    .chunks_exact(4)
-                    .map(|c| (c[0].to_bits(), Vec3::new(c[1], c[2], c[3])))
-                    .collect();
-                at += 4 * contacts;
-                adopted.push(open);
+            for grain in PackedGrains::new(message, stride) {
+                adopted.push(self.push_grain(&grain));
             }
         }
         previous.retain_and_adopt(&kept, &adopted);
+    }
+
+    /// Appends owned grain k to a message with everything that travels with
+    /// it: its state, its wall contacts and histories, and the open
+    /// contacts `open` (partner id, ξ seen from k). Read by [`PackedGrains`].
+    fn pack_grain(&self, k: usize, open: &[(u64, Vec3)], message: &mut Vec<f64>) {
+        let stride = self.wall_stride();
+        self.particles.pack_state(k, Vec3::zeros(), message);
+        message.push(f64::from_bits(
+            self.wall_touching.get(k).copied().unwrap_or(0),
+        ));
+        for history in &self.wall_history[k * stride..(k + 1) * stride] {
+            message.extend(history.iter());
+        }
+        message.push(open.len() as f64);
+        for (id, history) in open {
+            message.push(f64::from_bits(*id));
+            message.extend(history.iter());
+        }
+    }
+
+    /// Adds a grain of a [`DemSystem::pack_grain`] message as owned (no
+    /// ghosts may exist); returns its open contacts.
+    fn push_grain(&mut self, grain: &PackedGrain) -> Vec<(u64, Vec3)> {
+        self.particles.push_packed(grain.state, true);
+        self.wall_touching.push(grain.wall_touching);
+        self.wall_history.extend_from_slice(&grain.wall_history);
+        grain.open.clone()
+    }
+
+    /// The whole scene gathered on the root rank as a one-rank system, for
+    /// analyses that measure every grain (collective; None on the other
+    /// ranks). The grains come in the order of their ids with their wall
+    /// and contact histories; the pair list is rebuilt and the forces
+    /// evaluated again without advancing the histories.
+    pub fn gathered(&self) -> Option<DemSystem> {
+        let stride = self.wall_stride();
+        let mut message = Vec::new();
+        let mut open = Vec::new();
+        for k in 0..self.particles.n_owned {
+            self.neighbours.open_contacts(k, &self.particles, &mut open);
+            self.pack_grain(k, &open, &mut message);
+        }
+        let pieces = self.communicator.gather(&message)?;
+        let mut grains: Vec<PackedGrain> = pieces
+            .iter()
+            .flat_map(|m| PackedGrains::new(m, stride))
+            .collect();
+        grains.sort_by_key(|g| g.state[0].to_bits());
+        let mut whole = DemSystem::new(
+            self.domain.clone(),
+            self.law,
+            self.walls.clone(),
+            self.neighbours.skin,
+        );
+        whole.lubrication = self.lubrication;
+        whole.contact_gap = self.contact_gap;
+        whole.listing_gap = self.listing_gap;
+        whole.time = self.time;
+        whole.steps = self.steps;
+        whole.last = self.last;
+        whole.next_id = self.next_id;
+        let adopted: Vec<Vec<(u64, Vec3)>> = grains.iter().map(|g| whole.push_grain(g)).collect();
+        let mut previous = PreviousList::default();
+        previous.retain_and_adopt(&[], &adopted);
+        whole.rebuild_from(previous);
+        whole.evaluate_forces(0.0, self.film_dt);
+        whole.last = self.last;
+        Some(whole)
     }
 
     /// Marks, for each owned particle, the walls it may touch before the
@@ -872,6 +916,66 @@ impl DemSystem {
         self.particles.id[..self.particles.n_owned]
             .iter()
             .position(|&k| k == id)
+    }
+}
+
+/// One grain read from a [`DemSystem::pack_grain`] message.
+struct PackedGrain<'a> {
+    state: &'a [f64],
+    wall_touching: u64,
+    wall_history: Vec<Vec3>,
+    open: Vec<(u64, Vec3)>,
+}
+
+/// The grains of a message, in order.
+struct PackedGrains<'a> {
+    message: &'a [f64],
+    at: usize,
+    wall_stride: usize,
+}
+
+impl<'a> PackedGrains<'a> {
+    fn new(message: &'a [f64], wall_stride: usize) -> Self {
+        PackedGrains {
+            message,
+            at: 0,
+            wall_stride,
+        }
+    }
+}
+
+impl<'a> Iterator for PackedGrains<'a> {
+    type Item = PackedGrain<'a>;
+
+    fn next(&mut self) -> Option<PackedGrain<'a>> {
+        let m = self.message;
+        let mut at = self.at;
+        if at >= m.len() {
+            return None;
+        }
+        let state = &m[at..at + PACKED_STATE];
+        at += PACKED_STATE;
+        let wall_touching = m[at].to_bits();
+        at += 1;
+        let wall_history = m[at..at + 3 * self.wall_stride]
+            .chunks_exact(3)
+            .map(|h| Vec3::new(h[0], h[1], h[2]))
+            .collect();
+        at += 3 * self.wall_stride;
+        let contacts = m[at] as usize;
+        at += 1;
+        let open = m[at..at + 4 * contacts]
+            .chunks_exact(4)
+            .map(|c| (c[0].to_bits(), Vec3::new(c[1], c[2], c[3])))
+            .collect();
+        at += 4 * contacts;
+        self.at = at;
+        Some(PackedGrain {
+            state,
+            wall_touching,
+            wall_history,
+            open,
+        })
     }
 }
 
