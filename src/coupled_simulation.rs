@@ -344,7 +344,7 @@ impl CoupledOutputs {
         Ok(CoupledOutputs {
             particles,
             flow_series,
-            fields: FieldFiles::create(dir, case)?,
+            fields: FieldFiles::create(dir, case, true)?,
         })
     }
 

@@ -7,8 +7,8 @@
 use crate::case::{AnalysisSection, Case, InitialFlowSection};
 use grainflow_core::{Communicator, Dimension};
 use grainflow_fluid::{
-    clustered_faces, Boundaries, BoundaryCondition, Clustering, FlowSolver, Grid, TransformBackend,
-    ViscousScheme,
+    clustered_faces, flow_process_grid, Boundaries, BoundaryCondition, Clustering, FlowSolver,
+    Grid, TransformBackend, ViscousScheme,
 };
 use std::f64::consts::PI;
 
@@ -92,16 +92,31 @@ pub fn transform_backend(case: &Case) -> TransformBackend {
 
 /// The flow of the scene at t = 0.
 pub fn build(case: &Case) -> Result<FlowSolver, String> {
+    build_on(case, Communicator::serial())
+}
+
+/// [`build`] shared among the ranks of `communicator`: the process grid of
+/// `parallel.process_grid`, else the one with the least area of cuts.
+pub fn build_on(case: &Case, communicator: Communicator) -> Result<FlowSolver, String> {
     let f = case.fluid_section();
     let grid = grid(case);
-    let mut solver = FlowSolver::with_transforms(
+    let ranks = match case.parallel.as_ref().filter(|_| communicator.size() > 1) {
+        Some(parallel) => {
+            let mut ranks = [1; 3];
+            ranks[..parallel.process_grid.len()].copy_from_slice(&parallel.process_grid);
+            ranks
+        }
+        None => flow_process_grid(&grid, &communicator).map_err(|e| format!("fluid: {e}"))?,
+    };
+    let mut solver = FlowSolver::distributed(
         grid,
         boundaries(case),
         f.viscosity / f.density,
-        Communicator::serial(),
+        communicator,
+        ranks,
         transform_backend(case),
     )
-    .map_err(|e| format!("fluid: {e}"))?;
+    .map_err(|e| format!("fluid: {e}; parallel.process_grid: {ranks:?}"))?;
     if f.viscous == "explicit" {
         solver.viscous_scheme = ViscousScheme::Explicit;
     }

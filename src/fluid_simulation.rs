@@ -9,17 +9,29 @@ use crate::fluid_scene::{self, ChannelProfile, ExactFlow};
 use crate::output::RunDirectory;
 use crate::simulation::{peak_memory_bytes, Progress, Summary};
 use crate::RunError;
+use grainflow_core::Communicator;
 use grainflow_fluid::{FlowSolver, Location, StepReport, ViscousScheme, CFL_LIMIT};
-use grainflow_io::{CellLayout, CsvSeries, FieldFrame, PvdIndex};
+use grainflow_io::{
+    write_field_pieces_index, CellLayout, CsvSeries, FieldFrame, FieldPiece, PvdIndex,
+};
 use serde_json::{json, Map, Value};
 use std::path::Path;
 use std::time::Instant;
 
 /// Runs a validated fluid-only case into `out`. Nothing is written if the
 /// flow cannot be built or its fixed time step is beyond the CFL limit.
-pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
+///
+/// On several ranks (`communicator`) each holds its share of the cells;
+/// the root writes the shared files and every rank its piece of the fields.
+pub fn run(
+    case: &Case,
+    out: &Path,
+    show_progress: bool,
+    communicator: Communicator,
+) -> Result<Summary, RunError> {
     let started = Instant::now();
-    let mut solver = fluid_scene::build(case).map_err(RunError::Case)?;
+    let root = communicator.is_root();
+    let mut solver = fluid_scene::build_on(case, communicator.clone()).map_err(RunError::Case)?;
     let density = case.fluid_section().density;
     let end = case.time.end;
     // An adapted step also keeps an explicit viscous term stable.
@@ -55,17 +67,30 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         }
     }
 
-    let mut outputs = FluidOutputs::create(out, case).map_err(RunError::Io)?;
+    let mut outputs = FluidOutputs::create(out, case, root).map_err(RunError::Io)?;
     let grid = &solver.grid;
-    let cells: usize = grid.cells.iter().product();
+    let partition = solver.partition();
+    let global_cells = partition.global_cells;
+    let cells: usize = global_cells.iter().product();
     outputs.run.log(&format!(
         "grainflow {}: fluid-only scene, {}D staggered grid {:?} ({cells} cells), ν = {:.4e} m²/s, \
          RK3 + Crank–Nicolson, direct pressure solve; no particles",
         env!("CARGO_PKG_VERSION"),
         grid.dim(),
-        &grid.cells[..grid.dim()],
+        &global_cells[..grid.dim()],
         solver.viscosity
     ));
+    if communicator.size() > 1 {
+        let r = partition.ranks;
+        outputs.run.log(&format!(
+            "{} MPI ranks, cells shared in a process grid of {} x {} x {} (pencil transposes \
+             in the direct solves)",
+            communicator.size(),
+            r[0],
+            r[1],
+            r[2]
+        ));
+    }
     match case.time.cfl {
         Some(cfl) => outputs.run.log(&format!("dt adapted to CFL {cfl}")),
         None => outputs.run.log(&format!(
@@ -85,7 +110,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         .write_frame(&mut solver, first_dt, steps, &report, density)
         .map_err(RunError::Io)?;
     let progress = Progress::new(
-        show_progress && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        root && show_progress && std::io::IsTerminal::is_terminal(&std::io::stderr()),
         end,
     );
     let mut failure = None;
@@ -134,6 +159,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         "status": if failure.is_some() { "unstable" } else { "ok" },
         "stop_reason": failure.clone().unwrap_or_else(|| "end time reached".to_string()),
         "cells": cells,
+        "ranks": communicator.size(),
         "dimension": solver.grid.dim(),
         "steps": steps,
         "dt": dt,
@@ -141,7 +167,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         "wall_seconds": wall_seconds,
         "cell_steps_per_second": cell_steps / wall_seconds,
         "threads": rayon::current_num_threads(),
-        "peak_memory_bytes": peak_memory_bytes(),
+        "peak_memory_bytes": communicator.max(peak_memory_bytes().unwrap_or(0) as f64) as u64,
         "metrics": metrics,
     });
     outputs.run.finish(
@@ -172,8 +198,10 @@ fn fluid_metrics(case: &Case, solver: &FlowSolver, report: &StepReport) -> Map<S
     let h = (0..grid.dim())
         .map(|axis| grid.min_width(axis))
         .fold(f64::INFINITY, f64::min);
+    let c = solver.communicator();
     let mut speed = f64::MIN_POSITIVE;
     for_each_velocity(solver, |_, value, _| speed = speed.max(value.abs()));
+    let speed = c.max(speed);
     metrics.insert(
         "max_divergence".into(),
         json!(report.max_divergence * h / speed),
@@ -187,6 +215,7 @@ fn fluid_metrics(case: &Case, solver: &FlowSolver, report: &StepReport) -> Map<S
                 error_sq += (value - reference).powi(2);
                 norm_sq += reference * reference;
             });
+            let (error_sq, norm_sq) = (c.sum(error_sq), c.sum(norm_sq));
             metrics.insert("l2_error".into(), json!((error_sq / norm_sq).sqrt()));
         }
         Some(AnalysisSection::Channel) => {
@@ -197,6 +226,7 @@ fn fluid_metrics(case: &Case, solver: &FlowSolver, report: &StepReport) -> Map<S
                 error = error.max((value - reference).abs());
                 scale = scale.max(reference.abs());
             });
+            let (error, scale) = (c.max(error), c.max(scale));
             metrics.insert("profile_error".into(), json!(error / scale));
             // The pressure gradient that held a bulk velocity, against the
             // one the steady profile needs: ρ ν u''.
@@ -288,20 +318,26 @@ fn cell_fields(solver: &mut FlowSolver, density: f64) -> (Vec<[f64; 3]>, Vec<f64
 /// scalars) indexed by `fields.pvd`.
 pub(crate) struct FieldFiles {
     dir: std::path::PathBuf,
-    index: PvdIndex,
+    /// `fields.pvd` (the root's).
+    index: Option<PvdIndex>,
+    /// Lower corner of the domain: the origin of every piece's extent.
+    origin: [f64; 3],
     frames: usize,
 }
 
 impl FieldFiles {
     /// The field files in `dir`, if `output.fields` asks for them.
-    pub(crate) fn create(dir: &Path, case: &Case) -> std::io::Result<Option<Self>> {
+    pub(crate) fn create(dir: &Path, case: &Case, root: bool) -> std::io::Result<Option<Self>> {
         if !case.output.fields {
             return Ok(None);
         }
         std::fs::create_dir_all(dir.join("fields"))?;
+        let mut origin = [0.0; 3];
+        origin[..case.domain.lower.len()].copy_from_slice(&case.domain.lower);
         Ok(Some(FieldFiles {
             dir: dir.to_path_buf(),
-            index: PvdIndex::new(dir.join("fields.pvd")),
+            index: root.then(|| PvdIndex::new(dir.join("fields.pvd"))),
+            origin,
             frames: 0,
         }))
     }
@@ -315,10 +351,12 @@ impl FieldFiles {
     ) -> std::io::Result<()> {
         let (velocity, pressure, vorticity) = cell_fields(solver, density);
         let grid = &solver.grid;
+        let partition = solver.partition();
+        let (ranks, rank) = (partition.size(), solver.communicator().rank());
         let faces = [0, 1, 2].map(|axis| grid.face_coordinates(axis));
         let layout = if grid.is_uniform(grid.line_axis()) {
             CellLayout::Uniform {
-                origin: grid.lower,
+                origin: self.origin,
                 spacing: grid.spacing,
             }
         } else {
@@ -326,17 +364,61 @@ impl FieldFiles {
                 faces: [&faces[0], &faces[1], &faces[2]],
             }
         };
-        let name = format!("fields/fields_{:06}.{}", self.frames, layout.extension());
+        let extension = layout.extension();
+        let piece = |r: usize| format!("fields_{:06}_{r:04}.{extension}", self.frames);
+        let name = if ranks == 1 {
+            format!("fields/fields_{:06}.{extension}", self.frames)
+        } else {
+            format!("fields/{}", piece(rank))
+        };
         let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", &pressure)];
         scalars.extend_from_slice(extra);
         FieldFrame {
             cells: grid.cells,
+            offset: partition.offset(),
             layout,
             scalars: &scalars,
             vectors: &[("velocity", &velocity), ("vorticity", &vorticity)],
         }
-        .write(&self.dir.join(&name))?;
-        self.index.add(solver.time, &name)?;
+        .write(&self.dir.join(&name))
+        .map_err(|e| std::io::Error::new(e.kind(), format!("{name}: {e}")))?;
+        if let Some(index) = &mut self.index {
+            if ranks == 1 {
+                index.add(solver.time, &name)?;
+            } else {
+                let pieces: Vec<FieldPiece> = (0..ranks)
+                    .map(|r| {
+                        let (offset, cells) = partition.share_of(r);
+                        FieldPiece {
+                            source: piece(r),
+                            offset,
+                            cells,
+                        }
+                    })
+                    .collect();
+                let names: Vec<&str> = scalars.iter().map(|(n, _)| *n).collect();
+                let layout = if grid.is_uniform(grid.line_axis()) {
+                    CellLayout::Uniform {
+                        origin: self.origin,
+                        spacing: grid.spacing,
+                    }
+                } else {
+                    CellLayout::Rectilinear {
+                        faces: [&faces[0], &faces[1], &faces[2]],
+                    }
+                };
+                let index_name = format!("fields/fields_{:06}.p{extension}", self.frames);
+                write_field_pieces_index(
+                    &self.dir.join(&index_name),
+                    partition.global_cells,
+                    &layout,
+                    &names,
+                    &["velocity", "vorticity"],
+                    &pieces,
+                )?;
+                index.add(solver.time, &index_name)?;
+            }
+        }
         self.frames += 1;
         Ok(())
     }
@@ -346,14 +428,23 @@ impl FieldFiles {
 /// field files.
 struct FluidOutputs {
     run: RunDirectory,
-    series: CsvSeries,
+    /// `series.csv` (the root's).
+    series: Option<CsvSeries>,
     fields: Option<FieldFiles>,
 }
 
 impl FluidOutputs {
     /// `tracked.csv` stays empty: a fluid-only scene tracks no particle.
-    fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
-        let run = RunDirectory::create(dir, case)?;
+    fn create(dir: &Path, case: &Case, root: bool) -> std::io::Result<Self> {
+        let run = RunDirectory::create_on(dir, case, root)?;
+        let fields = FieldFiles::create(dir, case, root)?;
+        if !root {
+            return Ok(FluidOutputs {
+                run,
+                series: None,
+                fields,
+            });
+        }
         let series = CsvSeries::create(
             &dir.join("series.csv"),
             &[
@@ -368,8 +459,8 @@ impl FluidOutputs {
         )?;
         Ok(FluidOutputs {
             run,
-            series,
-            fields: FieldFiles::create(dir, case)?,
+            series: Some(series),
+            fields,
         })
     }
 
@@ -383,15 +474,17 @@ impl FluidOutputs {
         report: &StepReport,
         density: f64,
     ) -> std::io::Result<()> {
-        self.series.row(&[
-            solver.time,
-            dt,
-            steps as f64,
-            report.kinetic_energy,
-            report.max_cfl,
-            report.max_divergence,
-            self.run.started.elapsed().as_secs_f64(),
-        ])?;
+        if let Some(series) = &mut self.series {
+            series.row(&[
+                solver.time,
+                dt,
+                steps as f64,
+                report.kinetic_energy,
+                report.max_cfl,
+                report.max_divergence,
+                self.run.started.elapsed().as_secs_f64(),
+            ])?;
+        }
         if let Some(fields) = &mut self.fields {
             fields.write(solver, density, &[])?;
         }

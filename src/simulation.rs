@@ -106,13 +106,13 @@ fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
         Err(RunError::Case(format!(
             "{what} runs on one rank in this version; started on {ranks} ranks: run it \
              without mpirun (its threads use every core of a node); allowed on several \
-             ranks: dry scenes with contact.model = \"soft\""
+             ranks: dry scenes with contact.model = \"soft\", and scenes of a fluid alone"
         )))
     };
-    if case.fluid.is_some() {
-        return refuse("a scene with a [fluid]");
+    if case.fluid.is_some() && case.has_grains() {
+        return refuse("a scene of grains in a [fluid]");
     }
-    if scene::hard_contact(case).is_some() {
+    if case.has_grains() && scene::hard_contact(case).is_some() {
         return refuse("hard contact (contact.model = \"cocd\" or \"nscd\")");
     }
     Ok(())
@@ -126,7 +126,7 @@ fn run_here(
 ) -> Result<Summary, RunError> {
     check_ranks(case, communicator.size())?;
     if !case.has_grains() {
-        return fluid_simulation::run(case, out, show_progress);
+        return fluid_simulation::run(case, out, show_progress, communicator);
     }
     if case.fluid.is_some() {
         return coupled_simulation::run(case, out, show_progress);

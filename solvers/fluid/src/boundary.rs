@@ -47,6 +47,8 @@
 
 use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
+use crate::partition::Partition;
+use grainflow_core::Communicator;
 
 /// The condition on one face of the domain.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -88,6 +90,10 @@ pub enum EndKind {
     DirichletCellQuadratic,
     /// Value prescribed on the boundary face, which is not an unknown.
     DirichletFace,
+    /// Another rank's cells lie beyond: the ghosts are copies of them
+    /// ([`fill_ghosts_on`]). Only along an axis split among ranks
+    /// ([`crate::Partition`]), never the last one.
+    Halo,
 }
 
 /// An end kind and the prescribed value (unused for periodic and Neumann ends).
@@ -263,6 +269,37 @@ pub fn homogeneous(ends: &FieldEnds) -> FieldEnds {
     ends.map(|pair| pair.map(|end| EndCondition { value: 0.0, ..end }))
 }
 
+/// A rank's end conditions from those of the domain: along an axis split
+/// among ranks every end that is not a face of the domain, and both ends
+/// of a periodic axis, become [`EndKind::Halo`].
+pub fn local_ends(ends: &FieldEnds, partition: &Partition) -> FieldEnds {
+    let mut local = *ends;
+    for axis in 0..3 {
+        if partition.ranks[axis] == 1 {
+            continue;
+        }
+        for side in 0..2 {
+            let shared = !partition.at_domain_face(axis, side);
+            if shared || ends[axis][side].kind == EndKind::Periodic {
+                local[axis][side] = EndCondition {
+                    kind: EndKind::Halo,
+                    value: 0.0,
+                };
+            }
+        }
+    }
+    local
+}
+
+/// What a rank needs to fill [`EndKind::Halo`] ghosts: its place among the
+/// ranks, which axes are periodic, and the communicator.
+#[derive(Clone, Copy, Debug)]
+pub struct HaloExchange<'a> {
+    pub partition: &'a Partition,
+    pub periodic: [bool; 3],
+    pub communicator: &'a Communicator,
+}
+
 /// The padded indices of a field's unknowns: every owned cell, except that
 /// along an axis with prescribed face values the boundary faces (0 and n)
 /// are not unknowns; at an outflow face the normal velocity on the face is
@@ -284,8 +321,26 @@ pub fn unknowns(grid: &Grid, ends: &FieldEnds) -> Block {
 /// over the whole padded extent of the others, so edge and corner ghosts
 /// are consistent (periodic corners wrap twice).
 pub fn fill_ghosts(grid: &Grid, field: &mut [f64], location: Location, ends: &FieldEnds) {
+    fill_ghosts_on(grid, field, location, ends, None);
+}
+
+/// [`fill_ghosts`] on one rank of several: the ghosts beyond a
+/// [`EndKind::Halo`] end are the neighbouring rank's planes next to the
+/// shared face (collective among the ranks of `halo`; each axis in turn, so
+/// edge and corner ghosts come from the diagonal neighbours).
+pub fn fill_ghosts_on(
+    grid: &Grid,
+    field: &mut [f64],
+    location: Location,
+    ends: &FieldEnds,
+    halo: Option<&HaloExchange>,
+) {
     let padded = grid.padded();
     for axis in 0..grid.dim() {
+        if ends[axis].iter().any(|end| end.kind == EndKind::Halo) {
+            let halo = halo.expect("a halo end needs the ranks' exchange");
+            exchange_planes(grid, field, axis, ends, halo);
+        }
         let n = grid.cells[axis];
         let stride = grid.stride(axis);
         let mut line_block = Block {
@@ -310,6 +365,7 @@ pub fn fill_ghosts(grid: &Grid, field: &mut [f64], location: Location, ends: &Fi
         grid.for_each(&line_block, |first, _| {
             let at = |i: usize| first + i * stride;
             match lower.kind {
+                EndKind::Halo => {}
                 EndKind::Periodic => field[at(0)] = field[at(n)],
                 EndKind::Neumann => field[at(0)] = field[at(1)],
                 EndKind::DirichletCell => field[at(0)] = 2.0 * lower.value - field[at(1)],
@@ -320,6 +376,7 @@ pub fn fill_ghosts(grid: &Grid, field: &mut [f64], location: Location, ends: &Fi
                 EndKind::DirichletFace => field[at(0)] = lower.value,
             }
             match upper.kind {
+                EndKind::Halo => {}
                 EndKind::Periodic => field[at(n + 1)] = field[at(1)],
                 EndKind::Neumann => field[at(n + 1)] = field[at(n)],
                 EndKind::DirichletCell => field[at(n + 1)] = 2.0 * upper.value - field[at(n)],
@@ -338,6 +395,56 @@ pub fn fill_ghosts(grid: &Grid, field: &mut [f64], location: Location, ends: &Fi
         });
     }
 }
+
+/// The ghost planes along `axis` from the neighbouring ranks: plane n goes
+/// to the upper neighbour (its plane 0), plane 1 to the lower neighbour
+/// (its plane n + 1), each over the whole padded extent of the other axes.
+fn exchange_planes(
+    grid: &Grid,
+    field: &mut [f64],
+    axis: usize,
+    ends: &FieldEnds,
+    halo: &HaloExchange,
+) {
+    let n = grid.cells[axis];
+    let padded = grid.padded();
+    let mut plane = Block {
+        start: [0; 3],
+        end: padded,
+    };
+    let neighbour = |side: usize| {
+        (ends[axis][side].kind == EndKind::Halo)
+            .then(|| halo.partition.neighbour(axis, side, halo.periodic[axis]))
+            .flatten()
+    };
+    let (lower, upper) = (neighbour(0), neighbour(1));
+    // Upwards: this rank's plane n becomes the upper neighbour's plane 0.
+    for (send, receive, destination, source, tag) in [
+        (n, 0, upper, lower, 2 * axis as u16),
+        (1, n + 1, lower, upper, 2 * axis as u16 + 1),
+    ] {
+        plane.start[axis] = send;
+        plane.end[axis] = send + 1;
+        let mut message = Vec::new();
+        if destination.is_some() {
+            grid.for_each(&plane, |index, _| message.push(field[index]));
+        }
+        let received = halo
+            .communicator
+            .shift(HALO_TAG + tag, &message, destination, source);
+        if source.is_some() {
+            plane.start[axis] = receive;
+            plane.end[axis] = receive + 1;
+            let mut values = received.into_iter();
+            grid.for_each(&plane, |index, _| {
+                field[index] = values.next().expect("a whole plane from the neighbour")
+            });
+        }
+    }
+}
+
+/// First message tag of the halo exchanges.
+const HALO_TAG: u16 = 1000;
 
 #[cfg(test)]
 mod tests {

@@ -275,6 +275,34 @@ impl Grid {
         Ok(grid)
     }
 
+    /// The part of this grid made of `cells` cells from cell `offset` along
+    /// each axis, with the same spacing: a rank's share
+    /// ([`crate::Partition::local_grid`]). The last axis stays whole.
+    pub fn sub_grid(&self, offset: [usize; 3], cells: [usize; 3]) -> Grid {
+        let mut sub = self.clone();
+        for axis in 0..self.dim() {
+            if axis == self.line_axis() {
+                assert!(
+                    offset[axis] == 0 && cells[axis] == self.cells[axis],
+                    "the last axis is not split"
+                );
+                continue;
+            }
+            assert!(cells[axis] >= 2 && offset[axis] + cells[axis] <= self.cells[axis]);
+            let h = self.spacing[axis];
+            sub.cells[axis] = cells[axis];
+            sub.lower[axis] = self.lower[axis] + offset[axis] as f64 * h;
+            sub.upper[axis] = if offset[axis] + cells[axis] == self.cells[axis] {
+                self.upper[axis]
+            } else {
+                self.lower[axis] + (offset[axis] + cells[axis]) as f64 * h
+            };
+        }
+        sub.padded = [0, 1, 2].map(|a| sub.cells[a] + 2 * sub.ghost[a]);
+        sub.strides = [1, sub.padded[0], sub.padded[0] * sub.padded[1]];
+        sub
+    }
+
     /// Number of active axes (2 or 3).
     pub fn dim(&self) -> usize {
         self.dimension.count()

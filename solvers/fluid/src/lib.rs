@@ -45,6 +45,7 @@ pub mod fftw;
 pub mod grid;
 pub mod navier_stokes;
 pub mod operators;
+pub mod partition;
 pub mod poisson;
 pub mod transform;
 
@@ -55,4 +56,5 @@ pub use navier_stokes::{
     stage_fraction, FlowSolver, StepReport, ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT,
     STAGES,
 };
+pub use partition::{flow_process_grid, Partition};
 pub use poisson::{DirectSolver, TransformBackend};

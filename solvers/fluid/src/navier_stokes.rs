@@ -35,10 +35,13 @@
 
 use grainflow_core::Communicator;
 
-use crate::boundary::{fill_ghosts, homogeneous, unknowns, Boundaries, FieldEnds};
+use crate::boundary::{
+    fill_ghosts_on, homogeneous, local_ends, unknowns, Boundaries, EndKind, FieldEnds, HaloExchange,
+};
 use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
 use crate::operators::{add_laplacian, convective_tendency, divergence, subtract_gradient};
+use crate::partition::Partition;
 use crate::poisson::{DirectSolver, TransformBackend};
 
 /// Stages of a step.
@@ -135,6 +138,12 @@ pub struct FlowSolver {
     /// exceeds this is refused; [`EXPLICIT_VISCOUS_LIMIT`] unless set otherwise.
     pub viscous_limit: f64,
     communicator: Communicator,
+    /// This rank's share of the cells (all of them on one rank).
+    partition: Partition,
+    /// Which axes are periodic (their ends, when split, are halos).
+    periodic: [bool; 3],
+    /// End conditions of this rank's fields (halos where another rank's
+    /// cells lie beyond).
     velocity_ends: Vec<FieldEnds>,
     pressure_ends: FieldEnds,
     velocity_unknowns: Vec<Block>,
@@ -179,34 +188,68 @@ impl FlowSolver {
         communicator: Communicator,
         backend: TransformBackend,
     ) -> Result<Self, FluidError> {
-        boundaries.validate(&grid)?;
+        let ranks = crate::partition::flow_process_grid(&grid, &communicator)?;
+        Self::distributed(grid, boundaries, viscosity, communicator, ranks, backend)
+    }
+
+    /// The flow on `global` shared among the ranks of `communicator` in a
+    /// process grid of `ranks` ([`crate::flow_process_grid`] chooses one):
+    /// this rank holds its share of the cells ([`Partition`]), and
+    /// [`FlowSolver::grid`] is its part of the grid. Every rank builds its
+    /// solver and steps together (the steps are collective).
+    pub fn distributed(
+        global: Grid,
+        boundaries: Boundaries,
+        viscosity: f64,
+        communicator: Communicator,
+        ranks: [usize; 3],
+        backend: TransformBackend,
+    ) -> Result<Self, FluidError> {
+        boundaries.validate(&global)?;
         if !(viscosity.is_finite() && viscosity >= 0.0) {
             return Err(FluidError::Parameter(format!(
                 "the kinematic viscosity must be finite and non-negative, got {viscosity}"
             )));
         }
-        if communicator.size() > 1 {
-            // The transforms need whole lines on a rank: distributed
-            // pencils and halo exchanges are not there yet.
-            return Err(FluidError::Unsupported(format!(
-                "the fluid solver runs on one rank for now, not {}",
+        if ranks.iter().product::<usize>() != communicator.size() {
+            return Err(FluidError::Parameter(format!(
+                "the process grid {ranks:?} does not hold the {} ranks of the run",
                 communicator.size()
             )));
         }
+        let partition = Partition::new(&global, ranks, communicator.rank())?;
+        let grid = partition.local_grid(&global);
         let dim = grid.dim();
-        let velocity_ends: Vec<FieldEnds> = (0..dim)
-            .map(|component| boundaries.velocity_ends(&grid, component))
+        let global_velocity_ends: Vec<FieldEnds> = (0..dim)
+            .map(|component| boundaries.velocity_ends(&global, component))
             .collect();
-        let pressure_ends = boundaries.pressure_ends(&grid);
-        let velocity_solvers = velocity_ends
+        let global_pressure_ends = boundaries.pressure_ends(&global);
+        let solver_for = |ends: &FieldEnds| {
+            DirectSolver::distributed(
+                &global,
+                ends,
+                &grid,
+                &partition,
+                communicator.clone(),
+                backend,
+            )
+        };
+        let velocity_solvers = global_velocity_ends
             .iter()
-            .map(|ends| DirectSolver::with_backend(&grid, &homogeneous(ends), backend))
+            .map(|ends| solver_for(&homogeneous(ends)))
             .collect::<Result<Vec<_>, _>>()?;
-        let pressure_solver = DirectSolver::with_backend(&grid, &pressure_ends, backend)?;
+        let pressure_solver = solver_for(&global_pressure_ends)?;
+        let velocity_ends: Vec<FieldEnds> = global_velocity_ends
+            .iter()
+            .map(|ends| local_ends(ends, &partition))
+            .collect();
+        let pressure_ends = local_ends(&global_pressure_ends, &partition);
         let velocity_unknowns = velocity_ends
             .iter()
             .map(|ends| unknowns(&grid, ends))
             .collect();
+        let periodic = [0, 1, 2]
+            .map(|axis| boundaries.faces[axis][0] == crate::boundary::BoundaryCondition::Periodic);
         let field = || grid.zeros();
         let fields = |count: usize| (0..count).map(|_| grid.zeros()).collect::<Vec<_>>();
         let mut solver = FlowSolver {
@@ -222,6 +265,8 @@ impl FlowSolver {
             viscous_scheme: ViscousScheme::CrankNicolson,
             viscous_limit: EXPLICIT_VISCOUS_LIMIT,
             communicator,
+            partition,
+            periodic,
             velocity_ends,
             pressure_ends,
             velocity_unknowns,
@@ -262,7 +307,18 @@ impl FlowSolver {
         grid.for_each(&grid.cell_block(), |index, [i, j, k]| {
             pressure[index] = profile(grid.position(Location::Centre, i, j, k));
         });
-        fill_ghosts(grid, pressure, Location::Centre, &self.pressure_ends);
+        let halo = HaloExchange {
+            partition: &self.partition,
+            periodic: self.periodic,
+            communicator: &self.communicator,
+        };
+        fill_ghosts_on(
+            grid,
+            pressure,
+            Location::Centre,
+            &self.pressure_ends,
+            Some(&halo),
+        );
     }
 
     /// Advances the flow by `dt` (three RK3 stages) and reports on it.
@@ -357,11 +413,17 @@ impl FlowSolver {
         let alpha = gamma + zeta;
         let dim = self.grid.dim();
         self.fill_velocity_ghosts();
-        fill_ghosts(
+        let halo = HaloExchange {
+            partition: &self.partition,
+            periodic: self.periodic,
+            communicator: &self.communicator,
+        };
+        fill_ghosts_on(
             &self.grid,
             &mut self.pressure,
             Location::Centre,
             &self.pressure_ends,
+            Some(&halo),
         );
         // All explicit terms from u^{k−1} before any component moves.
         for component in 0..dim {
@@ -461,7 +523,18 @@ impl FlowSolver {
         divergence(grid, &self.velocity, correction);
         grid.par_update(&grid.cell_block(), correction, |_, value| value / scale);
         self.pressure_solver.solve_poisson(grid, correction);
-        fill_ghosts(grid, correction, Location::Centre, &self.pressure_ends);
+        let halo = HaloExchange {
+            partition: &self.partition,
+            periodic: self.periodic,
+            communicator: &self.communicator,
+        };
+        fill_ghosts_on(
+            grid,
+            correction,
+            Location::Centre,
+            &self.pressure_ends,
+            Some(&halo),
+        );
         for component in 0..grid.dim() {
             let block = &self.velocity_unknowns[component];
             subtract_gradient(
@@ -501,12 +574,18 @@ impl FlowSolver {
 
     /// Ghost values and wall-face values of every velocity component.
     pub fn fill_velocity_ghosts(&mut self) {
+        let halo = HaloExchange {
+            partition: &self.partition,
+            periodic: self.periodic,
+            communicator: &self.communicator,
+        };
         for (component, field) in self.velocity.iter_mut().enumerate() {
-            fill_ghosts(
+            fill_ghosts_on(
                 &self.grid,
                 field,
                 Location::Face(component),
                 &self.velocity_ends[component],
+                Some(&halo),
             );
         }
     }
@@ -530,16 +609,22 @@ impl FlowSolver {
         let uniform = grid.is_uniform(line);
         let mut sum = 0.0;
         for (component, field) in self.velocity.iter().enumerate() {
+            // Wall faces of this rank (prescribed, not unknowns) join the
+            // sum with weight ½.
             let mut block = self.velocity_unknowns[component];
-            let walls = block.end[component] < grid.interior(component).end;
-            if walls {
+            let ends = &self.velocity_ends[component][component];
+            let walls = ends.map(|end| end.kind == EndKind::DirichletFace);
+            if walls[0] {
                 block.start[component] -= 1;
+            }
+            if walls[1] {
                 block.end[component] += 1;
             }
             let (first, last) = (block.start[component], block.end[component] - 1);
             let on_face = component == line;
             sum += grid.par_sum(&block, |index, point| {
-                let on_wall = walls && (point[component] == first || point[component] == last);
+                let on_wall = (walls[0] && point[component] == first)
+                    || (walls[1] && point[component] == last);
                 let weight = if on_wall { 0.5 } else { 1.0 };
                 let length = match (uniform, on_face) {
                     (true, _) => 1.0,
@@ -575,6 +660,16 @@ impl FlowSolver {
             };
         }
         cfl
+    }
+
+    /// This rank's share of the cells.
+    pub fn partition(&self) -> &Partition {
+        &self.partition
+    }
+
+    /// The ranks the flow is shared among.
+    pub fn communicator(&self) -> &Communicator {
+        &self.communicator
     }
 
     /// The unknown faces of velocity component `component` (padded indices).

@@ -40,10 +40,12 @@
 //! round-off for the divergence of a velocity with no net flux), one value
 //! is pinned, and the solution is shifted to zero mean.
 
-use crate::boundary::{unknowns, EndKind, FieldEnds};
+use crate::boundary::{local_ends, unknowns, EndKind, FieldEnds};
 use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
+use crate::partition::Partition;
 use crate::transform::{AxisTransform, Direction, TransformKind};
+use grainflow_core::Communicator;
 
 /// Which library transforms the lines of the direct solvers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,6 +95,90 @@ pub struct DirectSolver {
     modal: Vec<f64>,
     modes: Vec<f64>,
     lines: ModeLines,
+    /// On several ranks, the pencils the transforms work on; None when one
+    /// rank holds every unknown (the transforms then act on `modes`).
+    pencils: Option<Pencils>,
+}
+
+/// Where each rank's share of a field's unknowns lies in one arrangement:
+/// the box `[lower, upper)` of global unknown indices of every rank, its
+/// values stored x fastest.
+#[derive(Clone, Debug)]
+struct Layout {
+    boxes: Vec<[[usize; 2]; 3]>,
+}
+
+impl Layout {
+    /// The extent of `rank`'s box along each axis.
+    fn shape(&self, rank: usize) -> [usize; 3] {
+        self.boxes[rank].map(|[lower, upper]| upper - lower)
+    }
+
+    fn len(&self, rank: usize) -> usize {
+        self.shape(rank).iter().product()
+    }
+}
+
+/// The unknowns of a solve on several ranks, rearranged so that each
+/// transform and the line solve see whole lines (as in CaNS and
+/// 2DECOMP&FFT): `physical`, split like the cells with the line axis whole
+/// (where the tridiagonal solve runs); `x_pencils`, x whole; in 3D
+/// `y_pencils`, y whole. A solve goes physical → x → y → physical, the
+/// line solve, and back; each change of arrangement is one all-to-all.
+struct Pencils {
+    communicator: Communicator,
+    physical: Layout,
+    x_pencils: Layout,
+    y_pencils: Option<Layout>,
+    x_data: Vec<f64>,
+    y_data: Vec<f64>,
+}
+
+impl Pencils {
+    /// Moves the values of `source` (arranged as `from`) into `target`
+    /// (arranged as `to`): each rank sends every other the part of its box
+    /// that lies in the other's new box.
+    fn redistribute(&self, from: &Layout, source: &[f64], to: &Layout, target: &mut [f64]) {
+        let me = self.communicator.rank();
+        let ranks = from.boxes.len();
+        let mut outgoing = vec![Vec::new(); ranks];
+        for (other, message) in outgoing.iter_mut().enumerate() {
+            if let Some(part) = intersection(&from.boxes[me], &to.boxes[other]) {
+                visit_part(&from.boxes[me], &part, |k| message.push(source[k]));
+            }
+        }
+        let incoming = self.communicator.exchange(outgoing);
+        for (other, message) in incoming.iter().enumerate() {
+            if let Some(part) = intersection(&from.boxes[other], &to.boxes[me]) {
+                let mut values = message.iter();
+                visit_part(&to.boxes[me], &part, |k| {
+                    target[k] = *values.next().expect("the part announced")
+                });
+            }
+        }
+    }
+}
+
+/// The common part of two boxes, if any.
+fn intersection(a: &[[usize; 2]; 3], b: &[[usize; 2]; 3]) -> Option<[[usize; 2]; 3]> {
+    let part = [0, 1, 2].map(|axis| [a[axis][0].max(b[axis][0]), a[axis][1].min(b[axis][1])]);
+    part.iter()
+        .all(|[lower, upper]| lower < upper)
+        .then_some(part)
+}
+
+/// Calls `visit(k)` with the flat index in an array over `whole` of every
+/// point of `part`, x fastest.
+fn visit_part(whole: &[[usize; 2]; 3], part: &[[usize; 2]; 3], mut visit: impl FnMut(usize)) {
+    let shape = whole.map(|[lower, upper]| upper - lower);
+    for k in part[2][0]..part[2][1] {
+        for j in part[1][0]..part[1][1] {
+            let row = ((k - whole[2][0]) * shape[1] + (j - whole[1][0])) * shape[0];
+            for i in part[0][0]..part[0][1] {
+                visit(row + i - whole[0][0]);
+            }
+        }
+    }
 }
 
 /// The three-point operator along a line, row by row: row `j` reads
@@ -143,6 +229,7 @@ impl LineRows {
                     [near, far]
                 }
                 EndKind::DirichletFace | EndKind::Periodic => [0.0, 0.0],
+                EndKind::Halo => unreachable!("the line axis is never split among ranks"),
             };
             // The end row couples outwards to the ghost, inwards to the
             // row next to it (which the quadratic ghost also reads).
@@ -188,6 +275,30 @@ impl DirectSolver {
         ends: &FieldEnds,
         backend: TransformBackend,
     ) -> Result<Self, FluidError> {
+        let partition = Partition::serial(grid);
+        Self::distributed(
+            grid,
+            ends,
+            grid,
+            &partition,
+            Communicator::serial(),
+            backend,
+        )
+    }
+
+    /// The solver of one rank of several: `global` is the whole grid and
+    /// `ends` its end conditions, `local` this rank's share of the cells
+    /// ([`Partition::local_grid`]); every rank of `communicator` builds its
+    /// own and solves together (every solve is collective).
+    pub fn distributed(
+        global: &Grid,
+        ends: &FieldEnds,
+        local: &Grid,
+        partition: &Partition,
+        communicator: Communicator,
+        backend: TransformBackend,
+    ) -> Result<Self, FluidError> {
+        let grid = local;
         if !backend.is_available() {
             return Err(FluidError::Unsupported(format!(
                 "the {backend:?} transforms are not in this build (rebuild with \
@@ -196,8 +307,18 @@ impl DirectSolver {
         }
         let dim = grid.dim();
         let line_axis = dim - 1;
-        let block = unknowns(grid, ends);
+        let global_block = unknowns(global, ends);
+        let global_shape = [0, 1, 2].map(|a| global_block.end[a] - global_block.start[a]);
+        let block = unknowns(grid, &local_ends(ends, partition));
         let shape = [0, 1, 2].map(|a| block.end[a] - block.start[a]);
+        let layouts = layouts(partition, global_shape, line_axis);
+        let me = communicator.rank();
+        assert_eq!(
+            layouts[0].shape(me),
+            shape,
+            "this rank's unknowns are its box of the physical layout"
+        );
+        let offset = layouts[0].boxes[me].map(|[lower, _]| lower);
         let mut transforms = Vec::new();
         let mut eigenvalues: Vec<Vec<f64>> = Vec::new();
         for (axis, end) in ends.iter().enumerate().take(line_axis) {
@@ -219,14 +340,14 @@ impl DirectSolver {
                     )))
                 }
             };
-            let transform = AxisTransform::new(kind, shape[axis]);
+            let transform = AxisTransform::new(kind, global_shape[axis]);
             let h2 = grid.spacing[axis] * grid.spacing[axis];
+            // This rank's modes along the axis (its box of the physical layout).
             eigenvalues.push(
-                transform
-                    .angles()
+                transform.angles()[offset[axis]..offset[axis] + shape[axis]]
                     .iter()
                     .map(|theta| -(2.0 - 2.0 * theta.cos()) / h2)
-                    .collect(),
+                    .collect::<Vec<f64>>(),
             );
             transforms.push(transform);
         }
@@ -283,6 +404,22 @@ impl DirectSolver {
         let total = shape.iter().product();
         #[cfg_attr(not(feature = "fftw"), allow(unused_mut))]
         let mut modes = vec![0.0; total];
+        #[cfg_attr(not(feature = "fftw"), allow(unused_mut))]
+        let mut pencils = (partition.size() > 1).then(|| {
+            let [physical, x_pencils, y_pencils] = layouts;
+            Pencils {
+                x_data: vec![0.0; x_pencils.len(me)],
+                y_data: if line_axis == 2 {
+                    vec![0.0; y_pencils.len(me)]
+                } else {
+                    Vec::new()
+                },
+                y_pencils: (line_axis == 2).then_some(y_pencils),
+                physical,
+                x_pencils,
+                communicator: communicator.clone(),
+            }
+        });
         let transforms = match backend {
             TransformBackend::Rust => LineTransforms::Rust(transforms),
             #[cfg(feature = "fftw")]
@@ -291,7 +428,16 @@ impl DirectSolver {
                     .iter()
                     .enumerate()
                     .map(|(axis, transform)| {
-                        crate::fftw::BatchTransform::new(transform.kind(), &mut modes, shape, axis)
+                        // Each axis is planned on the array it transforms.
+                        let (data, shape) = match (&mut pencils, axis) {
+                            (None, _) => (&mut modes, shape),
+                            (Some(p), 0) => (&mut p.x_data, p.x_pencils.shape(me)),
+                            (Some(p), _) => {
+                                let y_shape = p.y_pencils.as_ref().expect("3D").shape(me);
+                                (&mut p.y_data, y_shape)
+                            }
+                        };
+                        crate::fftw::BatchTransform::new(transform.kind(), data, shape, axis)
                     })
                     .collect(),
             ),
@@ -308,6 +454,7 @@ impl DirectSolver {
             modal,
             modes,
             lines: ModeLines::new(mode_count, shape[line_axis], periodic_line[0]),
+            pencils,
         })
     }
     /// The padded indices of the unknowns this solver owns in a field.
@@ -341,6 +488,9 @@ impl DirectSolver {
     /// Every transformed axis of the modal array, first to last forward,
     /// last to first backward.
     fn transform(&mut self, direction: Direction) {
+        if self.pencils.is_some() {
+            return self.transform_pencils(direction);
+        }
         let modes = &mut self.modes;
         match &mut self.transforms {
             LineTransforms::Rust(transforms) => {
@@ -363,6 +513,48 @@ impl DirectSolver {
                 }
             }
         }
+    }
+
+    /// [`DirectSolver::transform`] on several ranks: each axis on the pencils
+    /// that hold its lines whole.
+    fn transform_pencils(&mut self, direction: Direction) {
+        let pencils = self.pencils.as_mut().expect("several ranks");
+        let me = pencils.communicator.rank();
+        let x_shape = pencils.x_pencils.shape(me);
+        let mut x_data = std::mem::take(&mut pencils.x_data);
+        let mut y_data = std::mem::take(&mut pencils.y_data);
+        let pencils = self.pencils.as_ref().expect("several ranks");
+        let (physical, x_pencils) = (&pencils.physical, &pencils.x_pencils);
+        let transforms = &mut self.transforms;
+        let mut apply = |axis: usize, data: &mut [f64], shape: [usize; 3]| match transforms {
+            LineTransforms::Rust(t) => t[axis].apply_along(data, shape, axis, direction),
+            #[cfg(feature = "fftw")]
+            LineTransforms::Fftw(t) => t[axis].apply(data, direction),
+        };
+        match (&pencils.y_pencils, direction) {
+            (None, _) => {
+                pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
+                apply(0, &mut x_data, x_shape);
+                pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
+            }
+            (Some(y_pencils), Direction::Forward) => {
+                pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
+                apply(0, &mut x_data, x_shape);
+                pencils.redistribute(x_pencils, &x_data, y_pencils, &mut y_data);
+                apply(1, &mut y_data, y_pencils.shape(me));
+                pencils.redistribute(y_pencils, &y_data, physical, &mut self.modes);
+            }
+            (Some(y_pencils), Direction::Backward) => {
+                pencils.redistribute(physical, &self.modes, y_pencils, &mut y_data);
+                apply(1, &mut y_data, y_pencils.shape(me));
+                pencils.redistribute(y_pencils, &y_data, x_pencils, &mut x_data);
+                apply(0, &mut x_data, x_shape);
+                pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
+            }
+        }
+        let pencils = self.pencils.as_mut().expect("several ranks");
+        pencils.x_data = x_data;
+        pencils.y_data = y_data;
     }
 
     fn gather(&mut self, grid: &Grid, field: &[f64]) {
@@ -418,6 +610,70 @@ impl DirectSolver {
             }
         }
     }
+}
+
+/// The physical, x-pencil and y-pencil layouts of a field's unknowns
+/// (`shape` of them in all) among the ranks of `partition`. Physical: the
+/// ranks' boxes of cells (a rank at the upper end of an axis whose last
+/// face is prescribed has one unknown fewer), the line axis whole. x
+/// pencils: x whole, y as physical (3D), and the line axis shared among
+/// the ranks along x; y pencils (3D): x as physical, y whole, z shared
+/// among the ranks along y.
+fn layouts(partition: &Partition, shape: [usize; 3], line_axis: usize) -> [Layout; 3] {
+    let even = |length: usize, parts: usize, part: usize| {
+        [part * length / parts, (part + 1) * length / parts]
+    };
+    let whole = |axis: usize| [0, shape[axis]];
+    let mut physical = Vec::new();
+    let mut x_pencils = Vec::new();
+    let mut y_pencils = Vec::new();
+    for rank in 0..partition.size() {
+        let coords = [
+            rank % partition.ranks[0],
+            (rank / partition.ranks[0]) % partition.ranks[1],
+            rank / (partition.ranks[0] * partition.ranks[1]),
+        ];
+        let cells = |axis: usize| {
+            let c = coords[axis];
+            [
+                partition.cell_start(axis, c).min(shape[axis]),
+                partition.cell_start(axis, c + 1).min(shape[axis]),
+            ]
+        };
+        let box_of = |axis: usize| {
+            if axis < line_axis {
+                cells(axis)
+            } else {
+                whole(axis)
+            }
+        };
+        physical.push([box_of(0), box_of(1), box_of(2)]);
+        let line_share = |parts: usize, part: usize| even(shape[line_axis], parts, part);
+        if line_axis == 1 {
+            x_pencils.push([
+                whole(0),
+                line_share(partition.ranks[0], coords[0]),
+                whole(2),
+            ]);
+            y_pencils.push([whole(0), whole(1), whole(2)]);
+        } else {
+            x_pencils.push([
+                whole(0),
+                cells(1),
+                line_share(partition.ranks[0], coords[0]),
+            ]);
+            y_pencils.push([
+                cells(0),
+                whole(1),
+                line_share(partition.ranks[1], coords[1]),
+            ]);
+        }
+    }
+    [
+        Layout { boxes: physical },
+        Layout { boxes: x_pencils },
+        Layout { boxes: y_pencils },
+    ]
 }
 
 /// Work arrays of the tridiagonal systems of all modes: the line operator

@@ -6,4 +6,7 @@ pub mod csv;
 pub mod vtk;
 
 pub use csv::CsvSeries;
-pub use vtk::{write_particle_pieces_index, CellLayout, FieldFrame, ParticleFrame, PvdIndex};
+pub use vtk::{
+    write_field_pieces_index, write_particle_pieces_index, CellLayout, FieldFrame, FieldPiece,
+    ParticleFrame, PvdIndex,
+};

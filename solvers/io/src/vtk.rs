@@ -152,9 +152,11 @@ impl CellLayout<'_> {
 }
 
 /// Cell-centred fields on a grid of `cells` cells (a 2D grid has one cell
-/// along z).
+/// along z); on several ranks one rank's piece, whose first cell is cell
+/// `offset` of the whole grid (zero on one rank).
 pub struct FieldFrame<'a> {
     pub cells: [usize; 3],
+    pub offset: [usize; 3],
     pub layout: CellLayout<'a>,
     /// Scalar fields, one value per cell, x fastest.
     pub scalars: &'a [(&'a str, &'a [f64])],
@@ -164,10 +166,9 @@ pub struct FieldFrame<'a> {
 
 impl FieldFrame<'_> {
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        let [nx, ny, nz] = self.cells;
         let mut out = BufWriter::new(File::create(path)?);
         writeln!(out, r#"<?xml version="1.0"?>"#)?;
-        let extent = format!("0 {nx} 0 {ny} 0 {nz}");
+        let extent = extent_text(self.offset, self.cells);
         let kind = match self.layout {
             CellLayout::Uniform { .. } => "ImageData",
             CellLayout::Rectilinear { .. } => "RectilinearGrid",
@@ -214,6 +215,89 @@ impl FieldFrame<'_> {
         writeln!(out, "</Piece>\n</{kind}>\n</VTKFile>")?;
         out.flush()
     }
+}
+
+/// A VTK extent: first and last point index along each axis.
+fn extent_text(offset: [usize; 3], cells: [usize; 3]) -> String {
+    let [ox, oy, oz] = offset;
+    let [nx, ny, nz] = cells;
+    format!("{ox} {} {oy} {} {oz} {}", ox + nx, oy + ny, oz + nz)
+}
+
+/// One rank's piece of a field output: its file (relative to the index),
+/// first cell and cells.
+pub struct FieldPiece {
+    pub source: String,
+    pub offset: [usize; 3],
+    pub cells: [usize; 3],
+}
+
+/// The `.pvti` (uniform grid) or `.pvtr` (stretched) index of one field
+/// output written in pieces, one per rank, over a grid of `cells` cells:
+/// ParaView opens it as one dataset. Names the cell arrays of the pieces.
+pub fn write_field_pieces_index(
+    path: &Path,
+    cells: [usize; 3],
+    layout: &CellLayout,
+    scalars: &[&str],
+    vectors: &[&str],
+    pieces: &[FieldPiece],
+) -> std::io::Result<()> {
+    let mut out = BufWriter::new(File::create(path)?);
+    writeln!(out, r#"<?xml version="1.0"?>"#)?;
+    let whole = extent_text([0; 3], cells);
+    let kind = match layout {
+        CellLayout::Uniform { .. } => "PImageData",
+        CellLayout::Rectilinear { .. } => "PRectilinearGrid",
+    };
+    writeln!(
+        out,
+        r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
+    )?;
+    match layout {
+        CellLayout::Uniform { origin, spacing } => {
+            let [ox, oy, oz] = origin;
+            let [dx, dy, dz] = spacing;
+            writeln!(
+                out,
+                r#"<PImageData WholeExtent="{whole}" GhostLevel="0" Origin="{ox:e} {oy:e} {oz:e}" Spacing="{dx:e} {dy:e} {dz:e}">"#
+            )?;
+        }
+        CellLayout::Rectilinear { .. } => {
+            writeln!(
+                out,
+                r#"<PRectilinearGrid WholeExtent="{whole}" GhostLevel="0">"#
+            )?;
+            writeln!(out, "<PCoordinates>")?;
+            for name in ["x", "y", "z"] {
+                writeln!(
+                    out,
+                    r#"<PDataArray type="Float64" Name="{name}" NumberOfComponents="1"/>"#
+                )?;
+            }
+            writeln!(out, "</PCoordinates>")?;
+        }
+    }
+    writeln!(out, "<PCellData>")?;
+    for (names, components) in [(scalars, 1), (vectors, 3)] {
+        for name in names {
+            writeln!(
+                out,
+                r#"<PDataArray type="Float64" Name="{name}" NumberOfComponents="{components}"/>"#
+            )?;
+        }
+    }
+    writeln!(out, "</PCellData>")?;
+    for piece in pieces {
+        writeln!(
+            out,
+            r#"<Piece Extent="{}" Source="{}"/>"#,
+            extent_text(piece.offset, piece.cells),
+            piece.source
+        )?;
+    }
+    writeln!(out, "</{kind}>\n</VTKFile>")?;
+    out.flush()
 }
 
 fn to_bytes_f64(values: &[f64]) -> Vec<u8> {
