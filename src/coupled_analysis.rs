@@ -56,9 +56,15 @@ pub struct SphereInFluid {
 impl SphereInFluid {
     pub fn new(case: &Case, system: &CoupledSystem) -> Self {
         let gravity = system.dem.domain.gravity;
+        // Particle 0, wherever it is owned.
         let p = &system.dem.particles;
-        let k = system.dem.index_of(0).unwrap_or(0);
-        let volume = particle_volume(system.dem.dimension(), p.radius[k]);
+        let c = &system.dem.communicator;
+        let (radius, mass) = match system.dem.index_of(0) {
+            Some(k) => (p.radius[k], p.mass[k]),
+            None => (0.0, 0.0),
+        };
+        let (radius, mass) = (c.sum(radius), c.sum(mass));
+        let volume = particle_volume(system.dem.dimension(), radius);
         SphereInFluid {
             kind: match case.analysis {
                 Some(AnalysisSection::FallingSphere) => Kind::Falling,
@@ -68,10 +74,10 @@ impl SphereInFluid {
             down: gravity.try_normalize(0.0).unwrap_or_else(Vec3::zeros),
             initial_acceleration: None,
             history: Vec::new(),
-            density: p.mass[k] / volume,
+            density: mass / volume,
             fluid_density: system.fluid_density,
             viscosity: case.fluid_section().viscosity,
-            diameter: 2.0 * p.radius[k],
+            diameter: 2.0 * radius,
             gravity: gravity.norm(),
             restitution: case.contact_section().restitution.unwrap_or(1.0),
             three_d: system.dem.dimension() == Dimension::Three,
@@ -82,10 +88,11 @@ impl SphereInFluid {
         if self.kind == Kind::None {
             return;
         }
-        let Some(k) = system.dem.index_of(0) else {
-            return;
-        };
-        let speed = system.dem.particles.velocity[k].dot(&self.down);
+        let local = system
+            .dem
+            .index_of(0)
+            .map_or(0.0, |k| system.dem.particles.velocity[k].dot(&self.down));
+        let speed = system.dem.communicator.sum(local);
         if self.initial_acceleration.is_none() {
             self.initial_acceleration = Some(speed / dt);
         }

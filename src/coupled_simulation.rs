@@ -12,6 +12,7 @@ use crate::output::Outputs;
 use crate::simulation::{peak_memory_bytes, shortest_contact_time, Progress, Summary};
 use crate::stability::TimeStepVerdict;
 use crate::{fluid_scene, scene, stability, RunError};
+use grainflow_core::Communicator;
 use grainflow_ibm::{
     CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
 };
@@ -23,12 +24,22 @@ use std::time::Instant;
 /// The coupled scene of a validated case with grains and a fluid, and its
 /// DEM sub-step's ratio to the shortest contact time.
 pub fn build(case: &Case) -> Result<(CoupledSystem, f64), String> {
-    let mut flow = fluid_scene::build(case)?;
+    build_on(case, Communicator::serial())
+}
+
+/// [`build`] shared among the ranks of `communicator`: the grains in the
+/// flow's process grid, each rank holding the grains of its cells and the
+/// ghosts of those whose immersed boundary reaches them.
+pub fn build_on(case: &Case, communicator: Communicator) -> Result<(CoupledSystem, f64), String> {
+    let mut flow = fluid_scene::build_on(case, communicator.clone())?;
     // Gravity acts on the grains, buoyancy through their loads; on the
     // fluid alone it is balanced by the hydrostatic pressure, which the
     // kinematic pressure leaves out.
     flow.body_force = [0.0; 3];
-    let dem = scene::build(case)?;
+    let ranks = flow.partition().ranks;
+    let grid = &flow.grid;
+    let reach = |max_radius| grainflow_ibm::forcing::ghost_reach(grid, max_radius);
+    let dem = scene::build_with(case, communicator, Some(ranks), reach)?;
     let contact_time = shortest_contact_time(&dem);
     let ratio = case.time.dt_over_contact_time.unwrap_or(0.02);
     let coupling = match case.coupling.as_ref().map(|c| c.formulation.as_str()) {
@@ -138,9 +149,19 @@ pub fn check_density_ratio(system: &CoupledSystem) -> Result<Option<String>, Run
 
 /// Runs a validated case of grains in a fluid into `out`. Nothing is
 /// written if the scene cannot be built or a time step is refused.
-pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
+///
+/// On several ranks (`communicator`) the flow and the grains are shared in
+/// one process grid; the root writes the shared files.
+pub fn run(
+    case: &Case,
+    out: &Path,
+    show_progress: bool,
+    communicator: Communicator,
+) -> Result<Summary, RunError> {
     let started = Instant::now();
-    let (mut system, contact_time) = build(case).map_err(RunError::Case)?;
+    let root = communicator.is_root();
+    let (mut system, contact_time) =
+        build_on(case, communicator.clone()).map_err(RunError::Case)?;
     let warning = check_dem_substep(&system, contact_time)?;
     let density_warning = check_density_ratio(&system)?;
     let dt = case
@@ -149,16 +170,18 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         .expect("validated: a coupled scene has time.dt");
     let end = case.time.end;
 
-    let mut outputs = CoupledOutputs::create(out, case).map_err(RunError::Io)?;
+    let mut outputs =
+        CoupledOutputs::create(out, case, communicator.clone()).map_err(RunError::Io)?;
     let grid = &system.flow.grid;
-    let cells: usize = grid.cells.iter().product();
+    let global_cells = system.flow.partition().global_cells;
+    let cells: usize = global_cells.iter().product();
+    let particles = communicator.sum_count(system.dem.particles.n_owned);
     outputs.particles.run.log(&format!(
-        "grainflow {}: {} grains in a fluid, {}D staggered grid {:?} ({cells} cells), \
+        "grainflow {}: {particles} grains in a fluid, {}D staggered grid {:?} ({cells} cells), \
          immersed boundaries ({:?}), soft-sphere DEM sub-cycled in each stage{}",
         env!("CARGO_PKG_VERSION"),
-        system.dem.particles.n_owned,
         grid.dim(),
-        &grid.cells[..grid.dim()],
+        &global_cells[..grid.dim()],
         system.coupling,
         if system.dem.lubrication.is_some() {
             ", lubrication"
@@ -171,9 +194,21 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         system.dem_dt,
         system.dem_dt / contact_time
     ));
+    if communicator.size() > 1 {
+        let r = system.flow.partition().ranks;
+        outputs.particles.run.log(&format!(
+            "{} MPI ranks in a process grid of {} x {} x {} (cells and grains)",
+            communicator.size(),
+            r[0],
+            r[1],
+            r[2]
+        ));
+    }
     for w in warning.iter().chain(&density_warning) {
         outputs.particles.run.log(w);
-        eprintln!("{w}");
+        if root {
+            eprintln!("{w}");
+        }
     }
 
     let mut analysis = SphereInFluid::new(case, &system);
@@ -192,7 +227,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         .write_tracked(&system.dem, tracked)
         .map_err(RunError::Io)?;
     let progress = Progress::new(
-        show_progress && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        root && show_progress && std::io::IsTerminal::is_terminal(&std::io::stderr()),
         end,
     );
     let mut failure = None;
@@ -274,15 +309,18 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
     if moving_steps > 0 {
         if let Some(w) = forcing_step_warning(grain_cfl) {
             outputs.particles.run.log(&w);
-            eprintln!("{w}");
+            if root {
+                eprintln!("{w}");
+            }
         }
     }
     let summary = json!({
         "analysis": case.analysis,
         "status": if failure.is_some() { "unstable" } else { "ok" },
         "stop_reason": failure.clone().unwrap_or_else(|| "end time reached".to_string()),
-        "particles": system.dem.particles.n_owned,
+        "particles": particles,
         "cells": cells,
+        "ranks": communicator.size(),
         "dimension": system.flow.grid.dim(),
         "steps": steps,
         "dem_substeps": dem_substeps,
@@ -298,7 +336,7 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
         "seconds_loads": t.loads,
         "seconds_dem": t.dem,
         "threads": rayon::current_num_threads(),
-        "peak_memory_bytes": peak_memory_bytes(),
+        "peak_memory_bytes": communicator.max(peak_memory_bytes().unwrap_or(0) as f64) as u64,
         "metrics": metrics,
     });
     let run = &mut outputs.particles.run;
@@ -322,13 +360,23 @@ pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunE
 /// solid fraction).
 struct CoupledOutputs {
     particles: Outputs,
-    flow_series: CsvSeries,
+    /// `flow_series.csv` (the root's).
+    flow_series: Option<CsvSeries>,
     fields: Option<FieldFiles>,
 }
 
 impl CoupledOutputs {
-    fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
-        let particles = Outputs::create(dir, case)?;
+    fn create(dir: &Path, case: &Case, communicator: Communicator) -> std::io::Result<Self> {
+        let root = communicator.is_root();
+        let particles = Outputs::create_on(dir, case, communicator)?;
+        let fields = FieldFiles::create(dir, case, root)?;
+        if !root {
+            return Ok(CoupledOutputs {
+                particles,
+                flow_series: None,
+                fields,
+            });
+        }
         let flow_series = CsvSeries::create(
             &dir.join("flow_series.csv"),
             &[
@@ -343,8 +391,8 @@ impl CoupledOutputs {
         )?;
         Ok(CoupledOutputs {
             particles,
-            flow_series,
-            fields: FieldFiles::create(dir, case, true)?,
+            flow_series: Some(flow_series),
+            fields,
         })
     }
 
@@ -359,15 +407,18 @@ impl CoupledOutputs {
     ) -> std::io::Result<()> {
         self.particles.write_frame(&system.dem, dt)?;
         let density = system.fluid_density;
-        self.flow_series.row(&[
-            system.flow.time,
-            dt,
-            steps as f64,
-            density * system.flow.kinetic_energy(),
-            system.flow.max_cfl(dt),
-            max_divergence,
-            self.particles.run.started.elapsed().as_secs_f64(),
-        ])?;
+        let (energy, cfl) = (system.flow.kinetic_energy(), system.flow.max_cfl(dt));
+        if let Some(series) = &mut self.flow_series {
+            series.row(&[
+                system.flow.time,
+                dt,
+                steps as f64,
+                density * energy,
+                cfl,
+                max_divergence,
+                self.particles.run.started.elapsed().as_secs_f64(),
+            ])?;
+        }
         if let Some(fields) = &mut self.fields {
             let solid = system
                 .immersed

@@ -372,6 +372,18 @@ pub fn build(case: &Case) -> Result<DemSystem, String> {
 /// The scene's DEM system shared among the ranks of `communicator`: each
 /// rank holds the particles of its box of the process grid.
 pub fn build_on(case: &Case, communicator: Communicator) -> Result<DemSystem, String> {
+    build_with(case, communicator, None, |_| 0.0)
+}
+
+/// [`build_on`] in the process grid `ranks` if given (that of the flow, for
+/// grains in a fluid), with ghosts within `ghost_reach(r_max)` of each
+/// subdomain at least (the reach of the grains' immersed boundaries).
+pub fn build_with(
+    case: &Case,
+    communicator: Communicator,
+    ranks: Option<[usize; 3]>,
+    ghost_reach: impl Fn(f64) -> f64,
+) -> Result<DemSystem, String> {
     let domain = domain(case);
     let placed = particles(case)?;
     check_inside(&domain, &placed)?;
@@ -384,9 +396,22 @@ pub fn build_on(case: &Case, communicator: Communicator) -> Result<DemSystem, St
         system.listing_gap = hard.threshold;
     }
     let max_radius = placed.iter().map(|p| p.radius).fold(0.0, f64::max);
-    let range = system.range_for(max_radius);
-    let centres: Vec<Vec3> = placed.iter().map(|p| p.position).collect();
-    let ranks = process_grid_of(case, &system.domain, communicator.size(), range, &centres)?;
+    system.ghost_reach = ghost_reach(max_radius);
+    let range = system.range_for(max_radius).max(system.ghost_reach);
+    let ranks = match ranks {
+        Some(ranks) if fits(&system.domain, ranks, range) => ranks,
+        Some(ranks) => {
+            return Err(format!(
+                "the process grid {ranks:?} of the flow makes boxes narrower than the grains' \
+                 reach {range:.3e} m (interaction range and immersed boundary); allowed: fewer \
+                 ranks along the short axes (parallel.process_grid)"
+            ))
+        }
+        None => {
+            let centres: Vec<Vec3> = placed.iter().map(|p| p.position).collect();
+            process_grid_of(case, &system.domain, communicator.size(), range, &centres)?
+        }
+    };
     system.decompose(communicator, ranks);
     system.add_particles(&placed);
     Ok(system)

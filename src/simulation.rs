@@ -25,15 +25,17 @@ pub struct Summary {
 /// moving pair (the lightest particle of all if none moves).
 pub fn shortest_contact_time(system: &DemSystem) -> f64 {
     let p = &system.particles;
-    let lightest = (0..p.n_owned)
+    // Over every rank, so that all take the same step.
+    let c = &system.communicator;
+    let global_min = |local: f64| -c.max(-local);
+    let mobile = (0..p.n_owned)
         .filter(|&k| !p.is_fixed(k))
         .map(|k| p.mass[k])
         .fold(f64::MAX, f64::min);
-    let lightest = if lightest == f64::MAX {
-        p.mass.iter().cloned().fold(f64::MAX, f64::min)
-    } else {
-        lightest
-    };
+    let mut lightest = global_min(mobile);
+    if lightest == f64::MAX {
+        lightest = global_min(p.mass[..p.n_owned].iter().cloned().fold(f64::MAX, f64::min));
+    }
     stability::shortest_contact_time(&system.law, lightest)
 }
 
@@ -106,12 +108,9 @@ fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
         Err(RunError::Case(format!(
             "{what} runs on one rank in this version; started on {ranks} ranks: run it \
              without mpirun (its threads use every core of a node); allowed on several \
-             ranks: dry scenes with contact.model = \"soft\", and scenes of a fluid alone"
+             ranks: scenes with contact.model = \"soft\" and scenes of a fluid alone"
         )))
     };
-    if case.fluid.is_some() && case.has_grains() {
-        return refuse("a scene of grains in a [fluid]");
-    }
     if case.has_grains() && scene::hard_contact(case).is_some() {
         return refuse("hard contact (contact.model = \"cocd\" or \"nscd\")");
     }
@@ -129,7 +128,7 @@ fn run_here(
         return fluid_simulation::run(case, out, show_progress, communicator);
     }
     if case.fluid.is_some() {
-        return coupled_simulation::run(case, out, show_progress);
+        return coupled_simulation::run(case, out, show_progress, communicator);
     }
     let started = Instant::now();
     let root = communicator.is_root();

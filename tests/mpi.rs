@@ -419,11 +419,6 @@ fn scenes_not_shared_among_ranks_are_refused_before_writing() {
     let cases = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases");
     for (case, overrides, expected) in [
         (
-            cases.join("taylor_green_2d.toml"),
-            vec![],
-            "a scene with a [fluid]",
-        ),
-        (
             cases.join("column_collapse_cocd_2d.toml"),
             vec![],
             "hard contact",
@@ -634,5 +629,56 @@ interval = 0.2
                 );
             }
         }
+    }
+}
+
+/// The falling sphere of the validation (D/Δx = 4 here, the sphere on the
+/// line where the boxes of 2 × 2 ranks meet, so that its forcing region
+/// straddles all four), 100 steps on 2 and 4 ranks: the sphere's state and
+/// the fluid's velocity deviate from the serial run's by at most 1e-10.
+#[test]
+fn the_falling_sphere_on_2_and_4_ranks_matches_the_serial_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases/falling_sphere.toml");
+    let end = 100.0 * 1.5964e-3;
+    let settings = [
+        "fluid.cells=[32,32,96]".to_string(),
+        format!("time.end={end}"),
+        format!("output.interval={end}"),
+        format!("output.tracked_interval={end}"),
+        "output.fields=true".to_string(),
+    ];
+    let with = |extra: Option<&str>| {
+        let mut all: Vec<String> = settings.to_vec();
+        all.extend(extra.map(|g| format!("parallel.process_grid={g}")));
+        all
+    };
+    let serial = dir.path().join("serial");
+    let overrides = with(None);
+    let list: Vec<&str> = overrides.iter().map(|s| s.as_str()).collect();
+    let (code, stderr) = run(&case, &serial, 1, &list, Duration::from_secs(300));
+    assert_eq!(code, 0, "{stderr}");
+    let (_, sphere) = final_states(&serial);
+    let fluid = read_velocity(&serial, 1);
+    let fall = sphere[&0][5].abs();
+    assert!(fall > 0.05, "the sphere falls: {fall}");
+    for (ranks, grid) in [(2, "[1,2,1]"), (4, "[2,2,1]")] {
+        let out = dir.path().join(format!("ranks_{ranks}"));
+        let overrides = with(Some(grid));
+        let list: Vec<&str> = overrides.iter().map(|s| s.as_str()).collect();
+        let (code, stderr) = run(&case, &out, ranks, &list, Duration::from_secs(300));
+        assert_eq!(code, 0, "{grid}: {stderr}");
+        let (_, other) = final_states(&out);
+        // Position and velocity relative to the fall, spin to its rate.
+        let state_deviation = (0..9)
+            .map(|c| (sphere[&0][c] - other[&0][c]).abs())
+            .fold(0.0, f64::max)
+            / fall.min(sphere[&0][2]);
+        let fluid_deviation = field_deviation(&fluid, &read_velocity(&out, 1));
+        println!(
+            "falling sphere on {grid}: sphere {state_deviation:.3e}, fluid {fluid_deviation:.3e}"
+        );
+        assert!(state_deviation <= 1e-10, "{grid}: {state_deviation:e}");
+        assert!(fluid_deviation <= 1e-10, "{grid}: {fluid_deviation:e}");
     }
 }

@@ -151,6 +151,42 @@ impl Ghosts {
     }
 }
 
+impl Ghosts {
+    /// Adds what was accumulated on each ghost to the particle it copies,
+    /// stage by stage in reverse (a ghost of a ghost passes its share on):
+    /// `values` holds `width` numbers per local particle (owned, then
+    /// ghosts); on return the owned entries hold their totals (collective).
+    /// This is how a rank's partial sums for another rank's particle (the
+    /// hydrodynamic load of a grain whose forcing region straddles ranks)
+    /// reach its owner.
+    pub fn reverse_sum(&self, values: &mut [f64], width: usize, communicator: &Communicator) {
+        for (tag, stage) in self.stages.iter().enumerate().rev() {
+            let received = &values[stage.first * width..(stage.first + stage.count) * width];
+            // Back to the rank the ghosts came from; from the rank this one
+            // sent its particles to.
+            let returned = communicator.shift(
+                REVERSE_TAG + tag as u16,
+                received,
+                stage.source,
+                stage.destination,
+            );
+            assert_eq!(
+                returned.len(),
+                stage.sent.len() * width,
+                "a neighbour returned sums for a different set of ghosts"
+            );
+            for (&k, sums) in stage.sent.iter().zip(returned.chunks_exact(width)) {
+                for (value, sum) in values[k * width..(k + 1) * width].iter_mut().zip(sums) {
+                    *value += sum;
+                }
+            }
+        }
+    }
+}
+
+/// First message tag of the reverse sums.
+const REVERSE_TAG: u16 = 500;
+
 fn opposite(side: Side) -> Side {
     match side {
         Side::Lower => Side::Upper,

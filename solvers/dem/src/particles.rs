@@ -5,7 +5,7 @@ use grainflow_core::{Dimension, Vec3};
 use std::f64::consts::PI;
 
 /// Numbers per particle in a [`Particles::pack_state`] message.
-pub const PACKED_STATE: usize = 26;
+pub const PACKED_STATE: usize = 29;
 /// Numbers per particle in a [`Particles::pack_motion`] message.
 pub const PACKED_MOTION: usize = 15;
 
@@ -32,6 +32,10 @@ pub struct Particles {
     /// in a dry scene).
     pub external_force: Vec<Vec3>,
     pub external_torque: Vec<Vec3>,
+    /// Velocity at the start of the DEM's interval in the last stage of a
+    /// coupled step: the change since is the impulse the fluid answers one
+    /// stage late (`grainflow_ibm::coupled`). Travels with the particle.
+    pub dem_start_velocity: Vec<Vec3>,
 }
 
 /// Mass and moment of inertia of a sphere (3D) or of a disc per unit
@@ -103,6 +107,8 @@ impl Particles {
         self.torque.push(Vec3::zeros());
         self.external_force.push(Vec3::zeros());
         self.external_torque.push(Vec3::zeros());
+        let start = self.velocity[self.velocity.len() - 1];
+        self.dem_start_velocity.push(start);
         self.n_owned += 1;
     }
 
@@ -121,6 +127,7 @@ impl Particles {
         self.torque.truncate(n);
         self.external_force.truncate(n);
         self.external_torque.truncate(n);
+        self.dem_start_velocity.truncate(n);
     }
 
     /// Appends a ghost copy of particle `source` displaced by `shift`.
@@ -137,6 +144,8 @@ impl Particles {
         self.torque.push(self.torque[source]);
         self.external_force.push(self.external_force[source]);
         self.external_torque.push(self.external_torque[source]);
+        self.dem_start_velocity
+            .push(self.dem_start_velocity[source]);
     }
 
     /// Reorders the owned particles by `order` (new index k holds old
@@ -159,6 +168,7 @@ impl Particles {
         apply(&mut self.torque, order);
         apply(&mut self.external_force, order);
         apply(&mut self.external_torque, order);
+        apply(&mut self.dem_start_velocity, order);
     }
 
     /// Keeps the owned particles `kept` (in that order), dropping the others;
@@ -186,6 +196,7 @@ impl Particles {
             &self.torque[k],
             &self.external_force[k],
             &self.external_torque[k],
+            &self.dem_start_velocity[k],
         ] {
             message.extend(v.iter());
         }
@@ -211,6 +222,7 @@ impl Particles {
         self.torque.push(vector(17));
         self.external_force.push(vector(20));
         self.external_torque.push(vector(23));
+        self.dem_start_velocity.push(vector(26));
         if owned {
             self.n_owned += 1;
         }

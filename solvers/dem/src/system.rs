@@ -72,6 +72,12 @@ pub struct DemSystem {
     /// Gap below which pairs are listed for hard contact (its candidate
     /// threshold D, Martin et al. 2022 section 3.3); 0 with soft contact.
     pub listing_gap: f64,
+    /// Least distance from a subdomain's faces within which particles have
+    /// ghosts, beyond the interaction range: the reach of a grain's
+    /// immersed boundary in a fluid, so that every grain that forces a
+    /// rank's cells is there (0 in a dry scene). Set it before adding
+    /// particles.
+    pub ghost_reach: f64,
     /// The step the film forces of the current totals were made implicit
     /// for (0 before the first step: explicit).
     film_dt: f64,
@@ -114,6 +120,7 @@ impl DemSystem {
             lubrication: None,
             contact_gap: 0.0,
             listing_gap: 0.0,
+            ghost_reach: 0.0,
             film_dt: 0.0,
             walls,
             wall_history: Vec::new(),
@@ -253,7 +260,7 @@ impl DemSystem {
                 .collect();
         }
 
-        let range = self.interaction_range();
+        let range = self.interaction_range().max(self.ghost_reach);
         self.ghosts.build(
             &mut self.particles,
             &self.domain,
@@ -457,6 +464,26 @@ impl DemSystem {
             self.ghosts.refresh(&mut self.particles, &self.communicator);
         }
         false
+    }
+
+    /// Copies the current state of every particle onto its ghosts (the DEM
+    /// step leaves the ghosts' velocities half a kick behind; a coupled
+    /// stage forces the flow with every grain's latest motion).
+    pub fn refresh_ghosts(&mut self) {
+        self.ghosts.refresh(&mut self.particles, &self.communicator);
+    }
+
+    /// Adds the `width` numbers per local particle (owned, then ghosts)
+    /// accumulated on ghosts to the particles they copy; the owned entries
+    /// then hold the totals ([`Ghosts::reverse_sum`]).
+    pub fn sum_onto_owners(&self, values: &mut [f64], width: usize) {
+        assert_eq!(values.len(), self.particles.len() * width);
+        self.ghosts.reverse_sum(values, width, &self.communicator);
+    }
+
+    /// Ids handed out so far over all ranks (every id is below it).
+    pub fn id_count(&self) -> u64 {
+        self.next_id
     }
 
     /// The owned particle a ghost (index ≥ n_owned) copies.

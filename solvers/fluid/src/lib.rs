@@ -10,7 +10,9 @@
 //! - [`boundary`]: conditions on the domain faces and the ghost values they set;
 //! - [`operators`]: divergence, gradient, Laplacian, convection;
 //! - [`transform`]: the 1D transforms that diagonalise the second difference;
-//! - [`poisson`]: direct solvers for `(a I + b L) x = r`, their transforms
+//! - [`partition`]: how the cells are shared among ranks;
+//! - [`poisson`]: direct solvers for `(a I + b L) x = r` (on several ranks
+//!   through pencils), their transforms
 //!   by rustfft/rustdct or, with the cargo feature `fftw`, by FFTW (module
 //!   `fftw`: one plan per axis over all its lines);
 //! - [`navier_stokes`]: the time step.
@@ -23,8 +25,14 @@
 //! and calls [`FlowSolver::step`], which returns a [`StepReport`] (kinetic
 //! energy, CFL number, divergence) or refuses a step beyond [`CFL_LIMIT`].
 //!
-//! Limits of this version, each refused or stated where it applies: one
-//! rank (the transforms need whole lines); uniform spacing except along the
+//! On several ranks ([`FlowSolver::distributed`]) each holds its share of
+//! the cells ([`partition`]: x, and y in 3D, split; the last axis whole),
+//! ghosts across shared faces come from the neighbours, and the direct
+//! solvers run through pencil transposes (one all-to-all per change of
+//! arrangement).
+//!
+//! Limits of this version, each refused or stated where it applies: the
+//! last axis is never split among ranks; uniform spacing except along the
 //! last axis, which may be stretched ([`Grid::stretched`]); fluid may
 //! cross the faces of an axis as a through-flow (the same normal velocity
 //! on both) or leave through an outflow on the upper face of the last axis;

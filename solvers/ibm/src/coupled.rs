@@ -109,19 +109,15 @@ pub struct CoupledSystem {
     /// the grain, 1/2 for a sphere and 1 for a disc, with the
     /// inner-fluid-momentum load; 0 with the rigid inner fluid).
     pub virtual_mass: f64,
-    /// Velocity change of each particle over the last stage, by id.
-    last_velocity_change: Vec<Vec3>,
-    /// Hydrodynamic force and torque on each owned particle averaged over
-    /// the last step (N, N m; per unit depth in 2D), indexed like the DEM's
-    /// particles after the step.
-    pub hydrodynamic_force: Vec<Vec3>,
-    pub hydrodynamic_torque: Vec<Vec3>,
     pub timings: Timings,
 }
 
 impl CoupledSystem {
     /// Couples `flow` and `dem` (same domain; the DEM's gravity acts on
-    /// the grains, the flow's body force on the fluid).
+    /// the grains, the flow's body force on the fluid). On several ranks
+    /// the DEM must share the domain like the flow (the same process
+    /// grid); its ghosts are rebuilt to reach [`crate::forcing::ghost_reach`].
+    /// Collective.
     pub fn new(
         flow: FlowSolver,
         dem: DemSystem,
@@ -129,7 +125,7 @@ impl CoupledSystem {
         coupling: Coupling,
         dem_dt: f64,
     ) -> Self {
-        let immersed = ImmersedBoundaries::new(&flow.grid, &dem.domain);
+        let immersed = ImmersedBoundaries::new(&flow.grid);
         let mut dem = dem;
         let n = dem.particles.n_owned;
         let dimension = dem.dimension();
@@ -145,7 +141,13 @@ impl CoupledSystem {
                 p.inverse_mass[k] = 1.0 / (p.mass[k] + carried);
             }
         }
-        let slots = p.id.iter().max().map_or(0, |&id| id as usize + 1);
+        // Every grain that forces this rank's cells must be here, and the
+        // ghosts carry the inertia with the virtual mass.
+        let max_radius = dem.communicator.max(dem.particles.max_radius());
+        dem.ghost_reach = dem
+            .ghost_reach
+            .max(crate::forcing::ghost_reach(&flow.grid, max_radius));
+        dem.rebuild();
         CoupledSystem {
             flow,
             dem,
@@ -154,9 +156,6 @@ impl CoupledSystem {
             coupling,
             dem_dt,
             virtual_mass,
-            last_velocity_change: vec![Vec3::zeros(); slots],
-            hydrodynamic_force: vec![Vec3::zeros(); n],
-            hydrodynamic_torque: vec![Vec3::zeros(); n],
             timings: Timings::default(),
         }
     }
@@ -165,17 +164,6 @@ impl CoupledSystem {
     /// changed) when the flow's stability limits forbid it.
     pub fn step(&mut self, dt: f64) -> Result<CoupledReport, FluidError> {
         self.flow.begin_step(dt)?;
-        // Averages over the stages, by particle id: the DEM may reorder
-        // its particles when it rebuilds its lists.
-        let slots = self
-            .dem
-            .particles
-            .id
-            .iter()
-            .max()
-            .map_or(0, |&id| id as usize + 1);
-        let mut average_force = vec![Vec3::zeros(); slots];
-        let mut average_torque = vec![Vec3::zeros(); slots];
         let mut max_divergence: f64 = 0.0;
         let mut substeps = 0;
         let mut dem_report = StepDiagnostics::default();
@@ -186,39 +174,38 @@ impl CoupledSystem {
         for stage in 0..STAGES {
             let stage_dt = stage_fraction(stage) * dt;
             let clock = Instant::now();
-            // The particles stand still until the DEM runs.
+            // The particles stand still until the DEM runs; their ghosts
+            // take their latest motion.
+            self.dem.refresh_ghosts();
             let bodies = self
                 .immersed
                 .bodies(&self.dem.particles, &self.flow.grid, &unknowns);
-            let before =
-                self.immersed
-                    .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies);
+            let before = self.owned(self.immersed.inner_momentum(
+                &self.flow.grid,
+                &self.flow.velocity,
+                &bodies,
+            ));
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);
             let forcing =
                 self.immersed
                     .apply(&self.flow.grid, &mut self.flow.velocity, &bodies, stage_dt);
+            let forcing = self.owned(forcing);
             let clock = self.lap(clock, Part::Forcing);
             max_divergence = max_divergence.max(self.flow.project(stage, dt));
             let clock = self.lap(clock, Part::Flow);
-            let after = self
-                .immersed
-                .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies);
+            let after = self.owned(self.immersed.inner_momentum(
+                &self.flow.grid,
+                &self.flow.velocity,
+                &bodies,
+            ));
             let loads = self.hydrodynamic_loads(&forcing, &before, &after, stage_dt);
-            for (k, &id) in self.dem.particles.id[..loads.force.len()]
-                .iter()
-                .enumerate()
-            {
-                average_force[id as usize] += stage_fraction(stage) * loads.force[k];
-                average_torque[id as usize] += stage_fraction(stage) * loads.torque[k];
-            }
             self.dem.set_external_loads(&loads.force, &loads.torque);
-            // Velocities before the DEM, by id (it may reorder particles).
-            let p = &self.dem.particles;
-            for k in 0..p.n_owned {
-                self.last_velocity_change[p.id[k] as usize] = p.velocity[k];
-            }
+            // Velocities before the DEM (they travel with the particles).
+            let p = &mut self.dem.particles;
+            let n = p.n_owned;
+            p.dem_start_velocity[..n].copy_from_slice(&p.velocity[..n]);
             let clock = self.lap(clock, Part::Loads);
             let count = (stage_dt / self.dem_dt).ceil().max(1.0) as usize;
             for _ in 0..count {
@@ -226,22 +213,33 @@ impl CoupledSystem {
                 largest_overlap = largest_overlap.max(dem_report.max_overlap_ratio);
             }
             substeps += count;
-            let p = &self.dem.particles;
-            for k in 0..p.n_owned {
-                let change = &mut self.last_velocity_change[p.id[k] as usize];
-                *change = p.velocity[k] - *change;
-            }
             self.lap(clock, Part::Dem);
         }
-        let ids = &self.dem.particles.id[..self.dem.particles.n_owned];
-        self.hydrodynamic_force = ids.iter().map(|&id| average_force[id as usize]).collect();
-        self.hydrodynamic_torque = ids.iter().map(|&id| average_torque[id as usize]).collect();
         dem_report.max_overlap_ratio = largest_overlap;
         Ok(CoupledReport {
             flow: self.flow.end_step(dt, max_divergence),
             dem: dem_report,
             dem_substeps: substeps,
         })
+    }
+
+    /// The loads on the owned particles from loads on every local one:
+    /// each ghost's share goes to its owner (on this rank for a periodic
+    /// image, on another for another rank's grain).
+    fn owned(&self, local: Loads) -> Loads {
+        let mut values: Vec<f64> = local
+            .force
+            .iter()
+            .zip(&local.torque)
+            .flat_map(|(f, t)| [f.x, f.y, f.z, t.x, t.y, t.z])
+            .collect();
+        self.dem.sum_onto_owners(&mut values, 6);
+        let n = self.dem.particles.n_owned;
+        let (force, torque) = values[..6 * n]
+            .chunks_exact(6)
+            .map(|v| (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])))
+            .unzip();
+        Loads { force, torque }
     }
 
     /// Adds the time since `clock` to `part`; returns the time now.
@@ -286,7 +284,7 @@ impl CoupledSystem {
             match self.coupling {
                 Coupling::InnerFluidMomentum => {
                     let carried = self.virtual_mass * rho * volume;
-                    let lagged = self.last_velocity_change[p.id[k] as usize];
+                    let lagged = p.velocity[k] - p.dem_start_velocity[k];
                     loads.force[k] = rho
                         * (forcing.force[k] + (after.force[k] - before.force[k]) / stage_dt)
                         - rho * volume * gravity
@@ -306,14 +304,16 @@ impl CoupledSystem {
         loads
     }
 
-    /// The smallest `ρ_p/ρ` among the moving particles (infinite if none).
+    /// The smallest `ρ_p/ρ` among the moving particles of every rank
+    /// (infinite if none).
     pub fn smallest_density_ratio(&self) -> f64 {
         let p = &self.dem.particles;
         let dimension = self.dem.dimension();
-        (0..p.n_owned)
+        let local = (0..p.n_owned)
             .filter(|&k| p.inverse_mass[k] > 0.0)
             .map(|k| p.mass[k] / particle_volume(dimension, p.radius[k]) / self.fluid_density)
-            .fold(f64::INFINITY, f64::min)
+            .fold(f64::INFINITY, f64::min);
+        -self.dem.communicator.max(-local)
     }
 }
 

@@ -26,21 +26,35 @@
 //! momentum inside each particle, `∫ α_p u dV` and `∫ r × α_p u dV`, is
 //! measured on the same faces for the coupling that accounts for it.
 //!
-//! A particle acts through every periodic image whose support reaches the
-//! subdomain, so its forcing region may straddle a periodic edge (and,
-//! with several ranks, a subdomain edge: the owner then adds the partial
-//! loads of the other ranks).
+//! Every particle whose support reaches this rank's cells acts on them:
+//! its owned particles and the ghosts the DEM keeps within
+//! [`ghost_reach`] of the subdomain, periodic images included. So a
+//! forcing region may straddle a periodic edge or a subdomain edge: the
+//! loads are computed per local particle (owned, then ghosts) and the
+//! ghosts' shares are added to their owners by the DEM
+//! (`DemSystem::sum_onto_owners`).
 
 use std::ops::Range;
 
-use grainflow_core::{Dimension, Domain, Vec3};
+use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::Particles;
 use grainflow_fluid::{Block, Grid, Location};
 use rayon::prelude::*;
 
 use crate::solid_fraction::{solid_fraction, support, transition_width};
 
-/// Force and torque per particle (owned index), per unit fluid density.
+/// How far from a subdomain's faces the DEM must keep ghosts for the
+/// immersed boundaries of grains of radius up to `max_radius` on `grid`:
+/// the support of eq. 8 plus a cell (a rank's cells and its particle box
+/// may differ by less than one).
+pub fn ghost_reach(grid: &Grid, max_radius: f64) -> f64 {
+    let dim = grid.dim();
+    let widest = grid.spacing[..dim].iter().copied().fold(0.0, f64::max);
+    support(max_radius, transition_width(&grid.spacing[..dim])) + widest
+}
+
+/// Force and torque per local particle (owned, then ghosts), per unit
+/// fluid density.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Loads {
     pub force: Vec<Vec3>,
@@ -56,10 +70,10 @@ impl Loads {
     }
 }
 
-/// One particle, or one of its periodic images, as the grid sees it.
+/// One particle (owned or a ghost) as the grid sees it.
 #[derive(Clone, Debug)]
 struct Body {
-    /// Owned index of the particle.
+    /// Local index of the particle.
     particle: usize,
     centre: Vec3,
     velocity: Vec3,
@@ -88,12 +102,12 @@ impl Body {
     }
 }
 
-/// The particles of a subdomain as the grid sees them: every owned
-/// particle and the periodic images of those whose support crosses a
-/// periodic edge. Built once per stage ([`ImmersedBoundaries::bodies`]), while
-/// the particles stand still.
+/// The particles of a subdomain as the grid sees them: every local
+/// particle (owned or ghost) whose support reaches its cells. Built once
+/// per stage ([`ImmersedBoundaries::bodies`]), while the particles stand
+/// still.
 pub struct Bodies {
-    /// Owned particles (the loads have one entry each).
+    /// Local particles (the loads have one entry each).
     count: usize,
     list: Vec<Body>,
 }
@@ -103,9 +117,6 @@ pub struct ImmersedBoundaries {
     /// `Δ` of eq. 8.
     pub width: f64,
     dimension: Dimension,
-    /// Lower corner and lengths of the periodic axes of the whole domain.
-    domain_lower: Vec3,
-    periods: [Option<f64>; 3],
     /// `Σ_p α_p` on the faces of each component (zero outside the stencils
     /// between stages).
     total_fraction: Vec<Vec<f64>>,
@@ -114,30 +125,26 @@ pub struct ImmersedBoundaries {
 }
 
 impl ImmersedBoundaries {
-    /// Immersed boundaries on the flow grid `grid` of the scene's `domain`
-    /// (its periodic axes give the images of particles near its edges).
-    /// The grid must be uniform: the transition width of eq. 10 is a cell
-    /// size and the loads integrate with one cell volume (the case refuses
-    /// a stretched grid with grains before this).
-    pub fn new(grid: &Grid, domain: &Domain) -> Self {
+    /// Immersed boundaries on the flow grid `grid` (a rank's share). The
+    /// grid must be uniform: the transition width of eq. 10 is a cell size
+    /// and the loads integrate with one cell volume (the case refuses a
+    /// stretched grid with grains before this).
+    pub fn new(grid: &Grid) -> Self {
         let dim = grid.dim();
         assert!(
             grid.is_uniform(grid.line_axis()),
             "immersed boundaries need a uniform grid"
         );
-        let length = domain.extent();
         ImmersedBoundaries {
             width: transition_width(&grid.spacing[..dim]),
             dimension: grid.dimension,
-            domain_lower: domain.lower,
-            periods: [0, 1, 2].map(|a| (a < dim && domain.periodic[a]).then_some(length[a])),
             total_fraction: (0..dim).map(|_| grid.zeros()).collect(),
             solid_velocity: (0..dim).map(|_| grid.zeros()).collect(),
         }
     }
 
-    /// `Σ_faces α_p dV` of each owned particle: the volume the grid sees
-    /// (area in 2D), averaged over the components.
+    /// `Σ_faces α_p dV` of each local particle on this rank's faces: the
+    /// volume the grid sees (area in 2D), averaged over the components.
     pub fn grid_volume(&self, grid: &Grid, bodies: &Bodies) -> Vec<f64> {
         let dim = grid.dim();
         let mut volume = vec![0.0; bodies.count];
@@ -152,7 +159,8 @@ impl ImmersedBoundaries {
     }
 
     /// The fluid's momentum and angular momentum (about each centre) inside
-    /// each owned particle, `∫ α_p u dV` and `∫ r × α_p u dV`, per unit density.
+    /// each local particle, `∫ α_p u dV` and `∫ r × α_p u dV` over this
+    /// rank's faces, per unit density.
     pub fn inner_momentum(&self, grid: &Grid, velocity: &[Vec<f64>], bodies: &Bodies) -> Loads {
         let volume = grid.cell_volume();
         let per_body: Vec<(Vec3, Vec3)> = bodies
@@ -168,8 +176,9 @@ impl ImmersedBoundaries {
     }
 
     /// Applies the direct forcing of a stage of length `stage_dt` to the
-    /// predicted velocity and returns the loads on each owned particle,
-    /// per unit fluid density (eq. 5–7 without the density factors).
+    /// predicted velocity and returns the loads on each local particle
+    /// from this rank's faces, per unit fluid density (eq. 5–7 without the
+    /// density factors).
     pub fn apply(
         &mut self,
         grid: &Grid,
@@ -270,7 +279,7 @@ impl ImmersedBoundaries {
     pub fn cell_solid_fraction(&self, grid: &Grid, particles: &Particles) -> Vec<f64> {
         let cells = grid.cell_block();
         let mut field = grid.zeros();
-        for body in &self.images(particles).list {
+        for body in &self.local_bodies(particles, grid).list {
             let reach = support(body.radius, self.width);
             let mut stencil = cells;
             for axis in 0..grid.dim() {
@@ -297,11 +306,11 @@ impl ImmersedBoundaries {
         out
     }
 
-    /// The owned particles and the periodic images of those whose support
-    /// crosses a periodic edge of the domain, with their solid fractions
-    /// on the faces of the velocity unknowns `unknowns` of `grid`.
+    /// The local particles whose support reaches the cells of `grid`, with
+    /// their solid fractions on the faces of the velocity unknowns
+    /// `unknowns`.
     pub fn bodies(&self, particles: &Particles, grid: &Grid, unknowns: &[Block]) -> Bodies {
-        let mut bodies = self.images(particles);
+        let mut bodies = self.local_bodies(particles, grid);
         let width = self.width;
         bodies.list.par_iter_mut().for_each(|body| {
             body.fractions = (0..grid.dim())
@@ -320,46 +329,33 @@ impl ImmersedBoundaries {
         bodies
     }
 
-    /// The owned particles and their periodic images, without their solid
-    /// fractions on the faces (what the cell-centred output needs).
-    fn images(&self, particles: &Particles) -> Bodies {
-        let mut list = Vec::with_capacity(particles.n_owned);
-        for p in 0..particles.n_owned {
-            let centre = particles.position[p];
+    /// The local particles (owned, then ghosts: periodic images and other
+    /// ranks' grains) whose support reaches the cells of `grid`, without
+    /// their solid fractions on the faces (what the cell-centred output
+    /// needs).
+    fn local_bodies(&self, particles: &Particles, grid: &Grid) -> Bodies {
+        let dim = grid.dim();
+        let reaches = |p: usize| {
             let reach = support(particles.radius[p], self.width);
-            // Per axis, the periods to shift by: 0, and ±1 where the
-            // support crosses the lower or upper edge.
-            let mut periods = [[0.0; 3]; 3];
-            let mut counts = [1; 3];
-            for (axis, period) in self.periods.iter().enumerate() {
-                let Some(length) = *period else { continue };
-                let lower = self.domain_lower[axis];
-                if centre[axis] - reach < lower {
-                    periods[axis][counts[axis]] = length;
-                    counts[axis] += 1;
-                }
-                if centre[axis] + reach > lower + length {
-                    periods[axis][counts[axis]] = -length;
-                    counts[axis] += 1;
-                }
-            }
-            for &x in &periods[0][..counts[0]] {
-                for &y in &periods[1][..counts[1]] {
-                    for &z in &periods[2][..counts[2]] {
-                        list.push(Body {
-                            particle: p,
-                            centre: centre + Vec3::new(x, y, z),
-                            velocity: particles.velocity[p],
-                            angular_velocity: particles.angular_velocity[p],
-                            radius: particles.radius[p],
-                            fractions: Vec::new(),
-                        });
-                    }
-                }
-            }
-        }
+            let centre = particles.position[p];
+            (0..dim).all(|a| {
+                let h = grid.spacing[a];
+                centre[a] + reach > grid.lower[a] - h && centre[a] - reach < grid.upper[a] + h
+            })
+        };
+        let list = (0..particles.len())
+            .filter(|&p| reaches(p))
+            .map(|p| Body {
+                particle: p,
+                centre: particles.position[p],
+                velocity: particles.velocity[p],
+                angular_velocity: particles.angular_velocity[p],
+                radius: particles.radius[p],
+                fractions: Vec::new(),
+            })
+            .collect();
         Bodies {
-            count: particles.n_owned,
+            count: particles.len(),
             list,
         }
     }

@@ -1,28 +1,35 @@
 //! A particle whose forcing region straddles the edges of a triply
-//! periodic domain acts through its periodic images: seen by the grid, it
-//! is the same particle as one in the middle of the domain.
+//! periodic domain acts through its periodic images (the DEM's ghosts
+//! within the immersed boundaries' reach), whose shares of the loads go
+//! back to it: seen by the grid, it is the same particle as one in the
+//! middle of the domain.
 
 use grainflow_core::{Communicator, Dimension, Domain, Vec3};
 use grainflow_dem::particles::NewParticle;
-use grainflow_dem::Particles;
+use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::{Boundaries, FlowSolver, Grid};
+use grainflow_ibm::forcing::ghost_reach;
 use grainflow_ibm::ImmersedBoundaries;
 
-fn one_particle(centre: Vec3) -> Particles {
-    let mut particles = Particles::default();
-    particles.push(
-        Dimension::Three,
-        0,
-        &NewParticle {
-            position: centre,
-            velocity: Vec3::new(0.3, -0.2, 0.5),
-            angular_velocity: Vec3::new(1.0, 0.5, -2.0),
-            radius: 0.5,
-            density: 2.0,
-            fixed: false,
-        },
-    );
-    particles
+/// One sphere of radius 0.5 at `centre`, with its periodic images.
+fn one_particle(domain: &Domain, grid: &Grid, centre: Vec3) -> DemSystem {
+    let law = ContactLaw {
+        normal: NormalStiffness::from_restitution(0.9, 1e-2, NormalCalibration::Exact),
+        tangential_ratio: 0.2,
+        friction: 0.0,
+        rolling_friction: 0.0,
+    };
+    let mut dem = DemSystem::new(domain.clone(), law, Vec::new(), 0.05);
+    dem.ghost_reach = ghost_reach(grid, 0.5);
+    dem.add_particles(&[NewParticle {
+        position: centre,
+        velocity: Vec3::new(0.3, -0.2, 0.5),
+        angular_velocity: Vec3::new(1.0, 0.5, -2.0),
+        radius: 0.5,
+        density: 2.0,
+        fixed: false,
+    }]);
+    dem
 }
 
 /// The grid volume, the loads of one forcing stage on a fluid at rest,
@@ -50,12 +57,27 @@ fn a_sphere_across_periodic_edges_acts_like_one_inside() {
             Communicator::serial(),
         )
         .unwrap();
-        let mut immersed = ImmersedBoundaries::new(&grid, &domain);
-        let particles = one_particle(centre);
+        let mut immersed = ImmersedBoundaries::new(&grid);
+        let dem = one_particle(&domain, &grid, centre);
+        let images = dem.particles.len() - 1;
+        assert_eq!(images, if centre.x == 0.0 { 7 } else { 0 });
         let unknowns: Vec<_> = (0..3).map(|c| *flow.velocity_unknowns(c)).collect();
-        let bodies = immersed.bodies(&particles, &grid, &unknowns);
-        let volume = immersed.grid_volume(&grid, &bodies)[0];
-        let loads = immersed.apply(&grid, &mut flow.velocity, &bodies, 0.1);
+        let bodies = immersed.bodies(&dem.particles, &grid, &unknowns);
+        let mut volume = immersed.grid_volume(&grid, &bodies);
+        dem.sum_onto_owners(&mut volume, 1);
+        let volume = volume[0];
+        let local = immersed.apply(&grid, &mut flow.velocity, &bodies, 0.1);
+        let mut loads: Vec<f64> = local
+            .force
+            .iter()
+            .zip(&local.torque)
+            .flat_map(|(f, t)| [f.x, f.y, f.z, t.x, t.y, t.z])
+            .collect();
+        dem.sum_onto_owners(&mut loads, 6);
+        let (force, torque) = (
+            Vec3::new(loads[0], loads[1], loads[2]),
+            Vec3::new(loads[3], loads[4], loads[5]),
+        );
         let momentum: Vec<f64> = (0..3)
             .map(|c| {
                 let field = &flow.velocity[c];
@@ -64,7 +86,7 @@ fn a_sphere_across_periodic_edges_acts_like_one_inside() {
                 sum * grid.cell_volume()
             })
             .collect();
-        results.push((volume, loads.force[0], loads.torque[0], momentum));
+        results.push((volume, force, torque, momentum));
     }
     let (corner, middle) = (&results[0], &results[1]);
     println!("volume {:.12} / {:.12}", corner.0, middle.0);
