@@ -136,6 +136,41 @@ impl Communicator {
         outgoing
     }
 
+    /// [`Communicator::exchange`] when every rank already knows how many
+    /// numbers each other rank sends it (`incoming[r]` from rank r): one
+    /// all-to-all, without the exchange of counts.
+    pub fn exchange_known(&self, outgoing: Vec<Vec<f64>>, incoming: &[usize]) -> Vec<Vec<f64>> {
+        assert_eq!(outgoing.len(), self.size, "one message per rank");
+        assert_eq!(incoming.len(), self.size, "one count per rank");
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return world.exchange_known(&outgoing, incoming);
+        }
+        outgoing
+    }
+
+    /// The all-to-all of [`Communicator::exchange_known`] between flat
+    /// buffers the caller keeps: `send` holds the messages to ranks 0, 1, …
+    /// one after the other (`send_counts[r]` numbers for rank r), `receive`
+    /// gets those from ranks 0, 1, … (`receive_counts[r]` from rank r).
+    /// Nothing is allocated: for the large, repeated transposes of the
+    /// flow's direct solves.
+    pub fn all_to_all_flat(
+        &self,
+        send: &[f64],
+        send_counts: &[usize],
+        receive: &mut [f64],
+        receive_counts: &[usize],
+    ) {
+        assert_eq!(send_counts.iter().sum::<usize>(), send.len());
+        assert_eq!(receive_counts.iter().sum::<usize>(), receive.len());
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return world.all_to_all_flat(send, send_counts, receive, receive_counts);
+        }
+        receive.copy_from_slice(send);
+    }
+
     /// Collects every rank's `local` on the root, indexed by rank (None on
     /// the other ranks).
     pub fn gather(&self, local: &[f64]) -> Option<Vec<Vec<f64>>> {
@@ -259,6 +294,39 @@ pub mod mpi_backend {
                 self.0.all_to_all_varcount_into(&send, &mut receive);
             }
             split(&received, &receive_counts, &receive_displs)
+        }
+
+        pub fn exchange_known(&self, outgoing: &[Vec<f64>], incoming: &[usize]) -> Vec<Vec<f64>> {
+            let send_counts: Vec<Count> = outgoing.iter().map(|m| m.len() as Count).collect();
+            let receive_counts: Vec<Count> = incoming.iter().map(|&c| c as Count).collect();
+            let send_displs = displacements(&send_counts);
+            let receive_displs = displacements(&receive_counts);
+            let flat: Vec<f64> = outgoing.concat();
+            let total: usize = incoming.iter().sum();
+            let mut received = vec![0.0; total];
+            {
+                let send = Partition::new(&flat[..], &send_counts[..], &send_displs[..]);
+                let mut receive =
+                    PartitionMut::new(&mut received[..], &receive_counts[..], &receive_displs[..]);
+                self.0.all_to_all_varcount_into(&send, &mut receive);
+            }
+            split(&received, &receive_counts, &receive_displs)
+        }
+
+        pub fn all_to_all_flat(
+            &self,
+            send: &[f64],
+            send_counts: &[usize],
+            receive: &mut [f64],
+            receive_counts: &[usize],
+        ) {
+            let send_counts: Vec<Count> = send_counts.iter().map(|&c| c as Count).collect();
+            let receive_counts: Vec<Count> = receive_counts.iter().map(|&c| c as Count).collect();
+            let send_displs = displacements(&send_counts);
+            let receive_displs = displacements(&receive_counts);
+            let send = Partition::new(send, &send_counts[..], &send_displs[..]);
+            let mut receive = PartitionMut::new(receive, &receive_counts[..], &receive_displs[..]);
+            self.0.all_to_all_varcount_into(&send, &mut receive);
         }
 
         pub fn gather(&self, local: &[f64]) -> Option<Vec<Vec<f64>>> {

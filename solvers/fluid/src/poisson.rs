@@ -132,6 +132,9 @@ struct Pencils {
     y_pencils: Option<Layout>,
     x_data: Vec<f64>,
     y_data: Vec<f64>,
+    /// Send and receive buffers of the all-to-all, kept between solves
+    /// (allocating megabytes at every transpose costs more than moving them).
+    buffers: std::cell::RefCell<(Vec<f64>, Vec<f64>)>,
 }
 
 impl Pencils {
@@ -139,20 +142,56 @@ impl Pencils {
     /// (arranged as `to`): each rank sends every other the part of its box
     /// that lies in the other's new box.
     fn redistribute(&self, from: &Layout, source: &[f64], to: &Layout, target: &mut [f64]) {
+        if from.boxes == to.boxes {
+            // The same arrangement (no split along the axes that differ).
+            target.copy_from_slice(source);
+            return;
+        }
         let me = self.communicator.rank();
         let ranks = from.boxes.len();
-        let mut outgoing = vec![Vec::new(); ranks];
-        for (other, message) in outgoing.iter_mut().enumerate() {
-            if let Some(part) = intersection(&from.boxes[me], &to.boxes[other]) {
-                visit_part(&from.boxes[me], &part, |k| message.push(source[k]));
+        let parts_to: Vec<Option<[[usize; 2]; 3]>> = (0..ranks)
+            .map(|other| intersection(&from.boxes[me], &to.boxes[other]))
+            .collect();
+        let parts_from: Vec<Option<[[usize; 2]; 3]>> = (0..ranks)
+            .map(|other| intersection(&from.boxes[other], &to.boxes[me]))
+            .collect();
+        // This rank's own part is copied directly, not sent to itself.
+        if let Some(own) = &parts_to[me] {
+            let mut rows = Vec::new();
+            visit_rows(&from.boxes[me], own, |row| rows.push(row));
+            let mut rows = rows.into_iter();
+            visit_rows(&to.boxes[me], own, |row| {
+                let from_row = rows.next().expect("the same rows");
+                target[row].copy_from_slice(&source[from_row]);
+            });
+        }
+        let size = |(other, part): (usize, &Option<[[usize; 2]; 3]>)| match part {
+            Some(p) if other != me => p.iter().map(|[lower, upper]| upper - lower).product(),
+            _ => 0,
+        };
+        let send_counts: Vec<usize> = parts_to.iter().enumerate().map(size).collect();
+        // Every rank knows every box: the counts need no exchange.
+        let receive_counts: Vec<usize> = parts_from.iter().enumerate().map(size).collect();
+        let mut buffers = self.buffers.borrow_mut();
+        let (send, receive) = &mut *buffers;
+        send.clear();
+        for (other, part) in parts_to.iter().enumerate() {
+            if let (Some(part), true) = (part, other != me) {
+                visit_rows(&from.boxes[me], part, |row| {
+                    send.extend_from_slice(&source[row]);
+                });
             }
         }
-        let incoming = self.communicator.exchange(outgoing);
-        for (other, message) in incoming.iter().enumerate() {
-            if let Some(part) = intersection(&from.boxes[other], &to.boxes[me]) {
-                let mut values = message.iter();
-                visit_part(&to.boxes[me], &part, |k| {
-                    target[k] = *values.next().expect("the part announced")
+        receive.resize(receive_counts.iter().sum(), 0.0);
+        self.communicator
+            .all_to_all_flat(send, &send_counts, receive, &receive_counts);
+        let mut at = 0;
+        for (other, part) in parts_from.iter().enumerate() {
+            if let (Some(part), true) = (part, other != me) {
+                visit_rows(&to.boxes[me], part, |row| {
+                    let length = row.len();
+                    target[row].copy_from_slice(&receive[at..at + length]);
+                    at += length;
                 });
             }
         }
@@ -167,16 +206,19 @@ fn intersection(a: &[[usize; 2]; 3], b: &[[usize; 2]; 3]) -> Option<[[usize; 2];
         .then_some(part)
 }
 
-/// Calls `visit(k)` with the flat index in an array over `whole` of every
-/// point of `part`, x fastest.
-fn visit_part(whole: &[[usize; 2]; 3], part: &[[usize; 2]; 3], mut visit: impl FnMut(usize)) {
+/// Calls `visit(range)` with the flat indices, in an array over `whole`,
+/// of every row (along x, contiguous) of `part`, in order.
+fn visit_rows(
+    whole: &[[usize; 2]; 3],
+    part: &[[usize; 2]; 3],
+    mut visit: impl FnMut(std::ops::Range<usize>),
+) {
     let shape = whole.map(|[lower, upper]| upper - lower);
     for k in part[2][0]..part[2][1] {
         for j in part[1][0]..part[1][1] {
             let row = ((k - whole[2][0]) * shape[1] + (j - whole[1][0])) * shape[0];
-            for i in part[0][0]..part[0][1] {
-                visit(row + i - whole[0][0]);
-            }
+            let first = row + part[0][0] - whole[0][0];
+            visit(first..first + part[0][1] - part[0][0]);
         }
     }
 }
@@ -418,6 +460,7 @@ impl DirectSolver {
                 physical,
                 x_pencils,
                 communicator: communicator.clone(),
+                buffers: Default::default(),
             }
         });
         let transforms = match backend {

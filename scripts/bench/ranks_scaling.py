@@ -1,0 +1,182 @@
+#!/usr/bin/env python3
+"""Strong and weak scaling of the flow solver and of grains in a fluid over
+MPI ranks (cargo feature `mpi`), one thread per rank.
+
+- flow: a triply periodic box on an n^3 grid (1 rank) against a
+  (2n) x n x n grid twice as long along x (2 ranks, weak) and the long grid
+  on 1 and 2 ranks (strong); 20 steps, of which the last 15 are timed from
+  the wall-clock column of series.csv;
+- coupled: the many-grains scene scripts/bench/many_grains.toml (1,573
+  spheres at D/dx = 4 settling in a 64 x 64 x 96 box; 10 steps of the
+  coupled step) against the same box twice as long along x with twice the
+  grains (weak), and the long box on 1 and 2 ranks (strong).
+
+A fourth configuration runs two independent one-rank runs of the small
+case at once: the efficiency two cores sharing this machine's memory give
+without any communication, the ceiling of the weak scaling.
+
+Runs are interleaved; each configuration's median over the repeats is
+reported with the wall seconds per step, the peak memory per rank, the
+weak-scaling efficiency t(1 rank, N) / t(2 ranks, 2N) and the
+strong-scaling efficiency t(1 rank) / (2 t(2 ranks)).
+
+usage: scripts/bench/ranks_scaling.py [--cells 64] [--repeats 3]
+         [--binary target/release/grainflow] [--only flow|coupled] [--json FILE]
+"""
+import argparse, csv, json, os, statistics, subprocess, sys, tempfile
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "../.."))
+
+
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           RAYON_NUM_THREADS="1")
+
+
+def command_of(binary, case, out, overrides):
+    command = [binary, "run", case, "--out", out, "--threads", "1"]
+    for o in overrides:
+        command += ["--set", o]
+    return command
+
+
+def run(binary, case, out, ranks, overrides):
+    if ranks == 0:
+        # Two independent one-rank runs at once: what two cores sharing
+        # this machine's memory give without any communication.
+        runs = [subprocess.Popen(command_of(binary, case, f"{out}_{k}", overrides), env=ENV,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                for k in range(2)]
+        assert all(r.wait() == 0 for r in runs)
+        times = [timed(f"{out}_{k}") for k in range(2)]
+        return sum(t[0] for t in times) / 2, max(t[1] for t in times)
+    command = command_of(binary, case, out, overrides)
+    if ranks > 1:
+        command = ["mpirun", "--oversubscribe", "--bind-to", "none", "-n", str(ranks)] + command
+    subprocess.run(command, check=True, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return timed(out)
+
+
+def timed(out):
+    """Wall seconds per step of the timed window, and the peak memory."""
+    rows = list(csv.DictReader(open(os.path.join(out, "series.csv"))))
+    summary = json.load(open(os.path.join(out, "summary.json")))
+    first = rows[1] if len(rows) > 2 else rows[0]
+    last = rows[-1]
+    seconds = float(last["wall_seconds"]) - float(first["wall_seconds"])
+    steps = float(last["step"]) - float(first["step"])
+    return seconds / steps, summary["peak_memory_bytes"]
+
+
+FLOW = """
+[domain]
+dimension = 3
+lower = [0.0, 0.0, 0.0]
+upper = [{length}, 1.0, 1.0]
+periodic = [true, true, true]
+
+[fluid]
+cells = [{cells_x}, {n}, {n}]
+density = 1000.0
+viscosity = 10.0
+
+[fluid.initial]
+kind = "uniform"
+velocity = [1.0, 0.5, 0.25]
+
+[time]
+end = {end}
+dt = {dt}
+
+[output]
+interval = {interval}
+fields = false
+"""
+
+
+def flow_configurations(work, n):
+    # A periodic box: every step does the full work of a step (convection,
+    # three Helmholtz solves and a pressure solve per stage) whatever the
+    # flow; 20 steps at CFL 0.5.
+    dt = 0.5 / n
+    paths = {}
+    for name, scale in [("short", 1), ("long", 2)]:
+        paths[name] = os.path.join(work, f"flow_{name}.toml")
+        open(paths[name], "w").write(FLOW.format(length=float(scale), cells_x=scale * n, n=n,
+                                                 end=20 * dt, dt=dt, interval=5 * dt))
+    return [
+        ("1 rank, N", paths["short"], 1, [], n ** 3),
+        ("2 ranks, 2N", paths["long"], 2, ["parallel.process_grid=[2,1,1]"], 2 * n ** 3),
+        ("1 rank, 2N", paths["long"], 1, [], 2 * n ** 3),
+        ("2 x 1 rank, N", paths["short"], 0, [], n ** 3),
+    ]
+
+
+def coupled_configurations(work):
+    base = open(os.path.join(ROOT, "scripts/bench/many_grains.toml")).read()
+    long = (base.replace("upper = [0.08, 0.08, 0.12]", "upper = [0.16, 0.08, 0.12]")
+                .replace("cells = [64, 64, 96]", "cells = [128, 64, 96]")
+                .replace("upper = [0.074, 0.074, 0.11]", "upper = [0.154, 0.074, 0.11]")
+                .replace("point = [0.08, 0.0, 0.0]", "point = [0.16, 0.0, 0.0]"))
+    assert long.count("0.16") == 2 and "128" in long
+    paths = {}
+    for name, text in [("short", base), ("long", long)]:
+        paths[name] = os.path.join(work, f"grains_{name}.toml")
+        open(paths[name], "w").write(text)
+    return [
+        ("1 rank, N", paths["short"], 1, [], 1),
+        ("2 ranks, 2N", paths["long"], 2, ["parallel.process_grid=[2,1,1]"], 2),
+        ("1 rank, 2N", paths["long"], 1, [], 2),
+        ("2 x 1 rank, N", paths["short"], 0, [], 1),
+    ]
+
+
+def measure(name, configurations, binary, work, repeats):
+    samples = {c[0]: [] for c in configurations}
+    memory = {}
+    for repeat in range(repeats):
+        for label, case, ranks, overrides, _ in configurations:
+            out = os.path.join(work, f"{name}_{label.replace(' ', '_').replace(',', '')}_{repeat}")
+            seconds, peak = run(binary, case, out, ranks, overrides)
+            samples[label].append(seconds)
+            memory[label] = peak
+            print(f"{name} {label}: {seconds:.4f} s/step", file=sys.stderr)
+    median = {k: statistics.median(v) for k, v in samples.items()}
+    weak = median["1 rank, N"] / median["2 ranks, 2N"]
+    strong = median["1 rank, 2N"] / (2 * median["2 ranks, 2N"])
+    # The machine's own limit: two runs sharing its memory, no messages.
+    ceiling = median["1 rank, N"] / median["2 x 1 rank, N"]
+    print(f"== {name}")
+    for label, *_ in configurations:
+        runs = ", ".join(f"{s:.4f}" for s in samples[label])
+        print(f"  {label:14s} {median[label]:.4f} s/step ({runs}), {memory[label] / 1e6:.1f} MB/rank")
+    print(f"  weak-scaling efficiency (2 ranks): {weak:.3f}")
+    print(f"  strong-scaling efficiency (2 ranks): {strong:.3f}")
+    print(f"  two independent runs at once: efficiency {ceiling:.3f} (the machine's limit)")
+    return {"samples_seconds_per_step": samples, "median": median, "peak_memory_bytes": memory,
+            "weak_efficiency": weak, "strong_efficiency": strong,
+            "independent_runs_efficiency": ceiling}
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--cells", type=int, default=64)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--binary", default=os.path.join(ROOT, "target/release/grainflow"))
+    parser.add_argument("--only", choices=["flow", "coupled"])
+    parser.add_argument("--json")
+    args = parser.parse_args()
+    work = tempfile.mkdtemp(prefix="ranks_scaling_")
+    report = {}
+    if args.only in (None, "flow"):
+        report["flow"] = measure("flow", flow_configurations(work, args.cells), args.binary, work,
+                                 args.repeats)
+        report["flow"]["cells_per_rank"] = args.cells ** 3
+    if args.only in (None, "coupled"):
+        report["coupled"] = measure("coupled", coupled_configurations(work), args.binary, work,
+                                    args.repeats)
+    if args.json:
+        json.dump(report, open(args.json, "w"), indent=1)
+
+
+if __name__ == "__main__":
+    main()
