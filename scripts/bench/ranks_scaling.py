@@ -58,7 +58,12 @@ def run(binary, case, out, ranks, overrides):
 
 def timed(out):
     """Wall seconds per step of the timed window, and the peak memory."""
-    rows = list(csv.DictReader(open(os.path.join(out, "series.csv"))))
+    # Grains in a fluid count fluid steps in flow_series.csv (series.csv
+    # counts the DEM's sub-steps).
+    series = os.path.join(out, "flow_series.csv")
+    if not os.path.exists(series):
+        series = os.path.join(out, "series.csv")
+    rows = list(csv.DictReader(open(series)))
     summary = json.load(open(os.path.join(out, "summary.json")))
     first = rows[1] if len(rows) > 2 else rows[0]
     last = rows[-1]
