@@ -450,8 +450,13 @@ impl DirectSolver {
         let mut pencils = (partition.size() > 1).then(|| {
             let [physical, x_pencils, y_pencils] = layouts;
             Pencils {
-                x_data: vec![0.0; x_pencils.len(me)],
-                y_data: if line_axis == 2 {
+                // No array for pencils that are the ranks' own boxes.
+                x_data: if x_pencils.boxes != physical.boxes {
+                    vec![0.0; x_pencils.len(me)]
+                } else {
+                    Vec::new()
+                },
+                y_data: if line_axis == 2 && y_pencils.boxes != physical.boxes {
                     vec![0.0; y_pencils.len(me)]
                 } else {
                     Vec::new()
@@ -471,14 +476,21 @@ impl DirectSolver {
                     .iter()
                     .enumerate()
                     .map(|(axis, transform)| {
-                        // Each axis is planned on the array it transforms.
+                        // Each axis is planned on the array it transforms:
+                        // the ranks' own boxes where its lines are whole
+                        // there, else its pencils.
                         let (data, shape) = match (&mut pencils, axis) {
                             (None, _) => (&mut modes, shape),
-                            (Some(p), 0) => (&mut p.x_data, p.x_pencils.shape(me)),
-                            (Some(p), _) => {
+                            (Some(p), 0) if p.x_pencils.boxes != p.physical.boxes => {
+                                (&mut p.x_data, p.x_pencils.shape(me))
+                            }
+                            (Some(p), 1)
+                                if p.y_pencils.as_ref().expect("3D").boxes != p.physical.boxes =>
+                            {
                                 let y_shape = p.y_pencils.as_ref().expect("3D").shape(me);
                                 (&mut p.y_data, y_shape)
                             }
+                            (Some(_), _) => (&mut modes, shape),
                         };
                         crate::fftw::BatchTransform::new(transform.kind(), data, shape, axis)
                     })
@@ -579,6 +591,32 @@ impl DirectSolver {
                 pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
                 apply(0, &mut x_data, x_shape);
                 pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
+            }
+            // A process grid split along one axis only: the other axis'
+            // lines are whole in the ranks' own boxes, transformed there.
+            (Some(y_pencils), _) if y_pencils.boxes == physical.boxes => {
+                let own_shape = physical.shape(me);
+                if direction == Direction::Forward {
+                    apply(1, &mut self.modes, own_shape);
+                }
+                pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
+                apply(0, &mut x_data, x_shape);
+                pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
+                if direction == Direction::Backward {
+                    apply(1, &mut self.modes, own_shape);
+                }
+            }
+            (Some(y_pencils), _) if x_pencils.boxes == physical.boxes => {
+                let own_shape = physical.shape(me);
+                if direction == Direction::Forward {
+                    apply(0, &mut self.modes, own_shape);
+                }
+                pencils.redistribute(physical, &self.modes, y_pencils, &mut y_data);
+                apply(1, &mut y_data, y_pencils.shape(me));
+                pencils.redistribute(y_pencils, &y_data, physical, &mut self.modes);
+                if direction == Direction::Backward {
+                    apply(0, &mut self.modes, own_shape);
+                }
             }
             (Some(y_pencils), Direction::Forward) => {
                 pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
