@@ -370,28 +370,25 @@ impl CoupledOutputs {
         let root = communicator.is_root();
         let particles = Outputs::create_on(dir, case, communicator)?;
         let fields = FieldFiles::create(dir, case, root)?;
-        if !root {
-            return Ok(CoupledOutputs {
-                particles,
-                flow_series: None,
-                fields,
-            });
-        }
-        let flow_series = CsvSeries::create(
-            &dir.join("flow_series.csv"),
-            &[
-                "t",
-                "dt",
-                "step",
-                "fluid_kinetic_energy",
-                "max_cfl",
-                "max_divergence",
-                "wall_seconds",
-            ],
-        )?;
+        let flow_series = root
+            .then(|| {
+                CsvSeries::create(
+                    &dir.join("flow_series.csv"),
+                    &[
+                        "t",
+                        "dt",
+                        "step",
+                        "fluid_kinetic_energy",
+                        "max_cfl",
+                        "max_divergence",
+                        "wall_seconds",
+                    ],
+                )
+            })
+            .transpose()?;
         Ok(CoupledOutputs {
             particles,
-            flow_series: Some(flow_series),
+            flow_series,
             fields,
         })
     }

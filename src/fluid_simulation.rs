@@ -397,16 +397,6 @@ impl FieldFiles {
                     })
                     .collect();
                 let names: Vec<&str> = scalars.iter().map(|(n, _)| *n).collect();
-                let layout = if grid.is_uniform(grid.line_axis()) {
-                    CellLayout::Uniform {
-                        origin: self.origin,
-                        spacing: grid.spacing,
-                    }
-                } else {
-                    CellLayout::Rectilinear {
-                        faces: [&faces[0], &faces[1], &faces[2]],
-                    }
-                };
                 let index_name = format!("fields/fields_{:06}.p{extension}", self.frames);
                 write_field_pieces_index(
                     &self.dir.join(&index_name),
@@ -438,28 +428,25 @@ impl FluidOutputs {
     fn create(dir: &Path, case: &Case, root: bool) -> std::io::Result<Self> {
         let run = RunDirectory::create_on(dir, case, root)?;
         let fields = FieldFiles::create(dir, case, root)?;
-        if !root {
-            return Ok(FluidOutputs {
-                run,
-                series: None,
-                fields,
-            });
-        }
-        let series = CsvSeries::create(
-            &dir.join("series.csv"),
-            &[
-                "t",
-                "dt",
-                "step",
-                "kinetic_energy",
-                "max_cfl",
-                "max_divergence",
-                "wall_seconds",
-            ],
-        )?;
+        let series = root
+            .then(|| {
+                CsvSeries::create(
+                    &dir.join("series.csv"),
+                    &[
+                        "t",
+                        "dt",
+                        "step",
+                        "kinetic_energy",
+                        "max_cfl",
+                        "max_divergence",
+                        "wall_seconds",
+                    ],
+                )
+            })
+            .transpose()?;
         Ok(FluidOutputs {
             run,
-            series: Some(series),
+            series,
             fields,
         })
     }

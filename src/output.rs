@@ -124,40 +124,32 @@ impl Outputs {
         if case.output.particles {
             std::fs::create_dir_all(dir.join("particles"))?;
         }
-        if !root {
-            return Ok(Outputs {
-                run,
-                communicator,
-                series: None,
-                particle_files: case.output.particles,
-                particles: None,
-                frames: 0,
-            });
-        }
-        let series = CsvSeries::create(
-            &dir.join("series.csv"),
-            &[
-                "t",
-                "dt",
-                "step",
-                "kinetic_translational",
-                "kinetic_rotational",
-                "particle_contacts",
-                "wall_contacts",
-                "max_overlap_ratio",
-                "max_speed",
-                "neighbour_builds",
-                "wall_seconds",
-            ],
-        )?;
-        let particles = case
-            .output
-            .particles
-            .then(|| PvdIndex::new(dir.join("particles.pvd")));
+        let series = root
+            .then(|| {
+                CsvSeries::create(
+                    &dir.join("series.csv"),
+                    &[
+                        "t",
+                        "dt",
+                        "step",
+                        "kinetic_translational",
+                        "kinetic_rotational",
+                        "particle_contacts",
+                        "wall_contacts",
+                        "max_overlap_ratio",
+                        "max_speed",
+                        "neighbour_builds",
+                        "wall_seconds",
+                    ],
+                )
+            })
+            .transpose()?;
+        let particles =
+            (root && case.output.particles).then(|| PvdIndex::new(dir.join("particles.pvd")));
         Ok(Outputs {
             run,
             communicator,
-            series: Some(series),
+            series,
             particle_files: case.output.particles,
             particles,
             frames: 0,

@@ -282,35 +282,23 @@ pub mod mpi_backend {
             let mut receive_counts = vec![0 as Count; outgoing.len()];
             self.0
                 .all_to_all_into(&send_counts[..], &mut receive_counts[..]);
-            let send_displs = displacements(&send_counts);
-            let receive_displs = displacements(&receive_counts);
-            let flat: Vec<f64> = outgoing.concat();
-            let total: usize = receive_counts.iter().map(|&c| c as usize).sum();
-            let mut received = vec![0.0; total];
-            {
-                let send = Partition::new(&flat[..], &send_counts[..], &send_displs[..]);
-                let mut receive =
-                    PartitionMut::new(&mut received[..], &receive_counts[..], &receive_displs[..]);
-                self.0.all_to_all_varcount_into(&send, &mut receive);
-            }
-            split(&received, &receive_counts, &receive_displs)
+            let incoming: Vec<usize> = receive_counts.iter().map(|&c| c as usize).collect();
+            self.exchange_known(outgoing, &incoming)
         }
 
         pub fn exchange_known(&self, outgoing: &[Vec<f64>], incoming: &[usize]) -> Vec<Vec<f64>> {
-            let send_counts: Vec<Count> = outgoing.iter().map(|m| m.len() as Count).collect();
-            let receive_counts: Vec<Count> = incoming.iter().map(|&c| c as Count).collect();
-            let send_displs = displacements(&send_counts);
-            let receive_displs = displacements(&receive_counts);
-            let flat: Vec<f64> = outgoing.concat();
-            let total: usize = incoming.iter().sum();
-            let mut received = vec![0.0; total];
-            {
-                let send = Partition::new(&flat[..], &send_counts[..], &send_displs[..]);
-                let mut receive =
-                    PartitionMut::new(&mut received[..], &receive_counts[..], &receive_displs[..]);
-                self.0.all_to_all_varcount_into(&send, &mut receive);
-            }
-            split(&received, &receive_counts, &receive_displs)
+            let send_counts: Vec<usize> = outgoing.iter().map(Vec::len).collect();
+            let mut received = vec![0.0; incoming.iter().sum()];
+            self.all_to_all_flat(&outgoing.concat(), &send_counts, &mut received, incoming);
+            let mut rest = &received[..];
+            incoming
+                .iter()
+                .map(|&count| {
+                    let (message, tail) = rest.split_at(count);
+                    rest = tail;
+                    message.to_vec()
+                })
+                .collect()
         }
 
         pub fn all_to_all_flat(

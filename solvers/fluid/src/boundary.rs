@@ -293,11 +293,11 @@ pub fn local_ends(ends: &FieldEnds, partition: &Partition) -> FieldEnds {
 
 /// What a rank needs to fill [`EndKind::Halo`] ghosts: its place among the
 /// ranks, which axes are periodic, and the communicator.
-#[derive(Clone, Copy, Debug)]
-pub struct HaloExchange<'a> {
-    pub partition: &'a Partition,
+#[derive(Clone, Debug)]
+pub struct HaloExchange {
+    pub partition: Partition,
     pub periodic: [bool; 3],
-    pub communicator: &'a Communicator,
+    pub communicator: Communicator,
 }
 
 /// The padded indices of a field's unknowns: every owned cell, except that

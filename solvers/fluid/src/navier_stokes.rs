@@ -137,11 +137,10 @@ pub struct FlowSolver {
     /// With the explicit viscous scheme, a step whose viscous number
     /// exceeds this is refused; [`EXPLICIT_VISCOUS_LIMIT`] unless set otherwise.
     pub viscous_limit: f64,
-    communicator: Communicator,
-    /// This rank's share of the cells (all of them on one rank).
-    partition: Partition,
-    /// Which axes are periodic (their ends, when split, are halos).
-    periodic: [bool; 3],
+    /// This rank's share of the cells (all of them on one rank), the
+    /// periodic axes and the communicator: what the ghost fills across
+    /// ranks and the reductions need.
+    ranks: HaloExchange,
     /// End conditions of this rank's fields (halos where another rank's
     /// cells lie beyond).
     velocity_ends: Vec<FieldEnds>,
@@ -264,9 +263,11 @@ impl FlowSolver {
             cfl_limit: CFL_LIMIT,
             viscous_scheme: ViscousScheme::CrankNicolson,
             viscous_limit: EXPLICIT_VISCOUS_LIMIT,
-            communicator,
-            partition,
-            periodic,
+            ranks: HaloExchange {
+                partition,
+                periodic,
+                communicator,
+            },
             velocity_ends,
             pressure_ends,
             velocity_unknowns,
@@ -307,17 +308,12 @@ impl FlowSolver {
         grid.for_each(&grid.cell_block(), |index, [i, j, k]| {
             pressure[index] = profile(grid.position(Location::Centre, i, j, k));
         });
-        let halo = HaloExchange {
-            partition: &self.partition,
-            periodic: self.periodic,
-            communicator: &self.communicator,
-        };
         fill_ghosts_on(
             grid,
             pressure,
             Location::Centre,
             &self.pressure_ends,
-            Some(&halo),
+            Some(&self.ranks),
         );
     }
 
@@ -413,17 +409,12 @@ impl FlowSolver {
         let alpha = gamma + zeta;
         let dim = self.grid.dim();
         self.fill_velocity_ghosts();
-        let halo = HaloExchange {
-            partition: &self.partition,
-            periodic: self.periodic,
-            communicator: &self.communicator,
-        };
         fill_ghosts_on(
             &self.grid,
             &mut self.pressure,
             Location::Centre,
             &self.pressure_ends,
-            Some(&halo),
+            Some(&self.ranks),
         );
         // All explicit terms from u^{k−1} before any component moves.
         for component in 0..dim {
@@ -481,12 +472,18 @@ impl FlowSolver {
                     }
                 };
                 let total = self
+                    .ranks
                     .communicator
                     .sum(grid.par_sum(block, |_, point| weight(point)));
-                let mean = self.communicator.sum(grid.par_sum(block, |index, point| {
-                    weight(point) * (velocity[index] + increment[index])
-                })) / total;
+                let mean = self
+                    .ranks
+                    .communicator
+                    .sum(grid.par_sum(block, |index, point| {
+                        weight(point) * (velocity[index] + increment[index])
+                    }))
+                    / total;
                 let response_mean = self
+                    .ranks
                     .communicator
                     .sum(grid.par_sum(block, |index, point| weight(point) * response[index]))
                     / total;
@@ -523,17 +520,12 @@ impl FlowSolver {
         divergence(grid, &self.velocity, correction);
         grid.par_update(&grid.cell_block(), correction, |_, value| value / scale);
         self.pressure_solver.solve_poisson(grid, correction);
-        let halo = HaloExchange {
-            partition: &self.partition,
-            periodic: self.periodic,
-            communicator: &self.communicator,
-        };
         fill_ghosts_on(
             grid,
             correction,
             Location::Centre,
             &self.pressure_ends,
-            Some(&halo),
+            Some(&self.ranks),
         );
         for component in 0..grid.dim() {
             let block = &self.velocity_unknowns[component];
@@ -574,18 +566,13 @@ impl FlowSolver {
 
     /// Ghost values and wall-face values of every velocity component.
     pub fn fill_velocity_ghosts(&mut self) {
-        let halo = HaloExchange {
-            partition: &self.partition,
-            periodic: self.periodic,
-            communicator: &self.communicator,
-        };
         for (component, field) in self.velocity.iter_mut().enumerate() {
             fill_ghosts_on(
                 &self.grid,
                 field,
                 Location::Face(component),
                 &self.velocity_ends[component],
-                Some(&halo),
+                Some(&self.ranks),
             );
         }
     }
@@ -597,7 +584,7 @@ impl FlowSolver {
         let largest = self
             .grid
             .par_max(&self.grid.cell_block(), |index, _| divergence[index].abs());
-        self.communicator.max(largest)
+        self.ranks.communicator.max(largest)
     }
 
     /// `½ ∫ |u|² dV` over the domain, each component integrated on its own
@@ -639,7 +626,7 @@ impl FlowSolver {
         } else {
             grid.section_area()
         };
-        self.communicator.sum(0.5 * sum * volume)
+        self.ranks.communicator.sum(0.5 * sum * volume)
     }
 
     /// `Δt Σ_a max|u_a| / h_a` over every rank; along a stretched axis the
@@ -651,12 +638,12 @@ impl FlowSolver {
             let block = &self.velocity_unknowns[component];
             cfl += if grid.is_uniform(component) {
                 let largest = grid.par_max(block, |index, _| field[index].abs());
-                self.communicator.max(largest) * dt / grid.spacing[component]
+                self.ranks.communicator.max(largest) * dt / grid.spacing[component]
             } else {
                 let largest = grid.par_max(block, |index, plane| {
                     field[index].abs() / grid.gap(component, plane)
                 });
-                self.communicator.max(largest) * dt
+                self.ranks.communicator.max(largest) * dt
             };
         }
         cfl
@@ -664,12 +651,12 @@ impl FlowSolver {
 
     /// This rank's share of the cells.
     pub fn partition(&self) -> &Partition {
-        &self.partition
+        &self.ranks.partition
     }
 
     /// The ranks the flow is shared among.
     pub fn communicator(&self) -> &Communicator {
-        &self.communicator
+        &self.ranks.communicator
     }
 
     /// The unknown faces of velocity component `component` (padded indices).

@@ -133,6 +133,7 @@ pub fn write_particle_pieces_index(path: &Path, pieces: &[String]) -> std::io::R
 }
 
 /// How the cells of a field file are laid out.
+#[derive(Clone, Copy, Debug)]
 pub enum CellLayout<'a> {
     /// Cells of size `spacing` from `origin`: an ImageData file (`.vti`).
     Uniform { origin: [f64; 3], spacing: [f64; 3] },
