@@ -4,7 +4,7 @@
 use crate::case::Case;
 use crate::coupled_simulation;
 use crate::simulation::{check_time_step, time_step};
-use crate::{fluid_scene, scene, stability, RunError};
+use crate::{fluid_scene, scene, sharing, stability, RunError};
 use grainflow_contact::Method;
 use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
 use grainflow_ibm::settling::schiller_naumann_reynolds;
@@ -20,6 +20,28 @@ use std::fmt::Write;
 fn bytes_per_particle(dimension: usize, walls: usize) -> usize {
     let partners = if dimension == 3 { 13 } else { 6 };
     290 + 24 * walls.max(1) + partners * 81
+}
+
+/// [`report`], and with `ranks` above one how the scene would be shared
+/// among that many MPI ranks ([`sharing::report`]).
+pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
+    let mut text = report(case)?;
+    if ranks > 1 {
+        let grid = sharing::flow_grid(case);
+        let sharing = match (case.has_grains(), case.fluid.is_some()) {
+            (true, true) => {
+                let (system, _) = coupled_simulation::build(case).map_err(RunError::Case)?;
+                sharing::report(case, Some(&system.dem), grid.as_ref(), ranks)
+            }
+            (true, false) => {
+                let system = scene::build(case).map_err(RunError::Case)?;
+                sharing::report(case, Some(&system), None, ranks)
+            }
+            _ => sharing::report(case, None, grid.as_ref(), ranks),
+        };
+        text += &sharing.map_err(RunError::Case)?;
+    }
+    Ok(text)
 }
 
 pub fn report(case: &Case) -> Result<String, RunError> {

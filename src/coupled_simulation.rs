@@ -11,7 +11,7 @@ use crate::fluid_simulation::FieldFiles;
 use crate::output::Outputs;
 use crate::simulation::{peak_memory_bytes, shortest_contact_time, Progress, Summary};
 use crate::stability::TimeStepVerdict;
-use crate::{fluid_scene, scene, stability, RunError};
+use crate::{fluid_scene, scene, sharing, stability, RunError};
 use grainflow_core::Communicator;
 use grainflow_ibm::{
     CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
@@ -194,17 +194,17 @@ pub fn run(
         system.dem_dt,
         system.dem_dt / contact_time
     ));
+    let mut load_warning = None;
     if communicator.size() > 1 {
         let r = system.flow.partition().ranks;
+        let ranks = communicator.size();
         outputs.particles.run.log(&format!(
-            "{} MPI ranks in a process grid of {} x {} x {} (cells and grains)",
-            communicator.size(),
-            r[0],
-            r[1],
-            r[2]
+            "{ranks} MPI ranks in a process grid of {} x {} x {} (cells and grains)",
+            r[0], r[1], r[2]
         ));
+        load_warning = sharing::load_warning(ranks, None, Some(cells as f64 / ranks as f64));
     }
-    for w in warning.iter().chain(&density_warning) {
+    for w in warning.iter().chain(&density_warning).chain(&load_warning) {
         outputs.particles.run.log(w);
         if root {
             eprintln!("{w}");

@@ -106,7 +106,7 @@ pub fn build_on(case: &Case, communicator: Communicator) -> Result<FlowSolver, S
             ranks[..parallel.process_grid.len()].copy_from_slice(&parallel.process_grid);
             ranks
         }
-        None => flow_process_grid(&grid, &communicator).map_err(|e| format!("fluid: {e}"))?,
+        None => flow_process_grid(&grid, communicator.size()).map_err(|e| format!("fluid: {e}"))?,
     };
     let mut solver = FlowSolver::distributed(
         grid,

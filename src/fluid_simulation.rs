@@ -8,7 +8,7 @@ use crate::case::{AnalysisSection, Case};
 use crate::fluid_scene::{self, ChannelProfile, ExactFlow};
 use crate::output::RunDirectory;
 use crate::simulation::{peak_memory_bytes, Progress, Summary};
-use crate::RunError;
+use crate::{sharing, RunError};
 use grainflow_core::Communicator;
 use grainflow_fluid::{FlowSolver, Location, StepReport, ViscousScheme, CFL_LIMIT};
 use grainflow_io::{
@@ -82,14 +82,18 @@ pub fn run(
     ));
     if communicator.size() > 1 {
         let r = partition.ranks;
+        let ranks = communicator.size();
         outputs.run.log(&format!(
-            "{} MPI ranks, cells shared in a process grid of {} x {} x {} (pencil transposes \
-             in the direct solves)",
-            communicator.size(),
-            r[0],
-            r[1],
-            r[2]
+            "{ranks} MPI ranks, cells shared in a process grid of {} x {} x {} (pencil \
+             transposes in the direct solves)",
+            r[0], r[1], r[2]
         ));
+        if let Some(w) = sharing::load_warning(ranks, None, Some(cells as f64 / ranks as f64)) {
+            outputs.run.log(&w);
+            if root {
+                eprintln!("{w}");
+            }
+        }
     }
     match case.time.cfl {
         Some(cfl) => outputs.run.log(&format!("dt adapted to CFL {cfl}")),

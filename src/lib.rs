@@ -18,6 +18,7 @@ pub mod fluid_scene;
 pub mod fluid_simulation;
 pub mod output;
 pub mod scene;
+pub mod sharing;
 pub mod simulation;
 pub mod stability;
 

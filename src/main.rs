@@ -38,6 +38,10 @@ enum Command {
         case: PathBuf,
         #[arg(long = "set", value_name = "KEY=VALUE")]
         overrides: Vec<String>,
+        /// Also show how the scene would be shared among this many MPI
+        /// ranks (process grid, grains and cells per rank).
+        #[arg(long)]
+        ranks: Option<usize>,
     },
 }
 
@@ -124,7 +128,11 @@ fn main() -> ExitCode {
                 }
             }
         }
-        Command::Check { case, overrides } => {
+        Command::Check {
+            case,
+            overrides,
+            ranks,
+        } => {
             let loaded = match Case::load(&case, &overrides) {
                 Ok(c) => c,
                 Err(e) => {
@@ -132,7 +140,7 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
-            match check::report(&loaded) {
+            match check::report_on(&loaded, ranks.unwrap_or(1)) {
                 Ok(text) => {
                     print!("{text}");
                     ExitCode::SUCCESS

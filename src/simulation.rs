@@ -6,7 +6,7 @@ use crate::case::Case;
 use crate::dry_stepping::DryStepper;
 use crate::output::Outputs;
 use crate::stability::{self, TimeStepVerdict};
-use crate::{coupled_simulation, fluid_simulation, scene, RunError};
+use crate::{coupled_simulation, fluid_simulation, scene, sharing, RunError};
 use grainflow_core::Communicator;
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
@@ -153,6 +153,13 @@ fn run_here(
             s.ranks[1],
             s.ranks[2]
         ));
+        let ranks = communicator.size();
+        if let Some(w) = sharing::load_warning(ranks, Some(particles as f64 / ranks as f64), None) {
+            outputs.run.log(&w);
+            if root {
+                eprintln!("{w}");
+            }
+        }
     }
     outputs.run.log(&stepper.describe(dt));
     if let Some(w) = &warning {

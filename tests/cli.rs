@@ -201,3 +201,51 @@ fn check_warns_between_the_accuracy_and_the_stability_limit() {
         .unwrap();
     assert_eq!(refused.status.code(), Some(2));
 }
+
+/// `check --ranks N` shows, before a cluster job, how a scene would be
+/// shared: the process grid, each rank's load (the 2,700 grains of the 3D
+/// column, the 32³ cells of the Beltrami flow), the warning when ranks hold
+/// too little, and the refusal of what does not run on several ranks.
+#[test]
+fn check_shows_how_a_scene_is_shared_among_ranks() {
+    let text = |args: &[&str]| {
+        let output = grainflow().args(args).output().unwrap();
+        assert!(output.status.success(), "{args:?}");
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    let column = text(&["check", &case("column_collapse_3d.toml"), "--ranks", "4"]);
+    assert!(column.contains("on 4 MPI ranks:"), "{column}");
+    assert!(column.contains("process grid 2 x 2 x 1"), "{column}");
+    // 2,700 grains over 4 ranks.
+    assert!(column.contains("(mean 675)"), "{column}");
+    assert!(
+        column.contains("675 grains per rank (below 10000)"),
+        "{column}"
+    );
+    let flow = text(&["check", &case("taylor_green_3d.toml"), "--ranks", "4"]);
+    assert!(flow.contains("process grid 2 x 2 x 1"), "{flow}");
+    // 32³ cells over 2 x 2 ranks, the last axis whole.
+    assert!(
+        flow.contains("fluid cells per rank: 8192 to 8192"),
+        "{flow}"
+    );
+    assert!(
+        flow.contains("8192 cells per rank (below 100000)"),
+        "{flow}"
+    );
+    let chosen = text(&[
+        "check",
+        &case("taylor_green_3d.toml"),
+        "--ranks",
+        "2",
+        "--set",
+        "fluid.cells=[128,128,128]",
+    ]);
+    assert!(!chosen.contains("warning: "), "{chosen}");
+    let refused = grainflow()
+        .args(["check", &case("static_box.toml"), "--ranks", "2"])
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("hard contact"));
+}

@@ -220,6 +220,14 @@ pub fn process_grid(
 
 /// The number of `positions` in the fullest box of a process grid.
 fn busiest_box(domain: &Domain, ranks: [usize; 3], positions: &[Vec3]) -> usize {
+    grains_per_box(domain, ranks, positions)
+        .into_iter()
+        .max()
+        .unwrap_or(0)
+}
+
+/// How many of `positions` each box of a process grid owns, by rank.
+pub fn grains_per_box(domain: &Domain, ranks: [usize; 3], positions: &[Vec3]) -> Vec<usize> {
     let grid = Subdomain::of_rank(domain, ranks, 0);
     let mut counts = vec![0usize; grid.rank_count()];
     for x in positions {
@@ -227,7 +235,7 @@ fn busiest_box(domain: &Domain, ranks: [usize; 3], positions: &[Vec3]) -> usize 
         domain.wrap(&mut x);
         counts[grid.owner(domain, &x)] += 1;
     }
-    counts.into_iter().max().unwrap_or(0)
+    counts
 }
 
 /// Whether boxes of a process grid are at least `min_width` wide along

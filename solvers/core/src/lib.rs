@@ -10,7 +10,7 @@ pub mod communicator;
 pub mod domain;
 
 pub use communicator::Communicator;
-pub use domain::{fits, process_grid, Dimension, Domain, Side, Subdomain};
+pub use domain::{fits, grains_per_box, process_grid, Dimension, Domain, Side, Subdomain};
 
 /// Three-component vector of `f64`. 2D scenes live in the (x, y) plane with
 /// z = 0, rotations about z only.

@@ -187,7 +187,7 @@ impl FlowSolver {
         communicator: Communicator,
         backend: TransformBackend,
     ) -> Result<Self, FluidError> {
-        let ranks = crate::partition::flow_process_grid(&grid, &communicator)?;
+        let ranks = crate::partition::flow_process_grid(&grid, communicator.size())?;
         Self::distributed(grid, boundaries, viscosity, communicator, ranks, backend)
     }
 

@@ -17,7 +17,6 @@
 
 use crate::error::FluidError;
 use crate::grid::Grid;
-use grainflow_core::Communicator;
 
 /// One rank's share of the cells of a global grid.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -162,14 +161,10 @@ impl Partition {
     }
 }
 
-/// The process grid of a flow on `communicator`'s ranks: among the splits
-/// of x (2D) or of x and y (3D) whose ranks hold at least two cells along
-/// each split axis, the one with the least area of cuts between ranks.
-pub fn flow_process_grid(
-    global: &Grid,
-    communicator: &Communicator,
-) -> Result<[usize; 3], FluidError> {
-    let size = communicator.size();
+/// The process grid of a flow on `size` ranks: among the splits of x (2D)
+/// or of x and y (3D) whose ranks hold at least two cells along each split
+/// axis, the one with the least area of cuts between ranks.
+pub fn flow_process_grid(global: &Grid, size: usize) -> Result<[usize; 3], FluidError> {
     let line = global.line_axis();
     let mut best: Option<(f64, [usize; 3])> = None;
     for nx in (1..=size).filter(|&n| size.is_multiple_of(n)) {

@@ -1,0 +1,146 @@
+//! How a scene is shared among MPI ranks: the process grid a case gets on
+//! a number of ranks and each rank's load, for `grainflow check --ranks N`
+//! before a cluster job, and the warning a run logs when its ranks hold
+//! too little to keep the exchanges' latency small (docs/performance.md:
+//! below about 10,000 grains or 100,000 cells per rank the messages, not
+//! the work, set the pace).
+
+use crate::case::Case;
+use crate::{fluid_scene, scene};
+use grainflow_core::{fits, grains_per_box, Vec3};
+use grainflow_dem::DemSystem;
+use grainflow_fluid::{flow_process_grid, Grid, Partition};
+use std::fmt::Write;
+
+/// Fewer grains per rank than this and a run warns.
+pub const GRAINS_PER_RANK_WARNING: usize = 10_000;
+/// Fewer cells per rank than this and a run warns.
+pub const CELLS_PER_RANK_WARNING: usize = 100_000;
+
+/// The warning for ranks holding `grains` grains and `cells` fluid cells
+/// each on average (None where the scene has none).
+pub fn load_warning(ranks: usize, grains: Option<f64>, cells: Option<f64>) -> Option<String> {
+    let mut thin = Vec::new();
+    if let Some(g) = grains.filter(|&g| g < GRAINS_PER_RANK_WARNING as f64) {
+        thin.push(format!(
+            "{g:.0} grains per rank (below {GRAINS_PER_RANK_WARNING})"
+        ));
+    }
+    if let Some(c) = cells.filter(|&c| c < CELLS_PER_RANK_WARNING as f64) {
+        thin.push(format!(
+            "{c:.0} cells per rank (below {CELLS_PER_RANK_WARNING})"
+        ));
+    }
+    (!thin.is_empty()).then(|| {
+        format!(
+            "warning: {} on {ranks} ranks: the exchanges' latency, not the work, sets the pace \
+             there (docs/performance.md); fewer ranks with more threads each use the cores better",
+            thin.join(" and ")
+        )
+    })
+}
+
+/// What `grainflow check --ranks N` prints: the process grid the case gets
+/// on `ranks` ranks and each rank's load. `system` is the scene's DEM on
+/// one rank (None for a fluid alone), `grid` the whole flow grid (None
+/// for a dry scene). Refused as a run on those ranks would be.
+pub fn report(
+    case: &Case,
+    system: Option<&DemSystem>,
+    grid: Option<&Grid>,
+    ranks: usize,
+) -> Result<String, String> {
+    let mut out = String::new();
+    let _ = writeln!(out, "on {ranks} MPI ranks:");
+    if system.is_some() && scene::hard_contact(case).is_some() {
+        return Err(format!(
+            "hard contact (contact.model = \"cocd\" or \"nscd\") runs on one rank in this \
+             version, not on {ranks}"
+        ));
+    }
+    let process_grid = match grid {
+        Some(grid) => match &case.parallel {
+            Some(parallel) => {
+                let mut r = [1; 3];
+                r[..parallel.process_grid.len()].copy_from_slice(&parallel.process_grid);
+                r
+            }
+            None => flow_process_grid(grid, ranks).map_err(|e| format!("fluid: {e}"))?,
+        },
+        None => {
+            let system = system.expect("a scene with grains or a fluid");
+            let centres: Vec<Vec3> = positions(system);
+            let range = system.range_for(system.particles.max_radius());
+            scene::process_grid_of(case, &system.domain, ranks, range, &centres)?
+        }
+    };
+    if process_grid.iter().product::<usize>() != ranks {
+        return Err(format!(
+            "parallel.process_grid = {process_grid:?} does not hold {ranks} ranks"
+        ));
+    }
+    let _ = writeln!(
+        out,
+        "  process grid {} x {} x {}",
+        process_grid[0], process_grid[1], process_grid[2]
+    );
+    let mut mean_cells = None;
+    if let Some(grid) = grid {
+        let partition = Partition::new(grid, process_grid, 0).map_err(|e| format!("fluid: {e}"))?;
+        let cells: Vec<usize> = (0..ranks)
+            .map(|r| partition.share_of(r).1.iter().product())
+            .collect();
+        let mean = cells.iter().sum::<usize>() as f64 / ranks as f64;
+        let _ = writeln!(
+            out,
+            "  fluid cells per rank: {} to {} (the last axis whole on every rank)",
+            cells.iter().min().unwrap(),
+            cells.iter().max().unwrap()
+        );
+        mean_cells = Some(mean);
+    }
+    let mut mean_grains = None;
+    if let Some(system) = system {
+        let centres = positions(system);
+        if grid.is_some() {
+            // Grains in a fluid: the flow's grid, whose boxes must hold a
+            // grain's reach (interaction range and immersed boundary).
+            let reach = system
+                .range_for(system.particles.max_radius())
+                .max(system.ghost_reach);
+            if !fits(&system.domain, process_grid, reach) {
+                return Err(format!(
+                    "the process grid {process_grid:?} of the flow makes boxes narrower than \
+                     the grains' reach {reach:.3e} m; allowed: fewer ranks along the short axes"
+                ));
+            }
+        }
+        let counts = grains_per_box(&system.domain, process_grid, &centres);
+        let mean = centres.len() as f64 / ranks as f64;
+        let _ = writeln!(
+            out,
+            "  grains per rank at the start: {} to {} (mean {mean:.0})",
+            counts.iter().min().unwrap(),
+            counts.iter().max().unwrap()
+        );
+        // In a fluid the cells carry the work (a grain's forcing is done
+        // cell by cell): only a dry scene is judged by its grains.
+        if grid.is_none() {
+            mean_grains = Some(mean);
+        }
+    }
+    if let Some(warning) = load_warning(ranks, mean_grains, mean_cells) {
+        let _ = writeln!(out, "  {warning}");
+    }
+    Ok(out)
+}
+
+fn positions(system: &DemSystem) -> Vec<Vec3> {
+    let p = &system.particles;
+    p.position[..p.n_owned].to_vec()
+}
+
+/// The flow grid of a case with a fluid (None for a dry scene).
+pub fn flow_grid(case: &Case) -> Option<Grid> {
+    case.fluid.is_some().then(|| fluid_scene::grid(case))
+}
