@@ -73,6 +73,15 @@ pub struct ParallelSection {
     pub process_grid: Vec<usize>,
 }
 
+impl ParallelSection {
+    /// The process grid along x, y, z (1 along an axis the case omits).
+    pub fn ranks(&self) -> [usize; 3] {
+        let mut ranks = [1; 3];
+        ranks[..self.process_grid.len()].copy_from_slice(&self.process_grid);
+        ranks
+    }
+}
+
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DomainSection {

@@ -25,6 +25,7 @@ fn bytes_per_particle(dimension: usize, walls: usize) -> usize {
 /// [`report`], and with `ranks` above one how the scene would be shared
 /// among that many MPI ranks ([`sharing::report`]).
 pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
+    crate::simulation::check_ranks(case, ranks)?;
     let mut text = report(case)?;
     if ranks > 1 {
         let grid = sharing::flow_grid(case);

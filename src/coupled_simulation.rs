@@ -370,22 +370,19 @@ impl CoupledOutputs {
         let root = communicator.is_root();
         let particles = Outputs::create_on(dir, case, communicator)?;
         let fields = FieldFiles::create(dir, case, root)?;
-        let flow_series = root
-            .then(|| {
-                CsvSeries::create(
-                    &dir.join("flow_series.csv"),
-                    &[
-                        "t",
-                        "dt",
-                        "step",
-                        "fluid_kinetic_energy",
-                        "max_cfl",
-                        "max_divergence",
-                        "wall_seconds",
-                    ],
-                )
-            })
-            .transpose()?;
+        let flow_series = CsvSeries::create_on(
+            root,
+            &dir.join("flow_series.csv"),
+            &[
+                "t",
+                "dt",
+                "step",
+                "fluid_kinetic_energy",
+                "max_cfl",
+                "max_divergence",
+                "wall_seconds",
+            ],
+        )?;
         Ok(CoupledOutputs {
             particles,
             flow_series,

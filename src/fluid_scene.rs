@@ -95,19 +95,22 @@ pub fn build(case: &Case) -> Result<FlowSolver, String> {
     build_on(case, Communicator::serial())
 }
 
+/// The flow's process grid on `size` ranks: `parallel.process_grid` if
+/// given (and more than one rank runs), else the split of x and y with the
+/// least area of cuts.
+pub fn process_grid_of(case: &Case, grid: &Grid, size: usize) -> Result<[usize; 3], String> {
+    match case.parallel.as_ref().filter(|_| size > 1) {
+        Some(parallel) => Ok(parallel.ranks()),
+        None => flow_process_grid(grid, size).map_err(|e| format!("fluid: {e}")),
+    }
+}
+
 /// [`build`] shared among the ranks of `communicator`: the process grid of
 /// `parallel.process_grid`, else the one with the least area of cuts.
 pub fn build_on(case: &Case, communicator: Communicator) -> Result<FlowSolver, String> {
     let f = case.fluid_section();
     let grid = grid(case);
-    let ranks = match case.parallel.as_ref().filter(|_| communicator.size() > 1) {
-        Some(parallel) => {
-            let mut ranks = [1; 3];
-            ranks[..parallel.process_grid.len()].copy_from_slice(&parallel.process_grid);
-            ranks
-        }
-        None => flow_process_grid(&grid, communicator.size()).map_err(|e| format!("fluid: {e}"))?,
-    };
+    let ranks = process_grid_of(case, &grid, communicator.size())?;
     let mut solver = FlowSolver::distributed(
         grid,
         boundaries(case),

@@ -432,22 +432,19 @@ impl FluidOutputs {
     fn create(dir: &Path, case: &Case, root: bool) -> std::io::Result<Self> {
         let run = RunDirectory::create_on(dir, case, root)?;
         let fields = FieldFiles::create(dir, case, root)?;
-        let series = root
-            .then(|| {
-                CsvSeries::create(
-                    &dir.join("series.csv"),
-                    &[
-                        "t",
-                        "dt",
-                        "step",
-                        "kinetic_energy",
-                        "max_cfl",
-                        "max_divergence",
-                        "wall_seconds",
-                    ],
-                )
-            })
-            .transpose()?;
+        let series = CsvSeries::create_on(
+            root,
+            &dir.join("series.csv"),
+            &[
+                "t",
+                "dt",
+                "step",
+                "kinetic_energy",
+                "max_cfl",
+                "max_divergence",
+                "wall_seconds",
+            ],
+        )?;
         Ok(FluidOutputs {
             run,
             series,

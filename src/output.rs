@@ -124,26 +124,23 @@ impl Outputs {
         if case.output.particles {
             std::fs::create_dir_all(dir.join("particles"))?;
         }
-        let series = root
-            .then(|| {
-                CsvSeries::create(
-                    &dir.join("series.csv"),
-                    &[
-                        "t",
-                        "dt",
-                        "step",
-                        "kinetic_translational",
-                        "kinetic_rotational",
-                        "particle_contacts",
-                        "wall_contacts",
-                        "max_overlap_ratio",
-                        "max_speed",
-                        "neighbour_builds",
-                        "wall_seconds",
-                    ],
-                )
-            })
-            .transpose()?;
+        let series = CsvSeries::create_on(
+            root,
+            &dir.join("series.csv"),
+            &[
+                "t",
+                "dt",
+                "step",
+                "kinetic_translational",
+                "kinetic_rotational",
+                "particle_contacts",
+                "wall_contacts",
+                "max_overlap_ratio",
+                "max_speed",
+                "neighbour_builds",
+                "wall_seconds",
+            ],
+        )?;
         let particles =
             (root && case.output.particles).then(|| PvdIndex::new(dir.join("particles.pvd")));
         Ok(Outputs {
@@ -280,14 +277,18 @@ impl Outputs {
         let Some(pieces) = self.communicator.gather(&local) else {
             return Ok(());
         };
-        let rows: Vec<&[f64]> = pieces.iter().flat_map(|m| m.chunks_exact(10)).collect();
+        let rows: std::collections::HashMap<u64, &[f64]> = pieces
+            .iter()
+            .flat_map(|m| m.chunks_exact(10))
+            .map(|r| (r[0] as u64, r))
+            .collect();
         let tracked = self
             .run
             .tracked
             .as_mut()
             .expect("the root writes tracked.csv");
-        for &id in ids {
-            if let Some(state) = rows.iter().find(|r| r[0] == id as f64) {
+        for id in ids {
+            if let Some(state) = rows.get(id) {
                 let mut row = vec![system.time];
                 row.extend_from_slice(state);
                 tracked.row(&row)?;

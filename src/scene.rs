@@ -431,8 +431,7 @@ pub fn process_grid_of(
     let Some(parallel) = case.parallel.as_ref().filter(|_| size > 1) else {
         return process_grid(domain, size, range, positions);
     };
-    let mut ranks = [1; 3];
-    ranks[..parallel.process_grid.len()].copy_from_slice(&parallel.process_grid);
+    let ranks = parallel.ranks();
     if ranks.iter().product::<usize>() != size {
         return Err(format!(
             "parallel.process_grid = {:?} holds {} ranks, but the run has {size}; allowed: \

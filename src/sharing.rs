@@ -9,7 +9,7 @@ use crate::case::Case;
 use crate::{fluid_scene, scene};
 use grainflow_core::{fits, grains_per_box, Vec3};
 use grainflow_dem::DemSystem;
-use grainflow_fluid::{flow_process_grid, Grid, Partition};
+use grainflow_fluid::{Grid, Partition};
 use std::fmt::Write;
 
 /// Fewer grains per rank than this and a run warns.
@@ -43,7 +43,8 @@ pub fn load_warning(ranks: usize, grains: Option<f64>, cells: Option<f64>) -> Op
 /// What `grainflow check --ranks N` prints: the process grid the case gets
 /// on `ranks` ranks and each rank's load. `system` is the scene's DEM on
 /// one rank (None for a fluid alone), `grid` the whole flow grid (None
-/// for a dry scene). Refused as a run on those ranks would be.
+/// for a dry scene). What does not run on several ranks is refused before
+/// ([`crate::simulation::check_ranks`]).
 pub fn report(
     case: &Case,
     system: Option<&DemSystem>,
@@ -52,21 +53,8 @@ pub fn report(
 ) -> Result<String, String> {
     let mut out = String::new();
     let _ = writeln!(out, "on {ranks} MPI ranks:");
-    if system.is_some() && scene::hard_contact(case).is_some() {
-        return Err(format!(
-            "hard contact (contact.model = \"cocd\" or \"nscd\") runs on one rank in this \
-             version, not on {ranks}"
-        ));
-    }
     let process_grid = match grid {
-        Some(grid) => match &case.parallel {
-            Some(parallel) => {
-                let mut r = [1; 3];
-                r[..parallel.process_grid.len()].copy_from_slice(&parallel.process_grid);
-                r
-            }
-            None => flow_process_grid(grid, ranks).map_err(|e| format!("fluid: {e}"))?,
-        },
+        Some(grid) => fluid_scene::process_grid_of(case, grid, ranks)?,
         None => {
             let system = system.expect("a scene with grains or a fluid");
             let centres: Vec<Vec3> = positions(system);

@@ -100,7 +100,7 @@ pub fn run_on(
 
 /// Refuses, before anything is written, what does not run on several ranks
 /// yet.
-fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
+pub(crate) fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
     if ranks == 1 {
         return Ok(());
     }

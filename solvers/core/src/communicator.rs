@@ -136,23 +136,11 @@ impl Communicator {
         outgoing
     }
 
-    /// [`Communicator::exchange`] when every rank already knows how many
-    /// numbers each other rank sends it (`incoming[r]` from rank r): one
-    /// all-to-all, without the exchange of counts.
-    pub fn exchange_known(&self, outgoing: Vec<Vec<f64>>, incoming: &[usize]) -> Vec<Vec<f64>> {
-        assert_eq!(outgoing.len(), self.size, "one message per rank");
-        assert_eq!(incoming.len(), self.size, "one count per rank");
-        #[cfg(feature = "mpi")]
-        if let Some(world) = &self.world {
-            return world.exchange_known(&outgoing, incoming);
-        }
-        outgoing
-    }
-
-    /// The all-to-all of [`Communicator::exchange_known`] between flat
-    /// buffers the caller keeps: `send` holds the messages to ranks 0, 1, …
-    /// one after the other (`send_counts[r]` numbers for rank r), `receive`
-    /// gets those from ranks 0, 1, … (`receive_counts[r]` from rank r).
+    /// An all-to-all where every rank already knows how many numbers each
+    /// other sends it, between flat buffers the caller keeps: `send` holds
+    /// the messages to ranks 0, 1, … one after the other (`send_counts[r]`
+    /// numbers for rank r), `receive` gets those from ranks 0, 1, …
+    /// (`receive_counts[r]` from rank r).
     /// Nothing is allocated: for the large, repeated transposes of the
     /// flow's direct solves.
     pub fn all_to_all_flat(

@@ -82,12 +82,7 @@ impl Subdomain {
     /// The box of `rank` in a process grid of `ranks` (x fastest:
     /// rank = (c_z n_y + c_y) n_x + c_x).
     pub fn of_rank(domain: &Domain, ranks: [usize; 3], rank: usize) -> Self {
-        let coords = [
-            rank % ranks[0],
-            (rank / ranks[0]) % ranks[1],
-            rank / (ranks[0] * ranks[1]),
-        ];
-        assert!(coords[2] < ranks[2], "rank {rank} outside the process grid");
+        let coords = grid_coords(ranks, rank);
         let extent = domain.extent();
         let mut lower = domain.lower;
         let mut upper = domain.upper;
@@ -113,7 +108,7 @@ impl Subdomain {
 
     /// Rank at process-grid coordinates `coords`.
     pub fn rank_at(&self, coords: [usize; 3]) -> usize {
-        (coords[2] * self.ranks[1] + coords[1]) * self.ranks[0] + coords[0]
+        grid_rank(self.ranks, coords)
     }
 
     /// Process-grid coordinates of the rank owning position `x` (the same
@@ -145,19 +140,52 @@ impl Subdomain {
     /// The neighbouring rank on `side` along `axis`, across a periodic face
     /// if need be (None at a wall of the domain).
     pub fn neighbour(&self, domain: &Domain, axis: usize, side: Side) -> Option<usize> {
-        let n = self.ranks[axis];
-        let c = self.coords[axis];
-        let next = match side {
-            Side::Lower if c > 0 => c - 1,
-            Side::Upper if c + 1 < n => c + 1,
-            Side::Lower if domain.periodic[axis] => n - 1,
-            Side::Upper if domain.periodic[axis] => 0,
-            _ => return None,
-        };
-        let mut coords = self.coords;
-        coords[axis] = next;
-        Some(self.rank_at(coords))
+        let upper = side == Side::Upper;
+        grid_neighbour(self.ranks, self.coords, axis, upper, domain.periodic[axis])
     }
+}
+
+/// Coordinates of `rank` in a process grid of `ranks` (x fastest: rank =
+/// (c_z n_y + c_y) n_x + c_x). Every decomposition (grains, cells) numbers
+/// its ranks so.
+pub fn grid_coords(ranks: [usize; 3], rank: usize) -> [usize; 3] {
+    let coords = [
+        rank % ranks[0],
+        (rank / ranks[0]) % ranks[1],
+        rank / (ranks[0] * ranks[1]),
+    ];
+    assert!(
+        coords[2] < ranks[2],
+        "rank {rank} outside the process grid {ranks:?}"
+    );
+    coords
+}
+
+/// The rank at `coords` in a process grid of `ranks` ([`grid_coords`]).
+pub fn grid_rank(ranks: [usize; 3], coords: [usize; 3]) -> usize {
+    (coords[2] * ranks[1] + coords[1]) * ranks[0] + coords[0]
+}
+
+/// The rank next to the one at `coords` along `axis`, on its upper side or
+/// its lower one, across the end of a `periodic` axis (None at a wall).
+pub fn grid_neighbour(
+    ranks: [usize; 3],
+    coords: [usize; 3],
+    axis: usize,
+    upper: bool,
+    periodic: bool,
+) -> Option<usize> {
+    let (n, c) = (ranks[axis], coords[axis]);
+    let next = match upper {
+        false if c > 0 => c - 1,
+        true if c + 1 < n => c + 1,
+        false if periodic => n - 1,
+        true if periodic => 0,
+        _ => return None,
+    };
+    let mut coords = coords;
+    coords[axis] = next;
+    Some(grid_rank(ranks, coords))
 }
 
 /// The process grid for `size` ranks: among the factorisations

@@ -193,7 +193,7 @@ impl DemSystem {
     }
 
     /// Interaction range of a ghost: the largest pair distance in the list.
-    pub fn interaction_range(&self) -> f64 {
+    fn interaction_range(&self) -> f64 {
         self.range_for(self.max_radius)
     }
 
@@ -479,11 +479,6 @@ impl DemSystem {
     pub fn sum_onto_owners(&self, values: &mut [f64], width: usize) {
         assert_eq!(values.len(), self.particles.len() * width);
         self.ghosts.reverse_sum(values, width, &self.communicator);
-    }
-
-    /// Ids handed out so far over all ranks (every id is below it).
-    pub fn id_count(&self) -> u64 {
-        self.next_id
     }
 
     /// The owned particle a ghost (index ≥ n_owned) copies.

@@ -17,6 +17,7 @@
 
 use crate::error::FluidError;
 use crate::grid::Grid;
+use grainflow_core::{grid_coords, grid_neighbour, grid_rank};
 
 /// One rank's share of the cells of a global grid.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -69,18 +70,9 @@ impl Partition {
                 global.cells[line]
             )));
         }
-        let count: usize = ranks.iter().product();
-        assert!(
-            rank < count,
-            "rank {rank} outside the process grid {ranks:?}"
-        );
         Ok(Partition {
             ranks,
-            coords: [
-                rank % ranks[0],
-                (rank / ranks[0]) % ranks[1],
-                rank / (ranks[0] * ranks[1]),
-            ],
+            coords: grid_coords(ranks, rank),
             global_cells: global.cells,
         })
     }
@@ -92,7 +84,7 @@ impl Partition {
 
     /// The rank at process-grid coordinates `coords`.
     pub fn rank_at(&self, coords: [usize; 3]) -> usize {
-        (coords[2] * self.ranks[1] + coords[1]) * self.ranks[0] + coords[0]
+        grid_rank(self.ranks, coords)
     }
 
     /// First global cell of the rank at `coord` along `axis` (`coord =
@@ -103,14 +95,12 @@ impl Partition {
 
     /// This rank's first global cell along each axis.
     pub fn offset(&self) -> [usize; 3] {
-        [0, 1, 2].map(|axis| self.cell_start(axis, self.coords[axis]))
+        self.share_at(self.coords).0
     }
 
     /// This rank's cells along each axis.
     pub fn cells(&self) -> [usize; 3] {
-        [0, 1, 2].map(|axis| {
-            self.cell_start(axis, self.coords[axis] + 1) - self.cell_start(axis, self.coords[axis])
-        })
+        self.share_at(self.coords).1
     }
 
     /// Whether this rank's box reaches the lower (`side` 0) or upper (1)
@@ -126,30 +116,19 @@ impl Partition {
     /// a periodic end; None at a wall of the domain or along an axis of one
     /// rank (whose periodic ghosts are local copies).
     pub fn neighbour(&self, axis: usize, side: usize, periodic: bool) -> Option<usize> {
-        let n = self.ranks[axis];
-        if n == 1 {
+        if self.ranks[axis] == 1 {
             return None;
         }
-        let c = self.coords[axis];
-        let next = match side {
-            0 if c > 0 => c - 1,
-            0 if periodic => n - 1,
-            1 if c + 1 < n => c + 1,
-            1 if periodic => 0,
-            _ => return None,
-        };
-        let mut coords = self.coords;
-        coords[axis] = next;
-        Some(self.rank_at(coords))
+        grid_neighbour(self.ranks, self.coords, axis, side == 1, periodic)
     }
 
     /// The first cell and the cells of `rank` along each axis.
     pub fn share_of(&self, rank: usize) -> ([usize; 3], [usize; 3]) {
-        let coords = [
-            rank % self.ranks[0],
-            (rank / self.ranks[0]) % self.ranks[1],
-            rank / (self.ranks[0] * self.ranks[1]),
-        ];
+        self.share_at(grid_coords(self.ranks, rank))
+    }
+
+    /// The first cell and the cells of the rank at `coords`.
+    fn share_at(&self, coords: [usize; 3]) -> ([usize; 3], [usize; 3]) {
         let start = [0, 1, 2].map(|axis| self.cell_start(axis, coords[axis]));
         let end = [0, 1, 2].map(|axis| self.cell_start(axis, coords[axis] + 1));
         (start, [0, 1, 2].map(|axis| end[axis] - start[axis]))

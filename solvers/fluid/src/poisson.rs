@@ -45,7 +45,7 @@ use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
 use crate::partition::Partition;
 use crate::transform::{AxisTransform, Direction, TransformKind};
-use grainflow_core::Communicator;
+use grainflow_core::{grid_coords, Communicator};
 
 /// Which library transforms the lines of the direct solvers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -709,11 +709,7 @@ fn layouts(partition: &Partition, shape: [usize; 3], line_axis: usize) -> [Layou
     let mut x_pencils = Vec::new();
     let mut y_pencils = Vec::new();
     for rank in 0..partition.size() {
-        let coords = [
-            rank % partition.ranks[0],
-            (rank / partition.ranks[0]) % partition.ranks[1],
-            rank / (partition.ranks[0] * partition.ranks[1]),
-        ];
+        let coords = grid_coords(partition.ranks, rank);
         let cells = |axis: usize| {
             let c = coords[axis];
             [

@@ -180,26 +180,24 @@ impl CoupledSystem {
             let bodies = self
                 .immersed
                 .bodies(&self.dem.particles, &self.flow.grid, &unknowns);
-            let before = self.owned(self.immersed.inner_momentum(
-                &self.flow.grid,
-                &self.flow.velocity,
-                &bodies,
-            ));
+            let before = self
+                .immersed
+                .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies)
+                .summed_on_owners(&self.dem);
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);
             let forcing =
                 self.immersed
                     .apply(&self.flow.grid, &mut self.flow.velocity, &bodies, stage_dt);
-            let forcing = self.owned(forcing);
+            let forcing = forcing.summed_on_owners(&self.dem);
             let clock = self.lap(clock, Part::Forcing);
             max_divergence = max_divergence.max(self.flow.project(stage, dt));
             let clock = self.lap(clock, Part::Flow);
-            let after = self.owned(self.immersed.inner_momentum(
-                &self.flow.grid,
-                &self.flow.velocity,
-                &bodies,
-            ));
+            let after = self
+                .immersed
+                .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies)
+                .summed_on_owners(&self.dem);
             let loads = self.hydrodynamic_loads(&forcing, &before, &after, stage_dt);
             self.dem.set_external_loads(&loads.force, &loads.torque);
             // Velocities before the DEM (they travel with the particles).
@@ -221,25 +219,6 @@ impl CoupledSystem {
             dem: dem_report,
             dem_substeps: substeps,
         })
-    }
-
-    /// The loads on the owned particles from loads on every local one:
-    /// each ghost's share goes to its owner (on this rank for a periodic
-    /// image, on another for another rank's grain).
-    fn owned(&self, local: Loads) -> Loads {
-        let mut values: Vec<f64> = local
-            .force
-            .iter()
-            .zip(&local.torque)
-            .flat_map(|(f, t)| [f.x, f.y, f.z, t.x, t.y, t.z])
-            .collect();
-        self.dem.sum_onto_owners(&mut values, 6);
-        let n = self.dem.particles.n_owned;
-        let (force, torque) = values[..6 * n]
-            .chunks_exact(6)
-            .map(|v| (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])))
-            .unzip();
-        Loads { force, torque }
     }
 
     /// Adds the time since `clock` to `part`; returns the time now.

@@ -37,7 +37,7 @@
 use std::ops::Range;
 
 use grainflow_core::{Dimension, Vec3};
-use grainflow_dem::Particles;
+use grainflow_dem::{DemSystem, Particles};
 use grainflow_fluid::{Block, Grid, Location};
 use rayon::prelude::*;
 
@@ -67,6 +67,25 @@ impl Loads {
             force: vec![Vec3::zeros(); count],
             torque: vec![Vec3::zeros(); count],
         }
+    }
+
+    /// The loads on `dem`'s owned particles from loads on every local one:
+    /// each ghost's share goes to its owner (on this rank for a periodic
+    /// image, on another for another rank's grain; collective).
+    pub fn summed_on_owners(&self, dem: &DemSystem) -> Loads {
+        let mut values: Vec<f64> = self
+            .force
+            .iter()
+            .zip(&self.torque)
+            .flat_map(|(f, t)| [f.x, f.y, f.z, t.x, t.y, t.z])
+            .collect();
+        dem.sum_onto_owners(&mut values, 6);
+        let n = dem.particles.n_owned;
+        let (force, torque) = values[..6 * n]
+            .chunks_exact(6)
+            .map(|v| (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])))
+            .unzip();
+        Loads { force, torque }
     }
 }
 

@@ -66,18 +66,10 @@ fn a_sphere_across_periodic_edges_acts_like_one_inside() {
         let mut volume = immersed.grid_volume(&grid, &bodies);
         dem.sum_onto_owners(&mut volume, 1);
         let volume = volume[0];
-        let local = immersed.apply(&grid, &mut flow.velocity, &bodies, 0.1);
-        let mut loads: Vec<f64> = local
-            .force
-            .iter()
-            .zip(&local.torque)
-            .flat_map(|(f, t)| [f.x, f.y, f.z, t.x, t.y, t.z])
-            .collect();
-        dem.sum_onto_owners(&mut loads, 6);
-        let (force, torque) = (
-            Vec3::new(loads[0], loads[1], loads[2]),
-            Vec3::new(loads[3], loads[4], loads[5]),
-        );
+        let loads = immersed
+            .apply(&grid, &mut flow.velocity, &bodies, 0.1)
+            .summed_on_owners(&dem);
+        let (force, torque) = (loads.force[0], loads.torque[0]);
         let momentum: Vec<f64> = (0..3)
             .map(|c| {
                 let field = &flow.velocity[c];

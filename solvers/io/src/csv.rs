@@ -21,6 +21,12 @@ impl CsvSeries {
         })
     }
 
+    /// [`CsvSeries::create`] on the rank that writes the shared files
+    /// (`root`); None elsewhere.
+    pub fn create_on(root: bool, path: &Path, header: &[&str]) -> std::io::Result<Option<Self>> {
+        root.then(|| Self::create(path, header)).transpose()
+    }
+
     /// Writes one row of numbers (17 significant digits, round-trip exact).
     pub fn row(&mut self, values: &[f64]) -> std::io::Result<()> {
         debug_assert_eq!(values.len(), self.columns);
