@@ -121,12 +121,17 @@ impl Layout {
 
 /// The unknowns of a solve on several ranks, rearranged so that each
 /// transform and the line solve see whole lines (as in CaNS and
-/// 2DECOMP&FFT): `physical`, split like the cells with the line axis whole
-/// (where the tridiagonal solve runs); `x_pencils`, x whole; in 3D
-/// `y_pencils`, y whole. A solve goes physical → x → y → physical, the
-/// line solve, and back; each change of arrangement is one all-to-all.
+/// 2DECOMP&FFT): `physical`, split like the cells with the line axis whole;
+/// `x_pencils`, x whole; in 3D `y_pencils`, y whole. With ranks along both
+/// x and y a solve goes physical → x → y → physical, the line solve, and
+/// back; each change of arrangement is one all-to-all. With ranks along
+/// one axis only (a slab), the other transformed axis is whole in the
+/// ranks' own boxes and the pencils share it instead of the line axis, so
+/// the lines are solved in the pencils: one all-to-all each way.
 struct Pencils {
     communicator: Communicator,
+    /// Where the tridiagonal line solve runs.
+    solve_in: Arrangement,
     physical: Layout,
     x_pencils: Layout,
     y_pencils: Option<Layout>,
@@ -196,6 +201,14 @@ impl Pencils {
             }
         }
     }
+}
+
+/// One arrangement of a solve's unknowns among the ranks ([`Pencils`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Arrangement {
+    Physical,
+    XPencils,
+    YPencils,
 }
 
 /// The common part of two boxes, if any.
@@ -353,14 +366,23 @@ impl DirectSolver {
         let global_shape = [0, 1, 2].map(|a| global_block.end[a] - global_block.start[a]);
         let block = unknowns(grid, &local_ends(ends, partition));
         let shape = [0, 1, 2].map(|a| block.end[a] - block.start[a]);
-        let layouts = layouts(partition, global_shape, line_axis);
+        let (layouts, solve_in) = layouts(partition, global_shape, line_axis);
         let me = communicator.rank();
         assert_eq!(
             layouts[0].shape(me),
             shape,
             "this rank's unknowns are its box of the physical layout"
         );
-        let offset = layouts[0].boxes[me].map(|[lower, _]| lower);
+        // The modes this rank solves lines for: its box of the arrangement
+        // the line solve runs in.
+        let solve_box = match solve_in {
+            Arrangement::Physical => layouts[0].boxes[me],
+            Arrangement::XPencils => layouts[1].boxes[me],
+            Arrangement::YPencils => layouts[2].boxes[me],
+        };
+        let offset = solve_box.map(|[lower, _]| lower);
+        let solve_shape = solve_box.map(|[lower, upper]| upper - lower);
+        debug_assert_eq!(solve_shape[line_axis], shape[line_axis]);
         let mut transforms = Vec::new();
         let mut eigenvalues: Vec<Vec<f64>> = Vec::new();
         for (axis, end) in ends.iter().enumerate().take(line_axis) {
@@ -384,9 +406,8 @@ impl DirectSolver {
             };
             let transform = AxisTransform::new(kind, global_shape[axis]);
             let h2 = grid.spacing[axis] * grid.spacing[axis];
-            // This rank's modes along the axis (its box of the physical layout).
             eigenvalues.push(
-                transform.angles()[offset[axis]..offset[axis] + shape[axis]]
+                transform.angles()[offset[axis]..offset[axis] + solve_shape[axis]]
                     .iter()
                     .map(|theta| -(2.0 - 2.0 * theta.cos()) / h2)
                     .collect::<Vec<f64>>(),
@@ -431,14 +452,14 @@ impl DirectSolver {
             line_ends,
         );
         // Modes are ordered like the compact array: first axis fastest.
-        let mode_count: usize = shape[..line_axis].iter().product();
+        let mode_count: usize = solve_shape[..line_axis].iter().product();
         let modal = (0..mode_count)
             .map(|mode| {
                 let mut remainder = mode;
                 let mut sum = 0.0;
                 for (axis, eigenvalues) in eigenvalues.iter().enumerate() {
-                    sum += eigenvalues[remainder % shape[axis]];
-                    remainder /= shape[axis];
+                    sum += eigenvalues[remainder % solve_shape[axis]];
+                    remainder /= solve_shape[axis];
                 }
                 sum
             })
@@ -462,6 +483,7 @@ impl DirectSolver {
                     Vec::new()
                 },
                 y_pencils: (line_axis == 2).then_some(y_pencils),
+                solve_in,
                 physical,
                 x_pencils,
                 communicator: communicator.clone(),
@@ -593,28 +615,45 @@ impl DirectSolver {
                 pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
             }
             // A process grid split along one axis only: the other axis'
-            // lines are whole in the ranks' own boxes, transformed there.
+            // lines are whole in the ranks' own boxes, transformed there;
+            // the lines are solved in the pencils when they hold them whole
+            // (forward ends there, backward starts there).
             (Some(y_pencils), _) if y_pencils.boxes == physical.boxes => {
                 let own_shape = physical.shape(me);
+                let solve_here = pencils.solve_in == Arrangement::XPencils;
                 if direction == Direction::Forward {
                     apply(1, &mut self.modes, own_shape);
-                }
-                pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
-                apply(0, &mut x_data, x_shape);
-                pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
-                if direction == Direction::Backward {
+                    pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
+                    apply(0, &mut x_data, x_shape);
+                    if !solve_here {
+                        pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
+                    }
+                } else {
+                    if !solve_here {
+                        pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
+                    }
+                    apply(0, &mut x_data, x_shape);
+                    pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
                     apply(1, &mut self.modes, own_shape);
                 }
             }
             (Some(y_pencils), _) if x_pencils.boxes == physical.boxes => {
                 let own_shape = physical.shape(me);
+                let y_shape = y_pencils.shape(me);
+                let solve_here = pencils.solve_in == Arrangement::YPencils;
                 if direction == Direction::Forward {
                     apply(0, &mut self.modes, own_shape);
-                }
-                pencils.redistribute(physical, &self.modes, y_pencils, &mut y_data);
-                apply(1, &mut y_data, y_pencils.shape(me));
-                pencils.redistribute(y_pencils, &y_data, physical, &mut self.modes);
-                if direction == Direction::Backward {
+                    pencils.redistribute(physical, &self.modes, y_pencils, &mut y_data);
+                    apply(1, &mut y_data, y_shape);
+                    if !solve_here {
+                        pencils.redistribute(y_pencils, &y_data, physical, &mut self.modes);
+                    }
+                } else {
+                    if !solve_here {
+                        pencils.redistribute(physical, &self.modes, y_pencils, &mut y_data);
+                    }
+                    apply(1, &mut y_data, y_shape);
+                    pencils.redistribute(y_pencils, &y_data, physical, &mut self.modes);
                     apply(0, &mut self.modes, own_shape);
                 }
             }
@@ -660,6 +699,11 @@ impl DirectSolver {
     /// elimination runs over flat arrays.
     fn solve_lines(&mut self, identity: f64, laplacian: f64) {
         let length = self.shape[self.line_axis];
+        let modes = match &mut self.pencils {
+            Some(p) if p.solve_in == Arrangement::XPencils => &mut p.x_data,
+            Some(p) if p.solve_in == Arrangement::YPencils => &mut p.y_data,
+            _ => &mut self.modes,
+        };
         let work = &mut self.lines;
         self.rows.scaled(laplacian, &mut work.rows);
         let periodic = self.line_ends[0] == EndKind::Periodic;
@@ -676,31 +720,47 @@ impl DirectSolver {
             // Set the singular mode aside; it is swept as the identity.
             work.singular_line.clear();
             work.singular_line
-                .extend((0..length).map(|j| self.modes[j * self.modal.len()]));
+                .extend((0..length).map(|j| modes[j * self.modal.len()]));
         }
         if periodic {
-            work.solve_cyclic(&mut self.modes, length, singular);
+            work.solve_cyclic(modes, length, singular);
         } else {
-            work.sweep(&mut self.modes, length, singular);
+            work.sweep(modes, length, singular);
         }
         if singular {
             let line = work.solve_singular(length, &self.rows.width);
             let stride = self.modal.len();
             for (j, value) in line.iter().enumerate() {
-                self.modes[j * stride] = *value;
+                modes[j * stride] = *value;
             }
         }
     }
 }
 
 /// The physical, x-pencil and y-pencil layouts of a field's unknowns
-/// (`shape` of them in all) among the ranks of `partition`. Physical: the
-/// ranks' boxes of cells (a rank at the upper end of an axis whose last
-/// face is prescribed has one unknown fewer), the line axis whole. x
-/// pencils: x whole, y as physical (3D), and the line axis shared among
-/// the ranks along x; y pencils (3D): x as physical, y whole, z shared
-/// among the ranks along y.
-fn layouts(partition: &Partition, shape: [usize; 3], line_axis: usize) -> [Layout; 3] {
+/// (`shape` of them in all) among the ranks of `partition`, and the one
+/// the line solve runs in. Physical: the ranks' boxes of cells (a rank at
+/// the upper end of an axis whose last face is prescribed has one unknown
+/// fewer), the line axis whole. With ranks along x and y (and in 2D): x
+/// pencils, x whole, y as physical (3D), the line axis shared among the
+/// ranks along x; y pencils (3D), x as physical, y whole, z shared among
+/// the ranks along y; lines solved in the physical layout. With ranks
+/// along x only (3D): x pencils x whole, y shared, z whole, where the
+/// lines are solved; y pencils are the physical boxes. Along y only, the
+/// mirror image.
+fn layouts(
+    partition: &Partition,
+    shape: [usize; 3],
+    line_axis: usize,
+) -> ([Layout; 3], Arrangement) {
+    let [along_x, along_y] = [partition.ranks[0], partition.ranks[1]];
+    let solve_in = if line_axis == 2 && along_y == 1 && along_x > 1 && shape[1] >= along_x {
+        Arrangement::XPencils
+    } else if line_axis == 2 && along_x == 1 && along_y > 1 && shape[0] >= along_y {
+        Arrangement::YPencils
+    } else {
+        Arrangement::Physical
+    };
     let even = |length: usize, parts: usize, part: usize| {
         [part * length / parts, (part + 1) * length / parts]
     };
@@ -734,23 +794,28 @@ fn layouts(partition: &Partition, shape: [usize; 3], line_axis: usize) -> [Layou
             ]);
             y_pencils.push([whole(0), whole(1), whole(2)]);
         } else {
-            x_pencils.push([
-                whole(0),
-                cells(1),
-                line_share(partition.ranks[0], coords[0]),
-            ]);
-            y_pencils.push([
-                cells(0),
-                whole(1),
-                line_share(partition.ranks[1], coords[1]),
-            ]);
+            match solve_in {
+                Arrangement::XPencils => {
+                    x_pencils.push([whole(0), even(shape[1], along_x, coords[0]), whole(2)]);
+                    y_pencils.push(physical[rank]);
+                }
+                Arrangement::YPencils => {
+                    x_pencils.push(physical[rank]);
+                    y_pencils.push([even(shape[0], along_y, coords[1]), whole(1), whole(2)]);
+                }
+                Arrangement::Physical => {
+                    x_pencils.push([whole(0), cells(1), line_share(along_x, coords[0])]);
+                    y_pencils.push([cells(0), whole(1), line_share(along_y, coords[1])]);
+                }
+            }
         }
     }
-    [
+    let layouts = [
         Layout { boxes: physical },
         Layout { boxes: x_pencils },
         Layout { boxes: y_pencils },
-    ]
+    ];
+    (layouts, solve_in)
 }
 
 /// Work arrays of the tridiagonal systems of all modes: the line operator
