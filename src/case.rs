@@ -69,16 +69,24 @@ pub struct Case {
 #[serde(deny_unknown_fields)]
 pub struct ParallelSection {
     /// Ranks along each axis; their product must be the number of ranks
-    /// the run is started on.
-    pub process_grid: Vec<usize>,
+    /// the run is started on (default: chosen by the run).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub process_grid: Option<Vec<usize>>,
+    /// Whether ranks on one node read one another's arrays directly in the
+    /// flow's transposes (default true); false sends messages, as between
+    /// nodes.
+    #[serde(default = "default_true")]
+    pub shared_memory: bool,
 }
 
 impl ParallelSection {
-    /// The process grid along x, y, z (1 along an axis the case omits).
-    pub fn ranks(&self) -> [usize; 3] {
+    /// The process grid along x, y, z (1 along an axis the case omits), if
+    /// the case sets one.
+    pub fn ranks(&self) -> Option<[usize; 3]> {
+        let grid = self.process_grid.as_ref()?;
         let mut ranks = [1; 3];
-        ranks[..self.process_grid.len()].copy_from_slice(&self.process_grid);
-        ranks
+        ranks[..grid.len()].copy_from_slice(grid);
+        Some(ranks)
     }
 }
 
@@ -684,11 +692,11 @@ impl Case {
         if !d.gravity.is_empty() {
             check_len("domain.gravity", &d.gravity, dim, &need)?;
         }
-        if let Some(parallel) = &self.parallel {
-            if parallel.process_grid.len() != dim || parallel.process_grid.contains(&0) {
+        if let Some(grid) = self.parallel.as_ref().and_then(|p| p.process_grid.as_ref()) {
+            if grid.len() != dim || grid.contains(&0) {
                 return Err(invalid(
                     "parallel.process_grid",
-                    format!("{:?}", parallel.process_grid),
+                    format!("{grid:?}"),
                     &format!("allowed: {dim} positive rank counts, one per axis"),
                 ));
             }

@@ -99,8 +99,13 @@ pub fn build(case: &Case) -> Result<FlowSolver, String> {
 /// given (and more than one rank runs), else the split of x and y with the
 /// least area of cuts.
 pub fn process_grid_of(case: &Case, grid: &Grid, size: usize) -> Result<[usize; 3], String> {
-    match case.parallel.as_ref().filter(|_| size > 1) {
-        Some(parallel) => Ok(parallel.ranks()),
+    match case
+        .parallel
+        .as_ref()
+        .and_then(|p| p.ranks())
+        .filter(|_| size > 1)
+    {
+        Some(ranks) => Ok(ranks),
         None => flow_process_grid(grid, size).map_err(|e| format!("fluid: {e}")),
     }
 }
@@ -111,11 +116,12 @@ pub fn build_on(case: &Case, communicator: Communicator) -> Result<FlowSolver, S
     let f = case.fluid_section();
     let grid = grid(case);
     let ranks = process_grid_of(case, &grid, communicator.size())?;
+    let shared_memory = case.parallel.as_ref().is_none_or(|p| p.shared_memory);
     let mut solver = FlowSolver::distributed(
         grid,
         boundaries(case),
         f.viscosity / f.density,
-        communicator,
+        communicator.with_shared_memory(shared_memory),
         ranks,
         transform_backend(case),
     )

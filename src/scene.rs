@@ -428,15 +428,20 @@ pub fn process_grid_of(
     range: f64,
     positions: &[Vec3],
 ) -> Result<[usize; 3], String> {
-    let Some(parallel) = case.parallel.as_ref().filter(|_| size > 1) else {
+    let Some(ranks) = case
+        .parallel
+        .as_ref()
+        .and_then(|p| p.ranks())
+        .filter(|_| size > 1)
+    else {
         return process_grid(domain, size, range, positions);
     };
-    let ranks = parallel.ranks();
+    let given = case.parallel.as_ref().and_then(|p| p.process_grid.as_ref());
     if ranks.iter().product::<usize>() != size {
         return Err(format!(
             "parallel.process_grid = {:?} holds {} ranks, but the run has {size}; allowed: \
              counts whose product is the number of ranks",
-            parallel.process_grid,
+            given.expect("set"),
             ranks.iter().product::<usize>()
         ));
     }
@@ -444,7 +449,7 @@ pub fn process_grid_of(
         return Err(format!(
             "parallel.process_grid = {:?} makes boxes narrower than the interaction range \
              {range:.3e} m along a split axis; allowed: fewer ranks along the short axes",
-            parallel.process_grid
+            given.expect("set")
         ));
     }
     Ok(ranks)

@@ -561,7 +561,10 @@ fn field_deviation(
 /// Taylor–Green vortex, the 3D Beltrami flow, a lid-driven box walled on
 /// every side: walls across the split axes) and after the start-up of a
 /// Couette flow on a stretched grid: the velocity of every cell deviates from the serial run's by at
-/// most 1e-10 of the largest speed, and the analyses agree.
+/// most 1e-10 of the largest speed, and the analyses agree. The ranks of
+/// one node read one another's pencils directly; the grids marked
+/// `messages` send them instead (`parallel.shared_memory = false`, the
+/// path between nodes).
 #[test]
 fn flows_on_2_and_4_ranks_match_the_serial_run() {
     let dir = tempfile::tempdir().unwrap();
@@ -603,7 +606,13 @@ interval = 0.2
         (
             cases.join("taylor_green_3d.toml"),
             vec!["time.end=2.0", "output.interval=2.0"],
-            vec!["[2,1,1]", "[2,2,1]", "[1,4,1]"],
+            vec![
+                "[2,1,1]",
+                "[2,2,1]",
+                "[1,4,1]",
+                "[2,1,1] messages",
+                "[2,2,1] messages",
+            ],
             1,
             Some("l2_error"),
         ),
@@ -629,19 +638,29 @@ interval = 0.2
         assert_eq!(code, 0, "{name}: {stderr}");
         let reference = read_velocity(&serial, last_frame);
         for grid in grids {
+            let (grid, messages) = match grid.strip_suffix(" messages") {
+                Some(grid) => (grid, true),
+                None => (grid, false),
+            };
             let ranks: usize = grid
                 .trim_matches(|c| c == '[' || c == ']')
                 .split(',')
                 .map(|v| v.parse::<usize>().unwrap())
                 .product();
-            let out = dir.path().join(format!("{name}_{grid}"));
+            let out = dir.path().join(format!("{name}_{grid}_{messages}"));
             let setting = format!("parallel.process_grid={grid}");
             let mut all = settings.clone();
             all.push(&setting);
+            if messages {
+                all.push("parallel.shared_memory=false");
+            }
             let (code, stderr) = run(&case, &out, ranks, &all, Duration::from_secs(300));
             assert_eq!(code, 0, "{name} on {grid}: {stderr}");
             let largest = field_deviation(&reference, &read_velocity(&out, last_frame));
-            println!("{name} on {grid}: largest relative deviation of the velocity {largest:.3e}");
+            println!(
+                "{name} on {grid} (messages: {messages}): largest relative deviation of the \
+                 velocity {largest:.3e}"
+            );
             assert!(largest <= 1e-10, "{name} on {grid}: {largest:e}");
             if let Some(key) = metric {
                 let (a, b) = (

@@ -10,11 +10,16 @@
 //! it from the thread that runs the time loop, never from inside a parallel
 //! loop, so calls never overlap.
 
+use crate::shared::SharedArray;
+
 /// A group of ranks sharing one scene.
 #[derive(Clone, Debug)]
 pub struct Communicator {
     rank: usize,
     size: usize,
+    /// Whether arrays may be shared among ranks of one node
+    /// ([`Communicator::shares_memory`]).
+    memory_sharing: bool,
     #[cfg(feature = "mpi")]
     world: Option<std::sync::Arc<mpi_backend::World>>,
 }
@@ -25,6 +30,7 @@ impl Communicator {
         Communicator {
             rank: 0,
             size: 1,
+            memory_sharing: false,
             #[cfg(feature = "mpi")]
             world: None,
         }
@@ -37,10 +43,16 @@ impl Communicator {
         use mpi::traits::Communicator as _;
         let rank = world.rank() as usize;
         let size = world.size() as usize;
+        // Ranks that all live on one node can read one another's memory.
+        let node_size = world.split_shared(rank as i32).size() as usize;
         Communicator {
             rank,
             size,
-            world: Some(std::sync::Arc::new(mpi_backend::World(world))),
+            memory_sharing: true,
+            world: Some(std::sync::Arc::new(mpi_backend::World {
+                communicator: world,
+                one_node: node_size == size,
+            })),
         }
     }
 
@@ -159,6 +171,50 @@ impl Communicator {
         receive.copy_from_slice(send);
     }
 
+    /// Whether every rank can read the others' [`SharedArray`]s: MPI ranks
+    /// that all run on one node (a single rank reads only its own).
+    pub fn shares_memory(&self) -> bool {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            return self.memory_sharing && world.one_node && self.size > 1;
+        }
+        false
+    }
+
+    /// The same ranks, sharing memory on one node only if `allowed` (else
+    /// every exchange is a message, as between nodes).
+    pub fn with_shared_memory(mut self, allowed: bool) -> Self {
+        self.memory_sharing = allowed;
+        self
+    }
+
+    /// `len` zeros on this rank that the other ranks can read when they
+    /// share memory ([`Communicator::shares_memory`]); a plain array
+    /// otherwise. Collective: every rank allocates its arrays in the same
+    /// order (and frees them in the same order).
+    pub fn shared_array(&self, len: usize) -> SharedArray {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            if self.shares_memory() {
+                return SharedArray::window(crate::shared::window::Window::allocate(world, len));
+            }
+        }
+        SharedArray::local(len)
+    }
+
+    /// Collective: after it, what every rank wrote to its shared `arrays`
+    /// before it is visible to all, and every rank has finished what it did
+    /// before it (in particular reading the others' arrays).
+    pub fn synchronize_shared(&self, arrays: &[&SharedArray]) {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            arrays.iter().for_each(|array| array.memory_sync());
+            world.barrier();
+            arrays.iter().for_each(|array| array.memory_sync());
+        }
+        let _ = arrays;
+    }
+
     /// Collects every rank's `local` on the root, indexed by rank (None on
     /// the other ranks).
     pub fn gather(&self, local: &[f64]) -> Option<Vec<Vec<f64>>> {
@@ -196,7 +252,11 @@ pub mod mpi_backend {
     /// `MPI_COMM_WORLD`, shareable between threads: grainflow serialises
     /// its MPI calls (one thread drives the time loop), which the
     /// `Serialized` threading level allows.
-    pub struct World(pub mpi::topology::SimpleCommunicator);
+    pub struct World {
+        pub communicator: mpi::topology::SimpleCommunicator,
+        /// Whether all ranks share one node's memory.
+        pub one_node: bool,
+    }
 
     // SAFETY: MPI is initialised with `Threading::Serialized` (see
     // `initialize`), which allows calls from any thread as long as they do
@@ -206,7 +266,7 @@ pub mod mpi_backend {
 
     impl std::fmt::Debug for World {
         fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-            write!(f, "MPI world of {} ranks", self.0.size())
+            write!(f, "MPI world of {} ranks", self.communicator.size())
         }
     }
 
@@ -219,21 +279,21 @@ pub mod mpi_backend {
     impl World {
         pub fn sum(&self, local: f64) -> f64 {
             let mut total = 0.0;
-            self.0
+            self.communicator
                 .all_reduce_into(&local, &mut total, SystemOperation::sum());
             total
         }
 
         pub fn sum_count(&self, local: u64) -> u64 {
             let mut total = 0u64;
-            self.0
+            self.communicator
                 .all_reduce_into(&local, &mut total, SystemOperation::sum());
             total
         }
 
         pub fn max(&self, local: f64) -> f64 {
             let mut largest = 0.0;
-            self.0
+            self.communicator
                 .all_reduce_into(&local, &mut largest, SystemOperation::max());
             largest
         }
@@ -248,12 +308,12 @@ pub mod mpi_backend {
             let tag = i32::from(stage);
             mpi::request::scope(|scope| {
                 let sent = destination.map(|rank| {
-                    self.0
+                    self.communicator
                         .process_at_rank(rank as i32)
                         .immediate_send_with_tag(scope, outgoing, tag)
                 });
                 let received = source.map(|rank| {
-                    self.0
+                    self.communicator
                         .process_at_rank(rank as i32)
                         .receive_vec_with_tag::<f64>(tag)
                         .0
@@ -268,7 +328,7 @@ pub mod mpi_backend {
         pub fn exchange(&self, outgoing: &[Vec<f64>]) -> Vec<Vec<f64>> {
             let send_counts: Vec<Count> = outgoing.iter().map(|m| m.len() as Count).collect();
             let mut receive_counts = vec![0 as Count; outgoing.len()];
-            self.0
+            self.communicator
                 .all_to_all_into(&send_counts[..], &mut receive_counts[..]);
             let incoming: Vec<usize> = receive_counts.iter().map(|&c| c as usize).collect();
             self.exchange_known(outgoing, &incoming)
@@ -302,18 +362,19 @@ pub mod mpi_backend {
             let receive_displs = displacements(&receive_counts);
             let send = Partition::new(send, &send_counts[..], &send_displs[..]);
             let mut receive = PartitionMut::new(receive, &receive_counts[..], &receive_displs[..]);
-            self.0.all_to_all_varcount_into(&send, &mut receive);
+            self.communicator
+                .all_to_all_varcount_into(&send, &mut receive);
         }
 
         pub fn gather(&self, local: &[f64]) -> Option<Vec<Vec<f64>>> {
-            let root = self.0.process_at_rank(0);
+            let root = self.communicator.process_at_rank(0);
             let count = local.len() as Count;
-            if self.0.rank() != 0 {
+            if self.communicator.rank() != 0 {
                 root.gather_into(&count);
                 root.gather_varcount_into(local);
                 return None;
             }
-            let mut counts = vec![0 as Count; self.0.size() as usize];
+            let mut counts = vec![0 as Count; self.communicator.size() as usize];
             root.gather_into_root(&count, &mut counts[..]);
             let displs = displacements(&counts);
             let total: usize = counts.iter().map(|&c| c as usize).sum();
@@ -325,8 +386,12 @@ pub mod mpi_backend {
             Some(split(&received, &counts, &displs))
         }
 
+        pub fn barrier(&self) {
+            self.communicator.barrier();
+        }
+
         pub fn abort(&self, code: i32) -> ! {
-            self.0.abort(code)
+            self.communicator.abort(code)
         }
     }
 

@@ -8,12 +8,14 @@
 
 pub mod communicator;
 pub mod domain;
+pub mod shared;
 
 pub use communicator::Communicator;
 pub use domain::{
     fits, grains_per_box, grid_coords, grid_neighbour, grid_rank, process_grid, Dimension, Domain,
     Side, Subdomain,
 };
+pub use shared::SharedArray;
 
 /// Three-component vector of `f64`. 2D scenes live in the (x, y) plane with
 /// z = 0, rotations about z only.

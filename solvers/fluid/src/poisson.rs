@@ -45,7 +45,7 @@ use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
 use crate::partition::Partition;
 use crate::transform::{AxisTransform, Direction, TransformKind};
-use grainflow_core::{grid_coords, Communicator};
+use grainflow_core::{grid_coords, Communicator, SharedArray};
 
 /// Which library transforms the lines of the direct solvers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,7 +93,7 @@ pub struct DirectSolver {
     transforms: LineTransforms,
     /// `Σ λ_k` over the transformed axes, for every mode.
     modal: Vec<f64>,
-    modes: Vec<f64>,
+    modes: SharedArray,
     lines: ModeLines,
     /// On several ranks, the pencils the transforms work on; None when one
     /// rank holds every unknown (the transforms then act on `modes`).
@@ -135,8 +135,8 @@ struct Pencils {
     physical: Layout,
     x_pencils: Layout,
     y_pencils: Option<Layout>,
-    x_data: Vec<f64>,
-    y_data: Vec<f64>,
+    x_data: SharedArray,
+    y_data: SharedArray,
     /// Send and receive buffers of the all-to-all, kept between solves
     /// (allocating megabytes at every transpose costs more than moving them).
     buffers: std::cell::RefCell<(Vec<f64>, Vec<f64>)>,
@@ -146,7 +146,7 @@ impl Pencils {
     /// Moves the values of `source` (arranged as `from`) into `target`
     /// (arranged as `to`): each rank sends every other the part of its box
     /// that lies in the other's new box.
-    fn redistribute(&self, from: &Layout, source: &[f64], to: &Layout, target: &mut [f64]) {
+    fn redistribute(&self, from: &Layout, source: &SharedArray, to: &Layout, target: &mut [f64]) {
         if from.boxes == to.boxes {
             // The same arrangement (no split along the axes that differ).
             target.copy_from_slice(source);
@@ -154,6 +154,26 @@ impl Pencils {
         }
         let me = self.communicator.rank();
         let ranks = from.boxes.len();
+        if source.is_shared() {
+            // Ranks of one node: once every source is complete, each rank
+            // copies its new box straight out of the others' arrays. The
+            // barrier also ends every read of the last transpose, whose
+            // source no rank writes before this one (a solve only writes
+            // the target of the last transpose until the next one).
+            self.communicator.synchronize_shared(&[source]);
+            for other in 0..ranks {
+                if let Some(part) = intersection(&from.boxes[other], &to.boxes[me]) {
+                    copy_part(
+                        &from.boxes[other],
+                        source.of_rank(other),
+                        &to.boxes[me],
+                        target,
+                        &part,
+                    );
+                }
+            }
+            return;
+        }
         let parts_to: Vec<Option<[[usize; 2]; 3]>> = (0..ranks)
             .map(|other| intersection(&from.boxes[me], &to.boxes[other]))
             .collect();
@@ -217,6 +237,28 @@ fn intersection(a: &[[usize; 2]; 3], b: &[[usize; 2]; 3]) -> Option<[[usize; 2];
     part.iter()
         .all(|[lower, upper]| lower < upper)
         .then_some(part)
+}
+
+/// Copies `part` of `source` (an array over the box `from`) into `target`
+/// (an array over the box `to`), row by row.
+fn copy_part(
+    from: &[[usize; 2]; 3],
+    source: &[f64],
+    to: &[[usize; 2]; 3],
+    target: &mut [f64],
+    part: &[[usize; 2]; 3],
+) {
+    let row_start = |whole: &[[usize; 2]; 3], j: usize, k: usize| {
+        let shape = whole.map(|[lower, upper]| upper - lower);
+        ((k - whole[2][0]) * shape[1] + (j - whole[1][0])) * shape[0] + part[0][0] - whole[0][0]
+    };
+    let length = part[0][1] - part[0][0];
+    for k in part[2][0]..part[2][1] {
+        for j in part[1][0]..part[1][1] {
+            let (from_row, to_row) = (row_start(from, j, k), row_start(to, j, k));
+            target[to_row..to_row + length].copy_from_slice(&source[from_row..from_row + length]);
+        }
+    }
 }
 
 /// Calls `visit(range)` with the flat indices, in an array over `whole`,
@@ -465,22 +507,32 @@ impl DirectSolver {
             })
             .collect();
         let total = shape.iter().product();
+        // On ranks of one node the arrays the transposes read live in shared
+        // memory (every rank allocates them in the same order).
+        let shares_memory = partition.size() > 1 && communicator.shares_memory();
+        let array = |len: usize| {
+            if shares_memory {
+                communicator.shared_array(len)
+            } else {
+                SharedArray::local(len)
+            }
+        };
         #[cfg_attr(not(feature = "fftw"), allow(unused_mut))]
-        let mut modes = vec![0.0; total];
+        let mut modes = array(total);
         #[cfg_attr(not(feature = "fftw"), allow(unused_mut))]
         let mut pencils = (partition.size() > 1).then(|| {
             let [physical, x_pencils, y_pencils] = layouts;
             Pencils {
                 // No array for pencils that are the ranks' own boxes.
                 x_data: if x_pencils.boxes != physical.boxes {
-                    vec![0.0; x_pencils.len(me)]
+                    array(x_pencils.len(me))
                 } else {
-                    Vec::new()
+                    SharedArray::default()
                 },
                 y_data: if line_axis == 2 && y_pencils.boxes != physical.boxes {
-                    vec![0.0; y_pencils.len(me)]
+                    array(y_pencils.len(me))
                 } else {
-                    Vec::new()
+                    SharedArray::default()
                 },
                 y_pencils: (line_axis == 2).then_some(y_pencils),
                 solve_in,
