@@ -32,10 +32,19 @@ pub fn build(case: &Case) -> Result<(CoupledSystem, f64), String> {
 /// ghosts of those whose immersed boundary reaches them.
 pub fn build_on(case: &Case, communicator: Communicator) -> Result<(CoupledSystem, f64), String> {
     let mut flow = fluid_scene::build_on(case, communicator.clone())?;
-    // Gravity acts on the grains, buoyancy through their loads; on the
-    // fluid alone it is balanced by the hydrostatic pressure, which the
-    // kinematic pressure leaves out.
-    flow.body_force = [0.0; 3];
+    // Gravity acts on the grains, buoyancy (−ρ V g) through their loads.
+    // On the fluid, along an axis closed by walls, it is balanced by the
+    // hydrostatic pressure, which the kinematic pressure leaves out; along
+    // a periodic axis no pressure can balance it (the pressure is
+    // periodic), so there it drives the fluid, as down the inclined bed of
+    // Izard et al. (2014, section 4.2). The grains' loads
+    // −ρ∫f + ρ d/dt∫α u − ρ V g hold either way: the forcing inside a grain
+    // hands it the body force on its inner fluid.
+    let periodic = fluid_scene::boundaries(case)
+        .faces
+        .map(|[lower, _]| lower == grainflow_fluid::BoundaryCondition::Periodic);
+    let gravity = flow.body_force;
+    flow.body_force = [0, 1, 2].map(|axis| if periodic[axis] { gravity[axis] } else { 0.0 });
     let ranks = flow.partition().ranks;
     let grid = &flow.grid;
     let reach = |max_radius| grainflow_ibm::forcing::ghost_reach(grid, max_radius);

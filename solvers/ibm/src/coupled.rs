@@ -198,7 +198,26 @@ impl CoupledSystem {
                 .immersed
                 .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies)
                 .summed_on_owners(&self.dem);
-            let loads = self.hydrodynamic_loads(&forcing, &before, &after, stage_dt);
+            // Along a periodic axis the fluid carries gravity as a body
+            // force b, and the forcing hands each grain the body force on
+            // the fluid its grid volume holds.
+            let body_force = Vec3::from(self.flow.body_force);
+            let grid_volumes = (body_force != Vec3::zeros()).then(|| {
+                let local = self.immersed.grid_volumes(&self.flow.grid, &bodies);
+                let mut values: Vec<f64> = local.iter().flat_map(|v| [v.x, v.y, v.z]).collect();
+                self.dem.sum_onto_owners(&mut values, 3);
+                values[..3 * self.dem.particles.n_owned]
+                    .chunks_exact(3)
+                    .map(|v| Vec3::new(v[0], v[1], v[2]))
+                    .collect::<Vec<Vec3>>()
+            });
+            let loads = self.hydrodynamic_loads(
+                &forcing,
+                &before,
+                &after,
+                grid_volumes.as_deref(),
+                stage_dt,
+            );
             self.dem.set_external_loads(&loads.force, &loads.torque);
             // Velocities before the DEM (they travel with the particles).
             let p = &mut self.dem.particles;
@@ -238,14 +257,18 @@ impl CoupledSystem {
     /// The load (N, N m) the DEM holds fixed over a stage of length
     /// `stage_dt`, from the forcing's loads and the inner momentum before
     /// and after the stage (per unit density), plus the buoyancy in the
-    /// form that needs it; the DEM adds gravity `m_p g`.
+    /// form that needs it; the DEM adds gravity `m_p g`. With a body force
+    /// b on the fluid (gravity along periodic axes), `grid_volumes` holds
+    /// each owned grain's volume on the faces of each component.
     fn hydrodynamic_loads(
         &self,
         forcing: &Loads,
         before: &Loads,
         after: &Loads,
+        grid_volumes: Option<&[Vec3]>,
         stage_dt: f64,
     ) -> Loads {
+        let body_force = Vec3::from(self.flow.body_force);
         let rho = self.fluid_density;
         let p = &self.dem.particles;
         let gravity = self.dem.domain.gravity;
@@ -264,9 +287,21 @@ impl CoupledSystem {
                 Coupling::InnerFluidMomentum => {
                     let carried = self.virtual_mass * rho * volume;
                     let lagged = p.velocity[k] - p.dem_start_velocity[k];
+                    // −ρ V g where the hydrostatic pressure balances
+                    // gravity; along the axes where the fluid carries it
+                    // as b, the body force the forcing handed over,
+                    // −ρ V_grid b, so that a grain moving with the fluid
+                    // feels none (eq. 3–6 with b in the fluid's momentum).
+                    let buoyancy = match grid_volumes {
+                        Some(grid_volume) => {
+                            -rho * (volume * (gravity - body_force)
+                                + grid_volume[k].component_mul(&body_force))
+                        }
+                        None => -rho * volume * gravity,
+                    };
                     loads.force[k] = rho
                         * (forcing.force[k] + (after.force[k] - before.force[k]) / stage_dt)
-                        - rho * volume * gravity
+                        + buoyancy
                         + carried * lagged / stage_dt;
                     loads.torque[k] =
                         rho * (forcing.torque[k] + (after.torque[k] - before.torque[k]) / stage_dt);

@@ -162,19 +162,30 @@ impl ImmersedBoundaries {
         }
     }
 
-    /// `Σ_faces α_p dV` of each local particle on this rank's faces: the
-    /// volume the grid sees (area in 2D), averaged over the components.
-    pub fn grid_volume(&self, grid: &Grid, bodies: &Bodies) -> Vec<f64> {
-        let dim = grid.dim();
-        let mut volume = vec![0.0; bodies.count];
-        for body in &bodies.list {
-            for component in 0..dim {
-                visit_faces(grid, body, component, ALL_PLANES, |_, _, alpha| {
-                    volume[body.particle] += alpha * grid.cell_volume() / dim as f64;
-                });
-            }
+    /// `Σ_faces α_p dV` over this rank's faces of each velocity component,
+    /// for each local particle: the volume the grid sees (area in 2D),
+    /// which exceeds the sphere's by a few per cent (the tanh layer of
+    /// eq. 8 is not symmetric about R in volume).
+    pub fn grid_volumes(&self, grid: &Grid, bodies: &Bodies) -> Vec<Vec3> {
+        let volume = grid.cell_volume();
+        let per_body: Vec<Vec3> = bodies
+            .list
+            .par_iter()
+            .map(|body| {
+                let mut sums = Vec3::zeros();
+                for component in 0..grid.dim() {
+                    visit_faces(grid, body, component, ALL_PLANES, |_, _, alpha| {
+                        sums[component] += alpha * volume;
+                    });
+                }
+                sums
+            })
+            .collect();
+        let mut volumes = vec![Vec3::zeros(); bodies.count];
+        for (body, sums) in bodies.list.iter().zip(per_body) {
+            volumes[body.particle] += sums;
         }
-        volume
+        volumes
     }
 
     /// The fluid's momentum and angular momentum (about each centre) inside

@@ -63,7 +63,11 @@ fn a_sphere_across_periodic_edges_acts_like_one_inside() {
         assert_eq!(images, if centre.x == 0.0 { 7 } else { 0 });
         let unknowns: Vec<_> = (0..3).map(|c| *flow.velocity_unknowns(c)).collect();
         let bodies = immersed.bodies(&dem.particles, &grid, &unknowns);
-        let mut volume = immersed.grid_volume(&grid, &bodies);
+        let mut volume: Vec<f64> = immersed
+            .grid_volumes(&grid, &bodies)
+            .iter()
+            .map(|v| v.sum() / 3.0)
+            .collect();
         dem.sum_onto_owners(&mut volume, 1);
         let volume = volume[0];
         let loads = immersed
