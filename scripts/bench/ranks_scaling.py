@@ -6,6 +6,9 @@ MPI ranks (cargo feature `mpi`), one thread per rank.
   (2n) x n x n grid twice as long along x (2 ranks, weak) and the long grid
   on 1 and 2 ranks (strong); 20 steps, of which the last 15 are timed from
   the wall-clock column of series.csv;
+- avalanche: the immersed avalanche cases/immersed_avalanche.toml (230
+  grains at D/dx = 10 on 100 x 30 x 100 cells, 10 steps from rest) against
+  its bed twice along x (weak), and the long box on 1 and 2 ranks (strong);
 - coupled: the many-grains scene scripts/bench/many_grains.toml (1,573
   spheres at D/dx = 4 settling in a 64 x 64 x 96 box; 10 steps of the
   coupled step) against the same box twice as long along x holding its
@@ -22,7 +25,8 @@ weak-scaling efficiency t(1 rank, N) / t(2 ranks, 2N) and the
 strong-scaling efficiency t(1 rank) / (2 t(2 ranks)).
 
 usage: scripts/bench/ranks_scaling.py [--cells 64] [--repeats 3]
-         [--binary target/release/grainflow] [--only flow|coupled] [--json FILE]
+         [--binary target/release/grainflow] [--only flow|coupled|avalanche]
+         [--json FILE]
 """
 import argparse, csv, json, os, statistics, subprocess, sys, tempfile
 
@@ -144,6 +148,50 @@ def coupled_configurations(work):
     ]
 
 
+def avalanche_configurations(work):
+    """The immersed avalanche (cases/immersed_avalanche.toml: 230 grains at
+    D/dx = 10 on 100 x 30 x 100 cells), 10 steps from rest, against the
+    same bed twice along x (20 D x 3 D x 10 D, 200 x 30 x 100 cells)."""
+    base = open(os.path.join(ROOT, "cases/immersed_avalanche.toml")).read()
+    bed = open(os.path.join(ROOT, "cases/data/avalanche_bed.csv")).read().splitlines()
+    length = 0.05
+    doubled = [bed[0]] + bed[1:]
+    for line in bed[1:]:
+        values = line.split(",")
+        values[0] = repr(float(values[0]) + length)
+        doubled.append(",".join(values))
+    open(os.path.join(work, "avalanche_bed_long.csv"), "w").write("\n".join(doubled) + "\n")
+    window = {"time.end": "0.005", "output.interval": "0.005", "output.fields": "false"}
+    short = base.replace('path = "data/avalanche_bed.csv"',
+                         f'path = "{os.path.join(ROOT, "cases/data/avalanche_bed.csv")}"')
+    start = base.index("positions = [") + len("positions = [")
+    end = base.index("]\nradii")
+    fixed = base[start:end]
+    shifted = ", ".join(
+        "[" + ", ".join([repr(float(p.split(",")[0]) + length)] + p.split(",")[1:]) + "]"
+        for p in fixed.strip("[]").split("], [")
+    )
+    long = (base.replace("upper = [0.05, 0.015, 0.05]", "upper = [0.1, 0.015, 0.05]")
+                .replace("cells = [100, 30, 100]", "cells = [200, 30, 100]")
+                .replace(fixed, fixed + ", " + shifted)
+                .replace('path = "data/avalanche_bed.csv"',
+                         f'path = "{os.path.join(work, "avalanche_bed_long.csv")}"'))
+    radii = long[long.index("radii = [") + 9:long.index("]", long.index("radii = ["))]
+    long = long.replace("radii = [" + radii + "]", "radii = [" + radii + ", " + radii + "]")
+    assert "0.1, 0.015" in long and "200, 30" in long
+    paths = {}
+    for name, text in [("short", short), ("long", long)]:
+        paths[name] = os.path.join(work, f"avalanche_{name}.toml")
+        open(paths[name], "w").write(text)
+    settings = [f"{k}={v}" for k, v in window.items()]
+    return [
+        ("1 rank, N", paths["short"], 1, settings, 1),
+        ("2 ranks, 2N", paths["long"], 2, settings + ["parallel.process_grid=[2,1,1]"], 2),
+        ("1 rank, 2N", paths["long"], 1, settings, 2),
+        ("2 x 1 rank, N", paths["short"], 0, settings, 1),
+    ]
+
+
 def measure(name, configurations, binary, work, repeats):
     samples = {c[0]: [] for c in configurations}
     memory = {}
@@ -176,7 +224,7 @@ def main():
     parser.add_argument("--cells", type=int, default=64)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--binary", default=os.path.join(ROOT, "target/release/grainflow"))
-    parser.add_argument("--only", choices=["flow", "coupled"])
+    parser.add_argument("--only", choices=["flow", "coupled", "avalanche"])
     parser.add_argument("--json")
     args = parser.parse_args()
     work = tempfile.mkdtemp(prefix="ranks_scaling_")
@@ -188,6 +236,9 @@ def main():
     if args.only in (None, "coupled"):
         report["coupled"] = measure("coupled", coupled_configurations(work), args.binary, work,
                                     args.repeats)
+    if args.only in (None, "avalanche"):
+        report["avalanche"] = measure("avalanche", avalanche_configurations(work), args.binary,
+                                      work, args.repeats)
     if args.json:
         json.dump(report, open(args.json, "w"), indent=1)
 

@@ -15,9 +15,14 @@
 /// further than this times `Δ` per unit of the tanh argument.
 const WIDEST_LAMBDA_SIGMA: f64 = 0.4635;
 
-/// Beyond `R + TAIL λ σ Δ` the fraction is below `e^{−2 TAIL} ≈ 1.1e-7`
-/// and is dropped.
-const TAIL: f64 = 8.0;
+/// Beyond `R + TAIL λ σ Δ` the fraction is below `e^{−2 TAIL} ≈ 4.5e-5`
+/// and is dropped: the immersed boundaries visit only the faces where it
+/// is positive. The support then reaches `R + 3.3 Δx`; the work of the
+/// immersed boundaries goes with its volume. Measured against
+/// `e^{−16}` (`R + 5.2 Δx`): the falling sphere's terminal Reynolds number
+/// moves by 2e-4 relative at D/Δx = 8, and a step of the immersed
+/// avalanche (230 grains at D/Δx = 10) is 1.6 times faster.
+const TAIL: f64 = 5.0;
 
 /// The solid fraction of one sphere (disc in 2D) of radius `radius` at
 /// offset `offset = x − x_p` from its centre, on a grid of characteristic
@@ -30,7 +35,12 @@ pub fn solid_fraction(offset: [f64; 3], radius: f64, width: f64) -> f64 {
     }
     let lambda = (offset[0].abs() + offset[1].abs() + offset[2].abs()) / distance;
     let sigma = 0.065 * (1.0 - lambda * lambda) + 0.39;
-    0.5 - 0.5 * ((distance - radius) / (lambda * sigma * width)).tanh()
+    let argument = (distance - radius) / (lambda * sigma * width);
+    if argument > TAIL {
+        // Below e^{−2 TAIL}: dropped, as beyond the support.
+        return 0.0;
+    }
+    0.5 - 0.5 * argument.tanh()
 }
 
 /// Distance from the centre beyond which [`solid_fraction`] is dropped.
