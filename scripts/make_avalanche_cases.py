@@ -109,7 +109,9 @@ def avalanche():
 # gravity as a body force: it starts to flow over the bed, shears its
 # surface and sets the grains in motion (erosion, then an avalanche of the
 # whole bed near t (g/D)^1/2 = 50 in the paper). Contacts: e_n = 0.87,
-# t_c (g/D)^1/2 = 4.5e-3, mu_c = 0.25; lubrication eta/R = 4e-4.
+# t_c (g/D)^1/2 = 4.5e-3, mu_c = 0.25; lubrication eta/R = 4e-4. The
+# analysis writes the fluid's and the grains' streamwise velocity profiles,
+# the bed's motion and the Shields number at its surface (bed_series.csv).
 # The bed comes from cases/avalanche_bed.toml. Written by
 # scripts/make_avalanche_cases.py.
 
@@ -148,6 +150,9 @@ cfl = 0.5
 
 [output]
 interval = 0.05
+
+[analysis]
+kind = "inclined_bed"
 """
 
 

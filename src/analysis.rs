@@ -43,7 +43,8 @@ impl Analysis {
                 AnalysisSection::ExactDecay
                 | AnalysisSection::Channel
                 | AnalysisSection::FallingSphere
-                | AnalysisSection::BouncingSphere,
+                | AnalysisSection::BouncingSphere
+                | AnalysisSection::InclinedBed { .. },
             ) => {
                 unreachable!("validation keeps fluid analyses out of dry scenes")
             }

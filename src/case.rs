@@ -595,6 +595,15 @@ pub enum AnalysisSection {
     /// Grain in a fluid: particle 0 settling onto a wall; its approach and
     /// rebound velocities, restitution over e_n and Stokes number (eq. 23).
     BouncingSphere,
+    /// Grains in a fluid flowing down an inclined plane along x (section
+    /// 4.2): profiles of the fluid and the grains, the bed's motion and the
+    /// Shields number at its surface ([`crate::bed_analysis`]).
+    InclinedBed {
+        /// Height of the slabs the grains are averaged over [m] (default
+        /// half their mean diameter).
+        #[serde(default)]
+        slab: Option<f64>,
+    },
 }
 
 impl Case {
@@ -745,19 +754,24 @@ impl Case {
                 "analysis.kind",
                 "(a fluid analysis)",
                 "a scene of grains allows \"binary_collision\", \"bouncing\", \"silo\", \
-                 \"column_collapse\", \"static_box\" or, in a fluid, \"falling_sphere\"",
+                 \"column_collapse\", \"static_box\" or, in a fluid, \"falling_sphere\", \
+                 \"bouncing_sphere\" or \"inclined_bed\"",
             ));
         }
         if self.fluid.is_none()
             && matches!(
                 self.analysis,
-                Some(AnalysisSection::FallingSphere | AnalysisSection::BouncingSphere)
+                Some(
+                    AnalysisSection::FallingSphere
+                        | AnalysisSection::BouncingSphere
+                        | AnalysisSection::InclinedBed { .. }
+                )
             )
         {
             return Err(invalid(
                 "analysis.kind",
                 "(an analysis of grains in a fluid)",
-                "falling_sphere and bouncing_sphere need a [fluid]",
+                "falling_sphere, bouncing_sphere and inclined_bed need a [fluid]",
             ));
         }
         if self.time.cfl.is_some() && self.fluid.is_none() {
@@ -1496,14 +1510,27 @@ impl Case {
         if coupled {
             if !matches!(
                 self.analysis,
-                None | Some(AnalysisSection::FallingSphere | AnalysisSection::BouncingSphere)
+                None | Some(
+                    AnalysisSection::FallingSphere
+                        | AnalysisSection::BouncingSphere
+                        | AnalysisSection::InclinedBed { .. }
+                )
             ) {
                 return Err(invalid(
                     "analysis.kind",
                     "(grains in a fluid)",
-                    "grains in a fluid allow \"falling_sphere\" or \"bouncing_sphere\" (or no \
-                     analysis)",
+                    "grains in a fluid allow \"falling_sphere\", \"bouncing_sphere\" or \
+                     \"inclined_bed\" (or no analysis)",
                 ));
+            }
+            if let Some(AnalysisSection::InclinedBed { slab: Some(slab) }) = &self.analysis {
+                if !(slab.is_finite() && *slab > 0.0) {
+                    return Err(invalid(
+                        "analysis.slab",
+                        slab,
+                        "allowed: a positive height [m]",
+                    ));
+                }
             }
             if self.time.dt.is_none() {
                 return Err(invalid(

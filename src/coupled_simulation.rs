@@ -5,7 +5,8 @@
 //! `tracked.csv`, `particles/*.vtp` and `fields/*.vti` (velocity, pressure,
 //! vorticity and solid fraction) with their `.pvd` indices, `summary.json`.
 
-use crate::case::Case;
+use crate::bed_analysis::InclinedBed;
+use crate::case::{AnalysisSection, Case};
 use crate::coupled_analysis::SphereInFluid;
 use crate::fluid_simulation::FieldFiles;
 use crate::output::Outputs;
@@ -221,6 +222,12 @@ pub fn run(
     }
 
     let mut analysis = SphereInFluid::new(case, &system);
+    let mut bed = match &case.analysis {
+        Some(AnalysisSection::InclinedBed { slab }) => {
+            Some(InclinedBed::create(out, case, &system, *slab).map_err(RunError::Io)?)
+        }
+        _ => None,
+    };
     let interval = case.output.interval.unwrap_or(end / 100.0);
     let tracked_interval = case.output.tracked_interval.unwrap_or(interval);
     let tracked = &case.particles_section().tracked;
@@ -231,6 +238,9 @@ pub fn run(
     outputs
         .write(&mut system, dt, steps, 0.0)
         .map_err(RunError::Io)?;
+    if let Some(bed) = &mut bed {
+        bed.sample(&system).map_err(RunError::Io)?;
+    }
     outputs
         .particles
         .write_tracked(&system.dem, tracked)
@@ -294,6 +304,9 @@ pub fn run(
             outputs
                 .write(&mut system, step_dt, steps, max_divergence)
                 .map_err(RunError::Io)?;
+            if let Some(bed) = &mut bed {
+                bed.sample(&system).map_err(RunError::Io)?;
+            }
             next_output += interval;
         }
         if system.flow.time >= next_tracked - 0.5 * step_dt || at_end {
@@ -308,10 +321,10 @@ pub fn run(
     progress.finish();
 
     let wall_seconds = started.elapsed().as_secs_f64();
-    let metrics = if failure.is_none() {
-        analysis.metrics()
-    } else {
-        Map::new()
+    let metrics = match (&failure, &bed) {
+        (None, Some(bed)) => bed.metrics(),
+        (None, None) => analysis.metrics(),
+        _ => Map::new(),
     };
     let t = system.timings;
     let grain_cfl = grain_cfl_sum / moving_steps.max(1) as f64;

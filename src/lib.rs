@@ -9,6 +9,7 @@
 //! [`coupled_simulation::build`] and [`coupled_simulation::run`].
 
 pub mod analysis;
+pub mod bed_analysis;
 pub mod case;
 pub mod check;
 pub mod coupled_analysis;

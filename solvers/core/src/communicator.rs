@@ -171,6 +171,16 @@ impl Communicator {
         receive.copy_from_slice(send);
     }
 
+    /// Element-wise sum of `values` over all ranks, in place (every rank
+    /// passes as many).
+    pub fn sum_each(&self, values: &mut [f64]) {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            world.sum_each(values);
+        }
+        let _ = values;
+    }
+
     /// Whether every rank can read the others' [`SharedArray`]s: MPI ranks
     /// that all run on one node (a single rank reads only its own).
     pub fn shares_memory(&self) -> bool {
@@ -282,6 +292,12 @@ pub mod mpi_backend {
             self.communicator
                 .all_reduce_into(&local, &mut total, SystemOperation::sum());
             total
+        }
+
+        pub fn sum_each(&self, values: &mut [f64]) {
+            let local = values.to_vec();
+            self.communicator
+                .all_reduce_into(&local[..], values, SystemOperation::sum());
         }
 
         pub fn sum_count(&self, local: u64) -> u64 {
