@@ -335,83 +335,112 @@ pub fn fill_ghosts_on(
     ends: &FieldEnds,
     halo: Option<&HaloExchange>,
 ) {
-    let padded = grid.padded();
+    fill_ghosts_together(
+        grid,
+        &mut [GhostedField {
+            values: field,
+            location,
+            ends,
+        }],
+        halo,
+    );
+}
+
+/// A field whose ghosts [`fill_ghosts_together`] fills.
+pub struct GhostedField<'a> {
+    pub values: &'a mut [f64],
+    pub location: Location,
+    pub ends: &'a FieldEnds,
+}
+
+/// [`fill_ghosts_on`] for several fields at once: along each axis split
+/// among ranks, one message each way carries the planes of all of them.
+pub fn fill_ghosts_together(grid: &Grid, fields: &mut [GhostedField], halo: Option<&HaloExchange>) {
     for axis in 0..grid.dim() {
-        if ends[axis].iter().any(|end| end.kind == EndKind::Halo) {
+        let split = |f: &GhostedField| f.ends[axis].iter().any(|end| end.kind == EndKind::Halo);
+        if fields.iter().any(split) {
             let halo = halo.expect("a halo end needs the ranks' exchange");
-            exchange_planes(grid, field, axis, ends, halo);
+            debug_assert!(
+                fields.iter().all(split),
+                "every field shares the same faces"
+            );
+            exchange_planes(grid, fields, axis, halo);
         }
-        let n = grid.cells[axis];
-        let stride = grid.stride(axis);
-        let mut line_block = Block {
-            start: [0; 3],
-            end: padded,
-        };
-        line_block.end[axis] = 1;
-        let [lower, upper] = ends[axis];
-        if matches!(lower.kind, EndKind::DirichletFace)
-            || matches!(upper.kind, EndKind::DirichletFace)
-        {
-            debug_assert_eq!(location, Location::Face(axis));
+        for field in fields.iter_mut() {
+            fill_axis(grid, field.values, field.location, field.ends, axis);
         }
-        // The quadratic ghost reads the second unknown from the wall; a
-        // grid has at least two cells per axis, so it is never a ghost.
-        debug_assert!(n >= 2);
-        let quadratic = if axis == grid.line_axis() {
-            [0, 1].map(|side| grid.wall_ghost_weights(side))
-        } else {
-            [[0.0; 3]; 2]
-        };
-        grid.for_each(&line_block, |first, _| {
-            let at = |i: usize| first + i * stride;
-            match lower.kind {
-                EndKind::Halo => {}
-                EndKind::Periodic => field[at(0)] = field[at(n)],
-                EndKind::Neumann => field[at(0)] = field[at(1)],
-                EndKind::DirichletCell => field[at(0)] = 2.0 * lower.value - field[at(1)],
-                EndKind::DirichletCellQuadratic => {
-                    let [wall, near, far] = quadratic[0];
-                    field[at(0)] = wall * lower.value + near * field[at(1)] + far * field[at(2)]
-                }
-                EndKind::DirichletFace => field[at(0)] = lower.value,
-            }
-            match upper.kind {
-                EndKind::Halo => {}
-                EndKind::Periodic => field[at(n + 1)] = field[at(1)],
-                EndKind::Neumann => field[at(n + 1)] = field[at(n)],
-                EndKind::DirichletCell => field[at(n + 1)] = 2.0 * upper.value - field[at(n)],
-                EndKind::DirichletCellQuadratic => {
-                    let [wall, near, far] = quadratic[1];
-                    field[at(n + 1)] =
-                        wall * upper.value + near * field[at(n)] + far * field[at(n - 1)]
-                }
-                EndKind::DirichletFace => {
-                    field[at(n)] = upper.value;
-                    // Odd reflection about the wall face; no stencil of an
-                    // unknown reaches it, it only keeps the ghost finite.
-                    field[at(n + 1)] = 2.0 * upper.value - field[at(n - 1)];
-                }
-            }
-        });
     }
 }
 
-/// The ghost planes along `axis` from the neighbouring ranks: plane n goes
-/// to the upper neighbour (its plane 0), plane 1 to the lower neighbour
-/// (its plane n + 1), each over the whole padded extent of the other axes.
-fn exchange_planes(
-    grid: &Grid,
-    field: &mut [f64],
-    axis: usize,
-    ends: &FieldEnds,
-    halo: &HaloExchange,
-) {
+/// The ghosts (and prescribed boundary-face values) of `field` along
+/// `axis` from its end conditions, over the whole padded extent of the
+/// other axes; [`EndKind::Halo`] ends are left to the exchange.
+fn fill_axis(grid: &Grid, field: &mut [f64], location: Location, ends: &FieldEnds, axis: usize) {
+    let padded = grid.padded();
+    let n = grid.cells[axis];
+    let stride = grid.stride(axis);
+    let mut line_block = Block {
+        start: [0; 3],
+        end: padded,
+    };
+    line_block.end[axis] = 1;
+    let [lower, upper] = ends[axis];
+    if matches!(lower.kind, EndKind::DirichletFace) || matches!(upper.kind, EndKind::DirichletFace)
+    {
+        debug_assert_eq!(location, Location::Face(axis));
+    }
+    // The quadratic ghost reads the second unknown from the wall; a grid
+    // has at least two cells per axis, so it is never a ghost.
+    debug_assert!(n >= 2);
+    let quadratic = if axis == grid.line_axis() {
+        [0, 1].map(|side| grid.wall_ghost_weights(side))
+    } else {
+        [[0.0; 3]; 2]
+    };
+    grid.for_each(&line_block, |first, _| {
+        let at = |i: usize| first + i * stride;
+        match lower.kind {
+            EndKind::Halo => {}
+            EndKind::Periodic => field[at(0)] = field[at(n)],
+            EndKind::Neumann => field[at(0)] = field[at(1)],
+            EndKind::DirichletCell => field[at(0)] = 2.0 * lower.value - field[at(1)],
+            EndKind::DirichletCellQuadratic => {
+                let [wall, near, far] = quadratic[0];
+                field[at(0)] = wall * lower.value + near * field[at(1)] + far * field[at(2)]
+            }
+            EndKind::DirichletFace => field[at(0)] = lower.value,
+        }
+        match upper.kind {
+            EndKind::Halo => {}
+            EndKind::Periodic => field[at(n + 1)] = field[at(1)],
+            EndKind::Neumann => field[at(n + 1)] = field[at(n)],
+            EndKind::DirichletCell => field[at(n + 1)] = 2.0 * upper.value - field[at(n)],
+            EndKind::DirichletCellQuadratic => {
+                let [wall, near, far] = quadratic[1];
+                field[at(n + 1)] = wall * upper.value + near * field[at(n)] + far * field[at(n - 1)]
+            }
+            EndKind::DirichletFace => {
+                field[at(n)] = upper.value;
+                // Odd reflection about the wall face; no stencil of an
+                // unknown reaches it, it only keeps the ghost finite.
+                field[at(n + 1)] = 2.0 * upper.value - field[at(n - 1)];
+            }
+        }
+    });
+}
+
+/// The ghost planes along `axis` of every field from the neighbouring
+/// ranks: plane n goes to the upper neighbour (its plane 0), plane 1 to the
+/// lower neighbour (its plane n + 1), each over the whole padded extent of
+/// the other axes; one message each way holds the planes of all fields.
+fn exchange_planes(grid: &Grid, fields: &mut [GhostedField], axis: usize, halo: &HaloExchange) {
     let n = grid.cells[axis];
     let padded = grid.padded();
     let mut plane = Block {
         start: [0; 3],
         end: padded,
     };
+    let ends = fields[0].ends;
     let neighbour = |side: usize| {
         (ends[axis][side].kind == EndKind::Halo)
             .then(|| halo.partition.neighbour(axis, side, halo.periodic[axis]))
@@ -427,7 +456,9 @@ fn exchange_planes(
         plane.end[axis] = send + 1;
         let mut message = Vec::new();
         if destination.is_some() {
-            grid.for_each(&plane, |index, _| message.push(field[index]));
+            for field in fields.iter() {
+                grid.for_each(&plane, |index, _| message.push(field.values[index]));
+            }
         }
         let received = halo
             .communicator
@@ -436,9 +467,11 @@ fn exchange_planes(
             plane.start[axis] = receive;
             plane.end[axis] = receive + 1;
             let mut values = received.into_iter();
-            grid.for_each(&plane, |index, _| {
-                field[index] = values.next().expect("a whole plane from the neighbour")
-            });
+            for field in fields.iter_mut() {
+                grid.for_each(&plane, |index, _| {
+                    field.values[index] = values.next().expect("whole planes from the neighbour")
+                });
+            }
         }
     }
 }

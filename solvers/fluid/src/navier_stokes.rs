@@ -36,7 +36,8 @@
 use grainflow_core::Communicator;
 
 use crate::boundary::{
-    fill_ghosts_on, homogeneous, local_ends, unknowns, Boundaries, EndKind, FieldEnds, HaloExchange,
+    fill_ghosts_on, fill_ghosts_together, homogeneous, local_ends, unknowns, Boundaries, EndKind,
+    FieldEnds, GhostedField, HaloExchange,
 };
 use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
@@ -408,14 +409,14 @@ impl FlowSolver {
         let (gamma, zeta) = (GAMMA[stage], ZETA[stage]);
         let alpha = gamma + zeta;
         let dim = self.grid.dim();
-        self.fill_velocity_ghosts();
-        fill_ghosts_on(
-            &self.grid,
-            &mut self.pressure,
-            Location::Centre,
-            &self.pressure_ends,
-            Some(&self.ranks),
-        );
+        // The velocity and the pressure in one exchange per split axis.
+        let mut fields = velocity_fields(&mut self.velocity, &self.velocity_ends);
+        fields.push(GhostedField {
+            values: &mut self.pressure,
+            location: Location::Centre,
+            ends: &self.pressure_ends,
+        });
+        fill_ghosts_together(&self.grid, &mut fields, Some(&self.ranks));
         // All explicit terms from u^{k−1} before any component moves.
         for component in 0..dim {
             let grid = &self.grid;
@@ -564,17 +565,11 @@ impl FlowSolver {
         }
     }
 
-    /// Ghost values and wall-face values of every velocity component.
+    /// Ghost values and wall-face values of every velocity component (one
+    /// exchange per split axis for all of them).
     pub fn fill_velocity_ghosts(&mut self) {
-        for (component, field) in self.velocity.iter_mut().enumerate() {
-            fill_ghosts_on(
-                &self.grid,
-                field,
-                Location::Face(component),
-                &self.velocity_ends[component],
-                Some(&self.ranks),
-            );
-        }
+        let mut fields = velocity_fields(&mut self.velocity, &self.velocity_ends);
+        fill_ghosts_together(&self.grid, &mut fields, Some(&self.ranks));
     }
 
     /// Largest `|D u|` over the cells of every rank (1/s).
@@ -663,4 +658,22 @@ impl FlowSolver {
     pub fn velocity_unknowns(&self, component: usize) -> &Block {
         &self.velocity_unknowns[component]
     }
+}
+
+/// The velocity components with their locations and end conditions, for
+/// [`fill_ghosts_together`].
+fn velocity_fields<'a>(
+    velocity: &'a mut [Vec<f64>],
+    ends: &'a [FieldEnds],
+) -> Vec<GhostedField<'a>> {
+    velocity
+        .iter_mut()
+        .zip(ends)
+        .enumerate()
+        .map(|(component, (values, ends))| GhostedField {
+            values,
+            location: Location::Face(component),
+            ends,
+        })
+        .collect()
 }
