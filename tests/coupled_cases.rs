@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{metric, run, run_cli};
+use common::{last_row, metric, run, run_cli};
 
 #[test]
 fn bad_coupled_tables_are_refused_with_the_key_and_nothing_is_written() {
@@ -234,14 +234,7 @@ fields = false
     let case = grainflow::case::Case::load(&path, &[]).expect("case loads");
     let out = dir.path().join("out");
     grainflow::simulation::run(&case, &out, false).expect("run succeeds");
-    let tracked = std::fs::read_to_string(out.join("tracked.csv")).unwrap();
-    let last: Vec<f64> = tracked
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
+    let last = last_row(&out.join("tracked.csv"));
     let (t, u_x, u_z) = (last[0], last[5], last[7]);
     let carried = g_x * t;
     println!("t = {t}: u_x = {u_x} against g_x t = {carried}; u_z = {u_z}");
@@ -271,14 +264,7 @@ fn the_inclined_bed_starts_with_the_liquid_falling_freely_above_it() {
         ],
     );
     let g_x = 9.81 * 22f64.to_radians().sin();
-    let profiles = std::fs::read_to_string(dir.path().join("bed_profiles.csv")).unwrap();
-    let last: Vec<f64> = profiles
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
+    let last = last_row(&dir.path().join("bed_profiles.csv"));
     let (t, top) = (last[0], last[2]);
     println!("t = {t}: top layer {top} against g_x t = {}", g_x * t);
     assert!(

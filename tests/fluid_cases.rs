@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{load, metric, run, run_cli};
+use common::{last_row, load, metric, run, run_cli};
 use grainflow::simulation;
 
 /// Relative L2 error of the Taylor–Green vortex (carried by a stream) at
@@ -302,13 +302,7 @@ fn a_fluid_run_writes_the_output_contract() {
     let series = std::fs::read_to_string(dir.path().join("series.csv")).unwrap();
     assert!(series.starts_with("t,dt,step,kinetic_energy,max_cfl,max_divergence"));
     // The kinetic energy decays as exp(−4 ν k² t) around the stream's share.
-    let last: Vec<f64> = series
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
+    let last = last_row(&dir.path().join("series.csv"));
     let area = (2.0 * std::f64::consts::PI).powi(2);
     let stream = 0.5 * (1.0 + 0.25) * area;
     let vortex = 0.25 * area * (-4.0 * 0.01 * 0.1f64).exp();

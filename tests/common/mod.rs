@@ -58,3 +58,14 @@ pub fn run_cli(case: &str, overrides: &[&str]) -> (Option<i32>, String, bool) {
     let stderr = String::from_utf8_lossy(&result.stderr).into_owned();
     (result.status.code(), stderr, out.exists())
 }
+
+/// The numbers of the last row of a CSV file written by a run.
+pub fn last_row(path: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
+    text.lines()
+        .last()
+        .expect("a row")
+        .split(',')
+        .map(|v| v.parse().expect("a number"))
+        .collect()
+}

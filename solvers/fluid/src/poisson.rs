@@ -660,6 +660,32 @@ impl DirectSolver {
             #[cfg(feature = "fftw")]
             LineTransforms::Fftw(t) => t[axis].apply(data, direction),
         };
+        // A slab: `own` transformed in the ranks' boxes, `along` in the
+        // pencils `layout` (holding `data`), the lines solved there or back
+        // in the ranks' boxes.
+        let own_shape = physical.shape(me);
+        let mut slab_transform = |[own, along]: [usize; 2],
+                                  layout: &Layout,
+                                  data: &mut SharedArray,
+                                  solve_here: bool,
+                                  modes: &mut SharedArray| {
+            let shape = layout.shape(me);
+            if direction == Direction::Forward {
+                apply(own, modes, own_shape);
+                pencils.redistribute(physical, modes, layout, data);
+                apply(along, data, shape);
+                if !solve_here {
+                    pencils.redistribute(layout, data, physical, modes);
+                }
+            } else {
+                if !solve_here {
+                    pencils.redistribute(physical, modes, layout, data);
+                }
+                apply(along, data, shape);
+                pencils.redistribute(layout, data, physical, modes);
+                apply(own, modes, own_shape);
+            }
+        };
         match (&pencils.y_pencils, direction) {
             (None, _) => {
                 pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
@@ -671,43 +697,24 @@ impl DirectSolver {
             // the lines are solved in the pencils when they hold them whole
             // (forward ends there, backward starts there).
             (Some(y_pencils), _) if y_pencils.boxes == physical.boxes => {
-                let own_shape = physical.shape(me);
                 let solve_here = pencils.solve_in == Arrangement::XPencils;
-                if direction == Direction::Forward {
-                    apply(1, &mut self.modes, own_shape);
-                    pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
-                    apply(0, &mut x_data, x_shape);
-                    if !solve_here {
-                        pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
-                    }
-                } else {
-                    if !solve_here {
-                        pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
-                    }
-                    apply(0, &mut x_data, x_shape);
-                    pencils.redistribute(x_pencils, &x_data, physical, &mut self.modes);
-                    apply(1, &mut self.modes, own_shape);
-                }
+                slab_transform(
+                    [1, 0],
+                    x_pencils,
+                    &mut x_data,
+                    solve_here,
+                    &mut self.modes,
+                );
             }
             (Some(y_pencils), _) if x_pencils.boxes == physical.boxes => {
-                let own_shape = physical.shape(me);
-                let y_shape = y_pencils.shape(me);
                 let solve_here = pencils.solve_in == Arrangement::YPencils;
-                if direction == Direction::Forward {
-                    apply(0, &mut self.modes, own_shape);
-                    pencils.redistribute(physical, &self.modes, y_pencils, &mut y_data);
-                    apply(1, &mut y_data, y_shape);
-                    if !solve_here {
-                        pencils.redistribute(y_pencils, &y_data, physical, &mut self.modes);
-                    }
-                } else {
-                    if !solve_here {
-                        pencils.redistribute(physical, &self.modes, y_pencils, &mut y_data);
-                    }
-                    apply(1, &mut y_data, y_shape);
-                    pencils.redistribute(y_pencils, &y_data, physical, &mut self.modes);
-                    apply(0, &mut self.modes, own_shape);
-                }
+                slab_transform(
+                    [0, 1],
+                    y_pencils,
+                    &mut y_data,
+                    solve_here,
+                    &mut self.modes,
+                );
             }
             (Some(y_pencils), Direction::Forward) => {
                 pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
