@@ -698,23 +698,11 @@ impl DirectSolver {
             // (forward ends there, backward starts there).
             (Some(y_pencils), _) if y_pencils.boxes == physical.boxes => {
                 let solve_here = pencils.solve_in == Arrangement::XPencils;
-                slab_transform(
-                    [1, 0],
-                    x_pencils,
-                    &mut x_data,
-                    solve_here,
-                    &mut self.modes,
-                );
+                slab_transform([1, 0], x_pencils, &mut x_data, solve_here, &mut self.modes);
             }
             (Some(y_pencils), _) if x_pencils.boxes == physical.boxes => {
                 let solve_here = pencils.solve_in == Arrangement::YPencils;
-                slab_transform(
-                    [0, 1],
-                    y_pencils,
-                    &mut y_data,
-                    solve_here,
-                    &mut self.modes,
-                );
+                slab_transform([0, 1], y_pencils, &mut y_data, solve_here, &mut self.modes);
             }
             (Some(y_pencils), Direction::Forward) => {
                 pencils.redistribute(physical, &self.modes, x_pencils, &mut x_data);
