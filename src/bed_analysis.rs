@@ -30,7 +30,8 @@ pub struct InclinedBed {
     slab: f64,
     /// Mean diameter of the moving grains [m].
     diameter: f64,
-    /// g along the bed's normal, |g| and the streamwise unit scale.
+    /// |g| [m/s²], for the scales (g D)^½ and (D/g)^½ and the Shields
+    /// number.
     gravity: f64,
     viscosity: f64,
     density_difference: f64,

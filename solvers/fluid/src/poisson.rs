@@ -182,13 +182,7 @@ impl Pencils {
             .collect();
         // This rank's own part is copied directly, not sent to itself.
         if let Some(own) = &parts_to[me] {
-            let mut rows = Vec::new();
-            visit_rows(&from.boxes[me], own, |row| rows.push(row));
-            let mut rows = rows.into_iter();
-            visit_rows(&to.boxes[me], own, |row| {
-                let from_row = rows.next().expect("the same rows");
-                target[row].copy_from_slice(&source[from_row]);
-            });
+            copy_part(&from.boxes[me], source, &to.boxes[me], target, own);
         }
         let size = |(other, part): (usize, &Option<[[usize; 2]; 3]>)| match part {
             Some(p) if other != me => p.iter().map(|[lower, upper]| upper - lower).product(),
@@ -248,17 +242,22 @@ fn copy_part(
     target: &mut [f64],
     part: &[[usize; 2]; 3],
 ) {
-    let row_start = |whole: &[[usize; 2]; 3], j: usize, k: usize| {
-        let shape = whole.map(|[lower, upper]| upper - lower);
-        ((k - whole[2][0]) * shape[1] + (j - whole[1][0])) * shape[0] + part[0][0] - whole[0][0]
-    };
     let length = part[0][1] - part[0][0];
     for k in part[2][0]..part[2][1] {
         for j in part[1][0]..part[1][1] {
-            let (from_row, to_row) = (row_start(from, j, k), row_start(to, j, k));
+            let from_row = flat_index(from, [part[0][0], j, k]);
+            let to_row = flat_index(to, [part[0][0], j, k]);
             target[to_row..to_row + length].copy_from_slice(&source[from_row..from_row + length]);
         }
     }
+}
+
+/// The index of the global point `point` in an array over the box `whole`
+/// (x fastest).
+fn flat_index(whole: &[[usize; 2]; 3], point: [usize; 3]) -> usize {
+    let shape = whole.map(|[lower, upper]| upper - lower);
+    ((point[2] - whole[2][0]) * shape[1] + (point[1] - whole[1][0])) * shape[0] + point[0]
+        - whole[0][0]
 }
 
 /// Calls `visit(range)` with the flat indices, in an array over `whole`,
@@ -268,11 +267,9 @@ fn visit_rows(
     part: &[[usize; 2]; 3],
     mut visit: impl FnMut(std::ops::Range<usize>),
 ) {
-    let shape = whole.map(|[lower, upper]| upper - lower);
     for k in part[2][0]..part[2][1] {
         for j in part[1][0]..part[1][1] {
-            let row = ((k - whole[2][0]) * shape[1] + (j - whole[1][0])) * shape[0];
-            let first = row + part[0][0] - whole[0][0];
+            let first = flat_index(whole, [part[0][0], j, k]);
             visit(first..first + part[0][1] - part[0][0]);
         }
     }
@@ -509,14 +506,7 @@ impl DirectSolver {
         let total = shape.iter().product();
         // On ranks of one node the arrays the transposes read live in shared
         // memory (every rank allocates them in the same order).
-        let shares_memory = partition.size() > 1 && communicator.shares_memory();
-        let array = |len: usize| {
-            if shares_memory {
-                communicator.shared_array(len)
-            } else {
-                SharedArray::local(len)
-            }
-        };
+        let array = |len: usize| communicator.shared_array(len);
         #[cfg_attr(not(feature = "fftw"), allow(unused_mut))]
         let mut modes = array(total);
         #[cfg_attr(not(feature = "fftw"), allow(unused_mut))]

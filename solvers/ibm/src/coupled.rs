@@ -49,7 +49,7 @@ use grainflow_fluid::{stage_fraction, FlowSolver, FluidError, StepReport, STAGES
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use crate::forcing::{ImmersedBoundaries, Loads};
+use crate::forcing::{vectors_on_owners, ImmersedBoundaries, Loads};
 
 /// Density ratio `ρ_p/ρ` below which the rigid-inner-fluid load (eq. 5–6)
 /// blows up within a few time units: measured at 1.6 and below, at 1.7
@@ -204,12 +204,7 @@ impl CoupledSystem {
             let body_force = Vec3::from(self.flow.body_force);
             let grid_volumes = (body_force != Vec3::zeros()).then(|| {
                 let local = self.immersed.grid_volumes(&self.flow.grid, &bodies);
-                let mut values: Vec<f64> = local.iter().flat_map(|v| [v.x, v.y, v.z]).collect();
-                self.dem.sum_onto_owners(&mut values, 3);
-                values[..3 * self.dem.particles.n_owned]
-                    .chunks_exact(3)
-                    .map(|v| Vec3::new(v[0], v[1], v[2]))
-                    .collect::<Vec<Vec3>>()
+                vectors_on_owners(&self.dem, &local, 1)
             });
             let loads = self.hydrodynamic_loads(
                 &forcing,

@@ -73,20 +73,27 @@ impl Loads {
     /// each ghost's share goes to its owner (on this rank for a periodic
     /// image, on another for another rank's grain; collective).
     pub fn summed_on_owners(&self, dem: &DemSystem) -> Loads {
-        let mut values: Vec<f64> = self
+        let pairs: Vec<Vec3> = self
             .force
             .iter()
             .zip(&self.torque)
-            .flat_map(|(f, t)| [f.x, f.y, f.z, t.x, t.y, t.z])
+            .flat_map(|(&f, &t)| [f, t])
             .collect();
-        dem.sum_onto_owners(&mut values, 6);
-        let n = dem.particles.n_owned;
-        let (force, torque) = values[..6 * n]
-            .chunks_exact(6)
-            .map(|v| (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5])))
-            .unzip();
+        let summed = vectors_on_owners(dem, &pairs, 2);
+        let (force, torque) = summed.chunks_exact(2).map(|v| (v[0], v[1])).unzip();
         Loads { force, torque }
     }
+}
+
+/// `width` vectors per local particle (owned, then ghosts), summed onto the
+/// owned particles: each ghost's share goes to its owner (collective).
+pub fn vectors_on_owners(dem: &DemSystem, local: &[Vec3], width: usize) -> Vec<Vec3> {
+    let mut values: Vec<f64> = local.iter().flat_map(|v| [v.x, v.y, v.z]).collect();
+    dem.sum_onto_owners(&mut values, 3 * width);
+    values[..3 * width * dem.particles.n_owned]
+        .chunks_exact(3)
+        .map(|v| Vec3::new(v[0], v[1], v[2]))
+        .collect()
 }
 
 /// One particle (owned or a ghost) as the grid sees it.
@@ -166,24 +173,18 @@ impl ImmersedBoundaries {
     /// for each local particle: the volume the grid sees (area in 2D),
     /// which exceeds the sphere's by a few per cent (the tanh layer of
     /// eq. 8 is not symmetric about R in volume).
+    /// Read off the fractions the bodies hold for the stage.
     pub fn grid_volumes(&self, grid: &Grid, bodies: &Bodies) -> Vec<Vec3> {
         let volume = grid.cell_volume();
-        let per_body: Vec<Vec3> = bodies
-            .list
-            .par_iter()
-            .map(|body| {
-                let mut sums = Vec3::zeros();
-                for component in 0..grid.dim() {
-                    visit_faces(grid, body, component, ALL_PLANES, |_, _, alpha| {
-                        sums[component] += alpha * volume;
-                    });
-                }
-                sums
-            })
-            .collect();
         let mut volumes = vec![Vec3::zeros(); bodies.count];
-        for (body, sums) in bodies.list.iter().zip(per_body) {
-            volumes[body.particle] += sums;
+        for body in &bodies.list {
+            for (component, fractions) in body.fractions.iter().enumerate() {
+                volumes[body.particle][component] += fractions
+                    .alpha
+                    .iter()
+                    .map(|alpha| alpha * volume)
+                    .sum::<f64>();
+            }
         }
         volumes
     }
