@@ -161,6 +161,33 @@ fn bouncing_sphere_reduced_does_not_rebound_below_the_critical_stokes_number() {
     assert!(ratio < 0.01, "{summary}");
 }
 
+/// `cases/bouncing_sphere.toml` at D/Δx = 8 in a thinner liquid (St ≈ 60,
+/// where the experiments of Gondret et al. and Joseph et al. rebound at
+/// about exp(−35/St)): the rebound lies within their scatter, ±0.1 of that
+/// fit. The film force acts on approach and separation only, not while the
+/// sphere touches the wall; held through the contact it took all of this
+/// rebound (docs/validation.md, §7).
+#[test]
+fn bouncing_sphere_reduced_rebounds_within_the_experiments_band() {
+    let (summary, _dir) = run(
+        "bouncing_sphere.toml",
+        &[
+            "fluid.cells=[48, 48, 72]",
+            "domain.upper=[0.036, 0.036, 0.054]",
+            "particles.block[0].positions=[[0.018, 0.018, 0.033]]",
+            "fluid.viscosity=0.04",
+            "time.end=0.3",
+            "output.interval=0.1",
+        ],
+    );
+    let stokes = metric(&summary, "stokes");
+    let ratio = metric(&summary, "restitution_ratio");
+    let experiments = (-35.0 / stokes).exp();
+    eprintln!("bouncing sphere: St = {stokes:.3}, e/e_n = {ratio:.4} against {experiments:.4}");
+    assert!(stokes > 30.0 && stokes < 120.0, "{summary}");
+    assert!((ratio - experiments).abs() < 0.1, "{summary}");
+}
+
 /// Gravity along a periodic axis drives the fluid: no periodic pressure can
 /// balance it (the inclined bed of Izard et al. 2014, section 4.2). A
 /// sphere (ρ_p/ρ = 2.5, D/Δx = 8) released in a box periodic along x and y,
