@@ -34,13 +34,16 @@ if os.path.exists(reference):
     ax.plot(st, legendre, "k-", lw=1)
     ax.plot(st, film, "k:", lw=1, label="1 − 10/St")
 runs = [r for r in csv.DictReader(open(source)) if r["status"] == "ok" and r["stokes"]]
-for gap, marker in [("0", "o"), ("1", "s")]:
-    for lubricated, label in [("True", "with lubrication"), ("False", "without")]:
+markers = {"8": "o", "12": "s", "16": "D", "24": "^"}
+for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
+    for lubricated, style in [("True", "-"), ("False", "--")]:
         mine = sorted((float(r["stokes"]), float(r["restitution_ratio"])) for r in runs
-                      if r["lubrication"] == lubricated and r.get("contact_gap_cells", "0") == gap)
+                      if r["lubrication"] == lubricated and r["cells_per_diameter"] == resolution)
         if mine:
-            ax.plot(*zip(*mine), marker, ls="-",
-                    label=f"grainflow, {label}, contact gap {gap} cell")
+            label = "with lubrication" if lubricated == "True" else "without lubrication"
+            ax.plot(*zip(*mine), markers.get(resolution, "x"), ls=style,
+                    mfc="none" if lubricated == "False" else None,
+                    label=f"grainflow, D/Δx = {resolution}, {label}")
 ax.set_xscale("log")
 ax.set_xlabel("St = (ρp + ρ/2) V_T D / (9 μ)")
 ax.set_ylabel("e / e_n")
