@@ -5,6 +5,9 @@ reference band of ../shared/reference/bouncing_e_over_emax_fit_curves.csv
 (fit curves through the experiments of Gondret et al. and Joseph et al.,
 not data points: Legendre's exp(-35/St) and the thin-film 1 - 10/St).
 
+Filled markers: the rebound's peak read after every stage; crosses: the
+same runs read at the ends of fluid steps only.
+
 usage: postprocess/plot_bouncing_sphere.py [CSV] [PNG] [REFERENCE_CSV]
 """
 import csv
@@ -41,9 +44,20 @@ for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
                       if r["lubrication"] == lubricated and r["cells_per_diameter"] == resolution)
         if mine:
             label = "with lubrication" if lubricated == "True" else "without lubrication"
-            ax.plot(*zip(*mine), markers.get(resolution, "x"), ls=style,
-                    mfc="none" if lubricated == "False" else None,
-                    label=f"grainflow, D/Δx = {resolution}, {label}")
+            line, = ax.plot(*zip(*mine), markers.get(resolution, "x"), ls=style,
+                            mfc="none" if lubricated == "False" else None,
+                            label=f"grainflow, D/Δx = {resolution}, {label}")
+            # The same runs read at the ends of steps only (phase-dependent).
+            step_ends = sorted(
+                (float(r["stokes"]),
+                 float(r["rebound_velocity_step_end"]) / float(r["approach_velocity"])
+                 / (float(r["restitution"]) / float(r["restitution_ratio"])))
+                for r in runs
+                if r["lubrication"] == lubricated and r["cells_per_diameter"] == resolution
+                and r.get("rebound_velocity_step_end") and lubricated == "True")
+            if step_ends:
+                ax.plot(*zip(*step_ends), "x", color=line.get_color(), alpha=0.6,
+                        label=f"  same, read at step ends only")
 ax.set_xscale("log")
 ax.set_xlabel("St = (ρp + ρ/2) V_T D / (9 μ)")
 ax.set_ylabel("e / e_n")

@@ -21,8 +21,8 @@ import sys
 
 FIELDS = [
     "status", "viscosity", "lubrication", "cells_per_diameter", "dt", "cfl", "stokes", "reynolds",
-    "approach_velocity", "rebound_velocity", "restitution", "restitution_ratio",
-    "wall_seconds", "steps",
+    "approach_velocity", "rebound_velocity", "rebound_velocity_step_end", "restitution",
+    "restitution_ratio", "wall_seconds", "steps",
 ]
 D = 6e-3
 G = 9.81
@@ -64,8 +64,8 @@ def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir):
     m = summary["metrics"]
     row.update({"status": "ok", "wall_seconds": summary["wall_seconds"],
                 "steps": summary["steps"]})
-    for key in ("stokes", "reynolds", "approach_velocity", "rebound_velocity", "restitution",
-                "restitution_ratio"):
+    for key in ("stokes", "reynolds", "approach_velocity", "rebound_velocity",
+                "rebound_velocity_step_end", "restitution", "restitution_ratio"):
         row[key] = m.get(key, "")
     return row
 

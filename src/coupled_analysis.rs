@@ -13,10 +13,16 @@
 //!   largest settling speed before the first contact, `V_R` its largest
 //!   rising speed after it; the restitution `e = V_R / V_T` over the dry
 //!   `e_n` against the Stokes number `St = (ρ_p + ρ/2) V_T D / (9 μ)`
-//!   (eq. 23).
+//!   (eq. 23). `V_R` is the peak of the paper's figure 7, reached right
+//!   after the contact and followed by a steep fall as the fluid answers;
+//!   it is read after every Runge–Kutta stage, since samples at the ends
+//!   of steps catch it or miss it depending on where in its step the
+//!   contact falls (the speed at the end of each step is reported beside
+//!   it, `rebound_velocity_step_end`).
 
 use crate::case::{AnalysisSection, Case};
 use grainflow_core::{Dimension, Vec3};
+use grainflow_dem::DemSystem;
 use grainflow_ibm::settling::{early_acceleration, schiller_naumann_reynolds};
 use grainflow_ibm::{particle_volume, CoupledReport, CoupledSystem};
 use serde_json::{json, Map, Value};
@@ -29,6 +35,8 @@ struct Sample {
     speed: f64,
     /// Whether the sphere touched anything during the step's DEM sub-steps.
     contact: bool,
+    /// Largest rising speed (against gravity) after any stage of the step.
+    fastest_rise: f64,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,6 +52,8 @@ pub struct SphereInFluid {
     down: Vec3,
     initial_acceleration: Option<f64>,
     history: Vec<Sample>,
+    /// Largest rising speed after the stages of the step under way.
+    fastest_rise_in_step: f64,
     density: f64,
     fluid_density: f64,
     viscosity: f64,
@@ -74,6 +84,7 @@ impl SphereInFluid {
             down: gravity.try_normalize(0.0).unwrap_or_else(Vec3::zeros),
             initial_acceleration: None,
             history: Vec::new(),
+            fastest_rise_in_step: f64::NEG_INFINITY,
             density: mass / volume,
             fluid_density: system.fluid_density,
             viscosity: case.fluid_section().viscosity,
@@ -84,15 +95,29 @@ impl SphereInFluid {
         }
     }
 
+    /// Velocity of particle 0 along gravity, wherever it is owned
+    /// (collective).
+    fn speed(&self, dem: &DemSystem) -> f64 {
+        let local = dem
+            .index_of(0)
+            .map_or(0.0, |k| dem.particles.velocity[k].dot(&self.down));
+        dem.communicator.sum(local)
+    }
+
+    /// After each stage of a step (collective).
+    pub fn after_stage(&mut self, dem: &DemSystem) {
+        if self.kind == Kind::Bouncing {
+            let rise = -self.speed(dem);
+            self.fastest_rise_in_step = self.fastest_rise_in_step.max(rise);
+        }
+    }
+
     pub fn after_step(&mut self, system: &CoupledSystem, dt: f64, report: &Option<CoupledReport>) {
         if self.kind == Kind::None {
             return;
         }
-        let local = system
-            .dem
-            .index_of(0)
-            .map_or(0.0, |k| system.dem.particles.velocity[k].dot(&self.down));
-        let speed = system.dem.communicator.sum(local);
+        let speed = self.speed(&system.dem);
+        let fastest_rise = std::mem::replace(&mut self.fastest_rise_in_step, f64::NEG_INFINITY);
         if self.initial_acceleration.is_none() {
             self.initial_acceleration = Some(speed / dt);
         }
@@ -102,6 +127,7 @@ impl SphereInFluid {
             contact: report
                 .as_ref()
                 .is_some_and(|r| r.dem.max_overlap_ratio > 0.0),
+            fastest_rise: fastest_rise.max(-speed),
         });
     }
 
@@ -196,11 +222,13 @@ impl SphereInFluid {
             return metrics;
         };
         let approach = self.peak_speed(&self.history[..first_contact.max(1)]);
-        // Rising speeds are negative along gravity.
-        let rebound = self.history[first_contact..]
+        let after_contact = &self.history[first_contact..];
+        let rebound = after_contact
             .iter()
-            .map(|s| -s.speed)
+            .map(|s| s.fastest_rise)
             .fold(0.0, f64::max);
+        // Rising speeds are negative along gravity.
+        let rebound_at_step_ends = after_contact.iter().map(|s| -s.speed).fold(0.0, f64::max);
         let stokes = (rho_p + 0.5 * rho) * approach.speed * d / (9.0 * mu);
         let restitution = rebound / approach.speed;
         metrics.insert("contact".into(), json!(true));
@@ -210,6 +238,10 @@ impl SphereInFluid {
         );
         metrics.insert("approach_velocity".into(), json!(approach.speed));
         metrics.insert("rebound_velocity".into(), json!(rebound));
+        metrics.insert(
+            "rebound_velocity_step_end".into(),
+            json!(rebound_at_step_ends),
+        );
         metrics.insert("stokes".into(), json!(stokes));
         metrics.insert("reynolds".into(), json!(rho * approach.speed * d / mu));
         metrics.insert("restitution".into(), json!(restitution));

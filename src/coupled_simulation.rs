@@ -264,7 +264,7 @@ pub fn run(
     let (mut grain_cfl_sum, mut moving_steps) = (0.0, 0u64);
     while system.flow.time < end * (1.0 - 1e-12) {
         let step_dt = step_size(&system, case).min(end - system.flow.time);
-        match system.step(step_dt) {
+        match system.step_observed(step_dt, |dem| analysis.after_stage(dem)) {
             Ok(report) => {
                 last_report = Some(report);
                 dem_substeps += report.dem_substeps;

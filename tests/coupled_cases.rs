@@ -161,31 +161,47 @@ fn bouncing_sphere_reduced_does_not_rebound_below_the_critical_stokes_number() {
     assert!(ratio < 0.01, "{summary}");
 }
 
-/// `cases/bouncing_sphere.toml` at D/Δx = 8 in a thinner liquid (St ≈ 60,
-/// where the experiments of Gondret et al. and Joseph et al. rebound at
-/// about exp(−35/St)): the rebound lies within their scatter, ±0.1 of that
-/// fit. The film force acts on approach and separation only, not while the
-/// sphere touches the wall; held through the contact it took all of this
-/// rebound (docs/validation.md, §7).
+/// `cases/bouncing_sphere.toml` at D/Δx = 8 in a thin liquid (St ≈ 320):
+/// the rebound lies within the scatter of the experiments of Gondret et
+/// al. and Joseph et al. (±0.1 of their fit exp(−35/St); measured 0.858
+/// and 0.881 against 0.896), and its peak does not depend on where in its
+/// fluid step the contact falls. Released 0.1 mm apart, one run's step
+/// ends catch the peak right after the contact, the other's only the speed
+/// after the fluid's answer has taken a third of it (0.68 and 0.88 of
+/// e_n); read after every stage the two agree within 0.05, a quarter of
+/// that spread (measured 0.023). Before the film force stopped at contact
+/// it took a quarter of this rebound.
 #[test]
-fn bouncing_sphere_reduced_rebounds_within_the_experiments_band() {
-    let (summary, _dir) = run(
-        "bouncing_sphere.toml",
-        &[
-            "fluid.cells=[48, 48, 72]",
-            "domain.upper=[0.036, 0.036, 0.054]",
-            "particles.block[0].positions=[[0.018, 0.018, 0.033]]",
-            "fluid.viscosity=0.04",
-            "time.end=0.3",
-            "output.interval=0.1",
-        ],
-    );
-    let stokes = metric(&summary, "stokes");
-    let ratio = metric(&summary, "restitution_ratio");
-    let experiments = (-35.0 / stokes).exp();
-    eprintln!("bouncing sphere: St = {stokes:.3}, e/e_n = {ratio:.4} against {experiments:.4}");
-    assert!(stokes > 30.0 && stokes < 120.0, "{summary}");
-    assert!((ratio - experiments).abs() < 0.1, "{summary}");
+fn bouncing_sphere_rebound_is_in_the_band_whatever_the_contact_phase() {
+    let runs: Vec<(f64, f64, f64)> = ["0.0632", "0.0633"]
+        .iter()
+        .map(|z| {
+            let position = format!("particles.block[0].positions=[[0.018, 0.018, {z}]]");
+            let (summary, _dir) = run(
+                "bouncing_sphere.toml",
+                &[
+                    "fluid.cells=[48, 48, 104]",
+                    &position,
+                    "fluid.viscosity=0.01",
+                    "time.end=0.2",
+                    "output.interval=0.1",
+                ],
+            );
+            let scale = metric(&summary, "approach_velocity") * 0.97;
+            (
+                metric(&summary, "stokes"),
+                metric(&summary, "rebound_velocity") / scale,
+                metric(&summary, "rebound_velocity_step_end") / scale,
+            )
+        })
+        .collect();
+    eprintln!("bouncing sphere, (St, e/e_n read after stages, at step ends): {runs:?}");
+    for &(stokes, ratio, _) in &runs {
+        assert!(stokes > 250.0 && stokes < 400.0, "{runs:?}");
+        assert!((ratio - (-35.0 / stokes).exp()).abs() < 0.1, "{runs:?}");
+    }
+    assert!((runs[0].2 - runs[1].2).abs() > 0.1, "{runs:?}");
+    assert!((runs[0].1 - runs[1].1).abs() < 0.05, "{runs:?}");
 }
 
 /// Gravity along a periodic axis drives the fluid: no periodic pressure can

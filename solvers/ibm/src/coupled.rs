@@ -163,6 +163,19 @@ impl CoupledSystem {
     /// Advances fluid and grains by `dt`; refuses the step (nothing
     /// changed) when the flow's stability limits forbid it.
     pub fn step(&mut self, dt: f64) -> Result<CoupledReport, FluidError> {
+        self.step_observed(dt, |_| {})
+    }
+
+    /// [`CoupledSystem::step`], handing the grains to `after_stage` after
+    /// each stage's DEM sub-steps: an analysis that needs the grains'
+    /// motion finer than a step (a rebound's peak, which the fluid's answer
+    /// in the next stages takes down again). Every rank calls it the same
+    /// number of times, so it may make collective calls.
+    pub fn step_observed(
+        &mut self,
+        dt: f64,
+        mut after_stage: impl FnMut(&DemSystem),
+    ) -> Result<CoupledReport, FluidError> {
         self.flow.begin_step(dt)?;
         let mut max_divergence: f64 = 0.0;
         let mut substeps = 0;
@@ -226,6 +239,7 @@ impl CoupledSystem {
             }
             substeps += count;
             self.lap(clock, Part::Dem);
+            after_stage(&self.dem);
         }
         dem_report.max_overlap_ratio = largest_overlap;
         Ok(CoupledReport {
