@@ -40,24 +40,24 @@ runs = [r for r in csv.DictReader(open(source)) if r["status"] == "ok" and r["st
 markers = {"8": "o", "12": "s", "16": "D", "24": "^"}
 for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
     for lubricated, style in [("True", "-"), ("False", "--")]:
-        mine = sorted((float(r["stokes"]), float(r["restitution_ratio"])) for r in runs
-                      if r["lubrication"] == lubricated and r["cells_per_diameter"] == resolution)
-        if mine:
-            label = "with lubrication" if lubricated == "True" else "without lubrication"
-            line, = ax.plot(*zip(*mine), markers.get(resolution, "x"), ls=style,
-                            mfc="none" if lubricated == "False" else None,
-                            label=f"grainflow, D/Δx = {resolution}, {label}")
-            # The same runs read at the ends of steps only (phase-dependent).
-            step_ends = sorted(
-                (float(r["stokes"]),
-                 float(r["rebound_velocity_step_end"]) / float(r["approach_velocity"])
-                 / (float(r["restitution"]) / float(r["restitution_ratio"])))
-                for r in runs
-                if r["lubrication"] == lubricated and r["cells_per_diameter"] == resolution
-                and r.get("rebound_velocity_step_end") and lubricated == "True")
-            if step_ends:
-                ax.plot(*zip(*step_ends), "x", color=line.get_color(), alpha=0.6,
-                        label=f"  same, read at step ends only")
+        group = sorted((r for r in runs
+                        if r["lubrication"] == lubricated and r["cells_per_diameter"] == resolution),
+                       key=lambda r: float(r["stokes"]))
+        if not group:
+            continue
+        stokes = [float(r["stokes"]) for r in group]
+        label = "with lubrication" if lubricated == "True" else "without lubrication"
+        line, = ax.plot(stokes, [float(r["restitution_ratio"]) for r in group],
+                        markers.get(resolution, "x"), ls=style,
+                        mfc="none" if lubricated == "False" else None,
+                        label=f"grainflow, D/Δx = {resolution}, {label}")
+        # The same runs read at the ends of steps only (phase-dependent).
+        if lubricated == "True" and all(r.get("rebound_velocity_step_end") for r in group):
+            step_ends = [float(r["restitution_ratio"]) * float(r["rebound_velocity_step_end"])
+                         / float(r["rebound_velocity"]) if float(r["rebound_velocity"]) > 0 else 0.0
+                         for r in group]
+            ax.plot(stokes, step_ends, "x", color=line.get_color(), alpha=0.6,
+                    label="  same, read at step ends only")
 ax.set_xscale("log")
 ax.set_xlabel("St = (ρp + ρ/2) V_T D / (9 μ)")
 ax.set_ylabel("e / e_n")

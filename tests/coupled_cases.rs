@@ -187,12 +187,10 @@ fn bouncing_sphere_rebound_is_in_the_band_whatever_the_contact_phase() {
                     "output.interval=0.1",
                 ],
             );
-            let scale = metric(&summary, "approach_velocity") * 0.97;
-            (
-                metric(&summary, "stokes"),
-                metric(&summary, "rebound_velocity") / scale,
-                metric(&summary, "rebound_velocity_step_end") / scale,
-            )
+            let ratio = metric(&summary, "restitution_ratio");
+            let step_end_share = metric(&summary, "rebound_velocity_step_end")
+                / metric(&summary, "rebound_velocity");
+            (metric(&summary, "stokes"), ratio, ratio * step_end_share)
         })
         .collect();
     eprintln!("bouncing sphere, (St, e/e_n read after stages, at step ends): {runs:?}");
