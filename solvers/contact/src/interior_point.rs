@@ -13,7 +13,9 @@
 //! an SPD matrix of the size of the unknowns (three per disc), at least M̃,
 //! whose pattern is the contact graph: a supernodal sparse Cholesky (faer,
 //! AMD ordering), its symbolic analysis done once per step and reused by
-//! every iteration.
+//! every iteration; from 20,000 unknowns, split in two halves and a
+//! separator factorised side by side on two threads
+//! ([`crate::normal_factor`]).
 //! Clarabel works on the larger quasi-definite system [P Aᵀ; A −Θ⁻¹] of
 //! unknowns and rows together.
 //!
@@ -24,15 +26,8 @@
 //! the data and the duality gap relative to the objective, all below ε.
 
 use crate::cocd::ConicProgram;
+use crate::normal_factor::NormalFactor;
 use clarabel::algebra::CscMatrix;
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymmetricOrdering,
-};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
 
 /// Fraction of the distance to the boundary of the cone taken by a step.
 const STEP_FRACTION: f64 = 0.99;
@@ -162,72 +157,6 @@ impl NormalPattern {
                 y[self.row_column[k]] += self.row_value[k] * zr;
             }
         }
-    }
-}
-
-/// The Cholesky factor of the normal matrix: ordering and symbolic
-/// analysis once, numeric factorisations per iteration. Sequential, so
-/// that results do not depend on the number of threads.
-struct NormalFactor {
-    symbolic: SymbolicCholesky<usize>,
-    values: Vec<f64>,
-    work: MemBuffer,
-}
-
-/// faer's view of the upper-triangle pattern of a CSC matrix.
-fn symbolic_pattern(matrix: &CscMatrix<f64>) -> SymbolicSparseColMatRef<'_, usize> {
-    SymbolicSparseColMatRef::new_checked(matrix.n, matrix.n, &matrix.colptr, None, &matrix.rowval)
-}
-
-impl NormalFactor {
-    fn new(matrix: &CscMatrix<f64>) -> Result<Self, String> {
-        let pattern = symbolic_pattern(matrix);
-        let symbolic = factorize_symbolic_cholesky(
-            pattern,
-            Side::Upper,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| format!("symbolic factorisation: {e:?}"))?;
-        let scratch = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
-        ]);
-        Ok(NormalFactor {
-            values: vec![0.0; symbolic.len_val()],
-            symbolic,
-            work: MemBuffer::new(scratch),
-        })
-    }
-
-    fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
-        let pattern = symbolic_pattern(matrix);
-        let no_regularisation = LltRegularization {
-            dynamic_regularization_delta: 0.0,
-            dynamic_regularization_epsilon: 0.0,
-        };
-        self.symbolic
-            .factorize_numeric_llt(
-                &mut self.values,
-                SparseColMatRef::new(pattern, &matrix.nzval),
-                Side::Upper,
-                no_regularisation,
-                Par::Seq,
-                MemStack::new(&mut self.work),
-                Default::default(),
-            )
-            .map(|_| ())
-            .map_err(|e| format!("the normal matrix is not positive definite: {e:?}"))
-    }
-
-    fn solve(&mut self, rhs: &mut [f64]) {
-        let n = rhs.len();
-        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(rhs, n, 1),
-            Par::Seq,
-            MemStack::new(&mut self.work),
-        );
     }
 }
 

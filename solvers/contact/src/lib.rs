@@ -32,6 +32,7 @@ pub mod certificate;
 pub mod cocd;
 pub mod contacts;
 pub mod interior_point;
+mod normal_factor;
 pub mod nscd;
 pub mod step;
 
