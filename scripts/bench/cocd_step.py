@@ -11,12 +11,14 @@ same discs (a `file` block) and walls and takes three steps of
 dt = 1e-3 s with contact.model = "cocd" at the same tolerance; its
 seconds_per_solve is the mean time of the conic solve per step (assembly
 included). Prints, per size, the median over --repeats runs of each, their
-ratio, the iterations and contacts, and writes the table as JSON.
+ratio, the iterations and contacts, and writes the table as JSON. grainflow
+runs on each thread count of --threads (its results are the same on any).
 
 usage: scripts/bench/cocd_step.py [--sizes 8000,50000] [--tolerance 1e-8]
-         [--repeats 3] [--shared ../shared] [--work DIR] [--json FILE]
+         [--repeats 3] [--threads 1,2] [--shared ../shared] [--work DIR]
+         [--json FILE]
 """
-import argparse, json, os, statistics, subprocess, sys
+import argparse, json, os, shutil, statistics, subprocess, sys
 
 CASE = """[domain]
 dimension = 2
@@ -88,9 +90,11 @@ def grainflow_case(npz, work, n, tolerance):
     return case, len(inst["ci"])
 
 
-def run_grainflow(binary, case, work, tag):
+def run_grainflow(binary, case, work, tag, threads):
     out = os.path.join(work, f"out_{tag}")
-    subprocess.run([binary, "run", case, "--out", out], check=True, stdout=subprocess.DEVNULL)
+    shutil.rmtree(out, ignore_errors=True)
+    subprocess.run([binary, "run", case, "--out", out, "--threads", str(threads)], check=True,
+                   stdout=subprocess.DEVNULL)
     with open(os.path.join(out, "summary.json")) as f:
         s = json.load(f)
     m = s["metrics"]
@@ -113,6 +117,7 @@ def main():
     ap.add_argument("--sizes", default="8000,50000")
     ap.add_argument("--tolerance", type=float, default=1e-8)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--threads", default="1,2")
     ap.add_argument("--shared", default=os.path.join(os.path.dirname(__file__), "../../../shared"))
     ap.add_argument("--work", default="/tmp/grainflow_cocd_bench")
     ap.add_argument("--binary", default="target/release/grainflow")
@@ -125,28 +130,35 @@ def main():
     for n in [int(s) for s in a.sizes.split(",")]:
         npz = make_instance(shared, a.work, n)
         case, peer_contacts = grainflow_case(npz, a.work, n, a.tolerance)
-        ours, peer = [], []
-        for r in range(a.repeats):  # interleaved, so that both see the same machine load
-            ours.append(run_grainflow(binary, case, a.work, f"{n}_{r}"))
+        threads = [int(t) for t in a.threads.split(",")]
+        ours, peer = {t: [] for t in threads}, []
+        for r in range(a.repeats):  # interleaved, so that all see the same machine load
+            for t in threads:
+                ours[t].append(run_grainflow(binary, case, a.work, f"{n}_{r}_t{t}", t))
             peer.append(run_peer(shared, npz, a.tolerance, a.work))
+        first = ours[threads[0]][0]
         row = dict(
             N=n, tolerance=a.tolerance,
-            grainflow_seconds=statistics.median(o["seconds"] for o in ours),
-            grainflow_iterations=ours[0]["iterations"], grainflow_contacts=ours[0]["contacts"],
-            grainflow_coulomb_violation=max(o["coulomb"] for o in ours),
-            grainflow_penetration=max(o["penetration"] for o in ours),
-            grainflow_peak_memory=ours[0]["memory"],
+            grainflow_iterations=first["iterations"], grainflow_contacts=first["contacts"],
+            grainflow_coulomb_violation=max(o["coulomb"] for t in threads for o in ours[t]),
+            grainflow_penetration=max(o["penetration"] for t in threads for o in ours[t]),
+            grainflow_peak_memory=first["memory"],
             peer_seconds=statistics.median(p["seconds"] for p in peer),
             peer_iterations=peer[0]["iterations"], peer_contacts=peer[0]["contacts"],
             peer_status=peer[0]["status"],
-            samples_grainflow=[o["seconds"] for o in ours], samples_peer=[p["seconds"] for p in peer],
+            samples_peer=[p["seconds"] for p in peer],
         )
-        row["ratio"] = row["peer_seconds"] / row["grainflow_seconds"]
+        line = f"N={n}: "
+        for t in threads:
+            seconds = statistics.median(o["seconds"] for o in ours[t])
+            row[f"grainflow_seconds_t{t}"] = seconds
+            row[f"samples_grainflow_t{t}"] = [o["seconds"] for o in ours[t]]
+            row[f"ratio_t{t}"] = row["peer_seconds"] / seconds
+            line += f"grainflow {seconds:.3f} s/step on {t} thread(s) (ratio {row[f'ratio_t{t}']:.2f}), "
         table.append(row)
-        print(f"N={n}: grainflow {row['grainflow_seconds']:.3f} s/step ({row['grainflow_iterations']:.0f} it, "
-              f"{row['grainflow_contacts']:.0f} contacts), Clarabel from Python {row['peer_seconds']:.3f} s "
-              f"({row['peer_iterations']} it, {row['peer_contacts']} contacts): ratio {row['ratio']:.2f}",
-              flush=True)
+        print(line + f"{row['grainflow_iterations']:.0f} it, {row['grainflow_contacts']:.0f} contacts; "
+              f"Clarabel from Python {row['peer_seconds']:.3f} s ({row['peer_iterations']} it, "
+              f"{row['peer_contacts']} contacts)", flush=True)
     if a.json:
         with open(a.json, "w") as f:
             json.dump(table, f, indent=1)
