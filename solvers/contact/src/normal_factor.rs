@@ -67,6 +67,27 @@ fn no_regularisation() -> LltRegularization<f64> {
     }
 }
 
+/// The numeric factorisation of `matrix` into `values`, sequential.
+fn factorise_numeric(
+    symbolic: &SymbolicCholesky<usize>,
+    values: &mut [f64],
+    work: &mut MemBuffer,
+    matrix: &CscMatrix<f64>,
+) -> Result<(), String> {
+    symbolic
+        .factorize_numeric_llt(
+            values,
+            SparseColMatRef::new(symbolic_pattern(matrix), &matrix.nzval),
+            Side::Upper,
+            no_regularisation(),
+            Par::Seq,
+            MemStack::new(work),
+            Default::default(),
+        )
+        .map(|_| ())
+        .map_err(|e| format!("the normal matrix is not positive definite: {e:?}"))
+}
+
 /// The factor of K, whole or split.
 pub(crate) enum NormalFactor {
     Whole(Box<WholeFactor>),
@@ -139,18 +160,7 @@ impl WholeFactor {
     }
 
     fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
-        self.symbolic
-            .factorize_numeric_llt(
-                &mut self.values,
-                SparseColMatRef::new(symbolic_pattern(matrix), &matrix.nzval),
-                Side::Upper,
-                no_regularisation(),
-                Par::Seq,
-                MemStack::new(&mut self.work),
-                Default::default(),
-            )
-            .map(|_| ())
-            .map_err(|e| format!("the normal matrix is not positive definite: {e:?}"))
+        factorise_numeric(&self.symbolic, &mut self.values, &mut self.work, matrix)
     }
 
     fn solve(&mut self, rhs: &mut [f64]) {
@@ -401,17 +411,12 @@ impl Half {
         for (value, &k) in self.matrix.nzval.iter_mut().zip(&self.source) {
             *value = matrix.nzval[k];
         }
-        self.symbolic
-            .factorize_numeric_llt(
-                &mut self.values,
-                SparseColMatRef::new(symbolic_pattern(&self.matrix), &self.matrix.nzval),
-                faer::Side::Upper,
-                no_regularisation(),
-                Par::Seq,
-                MemStack::new(&mut self.work),
-                Default::default(),
-            )
-            .map_err(|e| format!("the normal matrix is not positive definite: {e:?}"))?;
+        factorise_numeric(
+            &self.symbolic,
+            &mut self.values,
+            &mut self.work,
+            &self.matrix,
+        )?;
         let first = self.interior;
         let mut lambda = std::mem::replace(&mut self.lambda, Mat::new());
         lambda.as_mut().fill(0.0);
