@@ -531,10 +531,11 @@ fn adjacency(matrix: &CscMatrix<f64>) -> Vec<Vec<usize>> {
 const SEPARATOR: u8 = 2;
 
 /// Sides 0 and 1 and the separator (2) of each unknown: breadth-first
-/// levels from a peripheral unknown (the last one reached from unknown 0),
-/// the first side holding the levels up to the one that reaches half the
-/// unknowns, the separator its unknowns of that level with a neighbour
-/// beyond. None if the graph is not connected enough to split.
+/// levels from a peripheral unknown of the largest connected part (the
+/// last one reached from its first unknown), the first side holding the
+/// levels up to the one that reaches half the unknowns, the separator its
+/// unknowns of that level with a neighbour beyond. None if that part holds
+/// less than half the unknowns.
 fn bisect(neighbours: &[Vec<usize>]) -> Option<Vec<u8>> {
     let n = neighbours.len();
     let levels = |start: usize| -> Vec<usize> {
@@ -551,10 +552,33 @@ fn bisect(neighbours: &[Vec<usize>]) -> Option<Vec<u8>> {
         }
         level
     };
-    let from_zero = levels(0);
+    // Start in the largest connected part (a grain touching only walls or
+    // glued grains is a part of its own).
+    let mut part = vec![usize::MAX; n];
+    let (mut largest, mut largest_size) = (0, 0);
+    for start in 0..n {
+        if part[start] != usize::MAX {
+            continue;
+        }
+        part[start] = start;
+        let (mut queue, mut size) = (vec![start], 0);
+        while let Some(u) = queue.pop() {
+            size += 1;
+            for &v in &neighbours[u] {
+                if part[v] == usize::MAX {
+                    part[v] = start;
+                    queue.push(v);
+                }
+            }
+        }
+        if size > largest_size {
+            (largest, largest_size) = (start, size);
+        }
+    }
+    let from_start = levels(largest);
     let peripheral = (0..n)
-        .filter(|&u| from_zero[u] != usize::MAX)
-        .max_by_key(|&u| (from_zero[u], std::cmp::Reverse(u)))?;
+        .filter(|&u| from_start[u] != usize::MAX)
+        .max_by_key(|&u| (from_start[u], std::cmp::Reverse(u)))?;
     let level = levels(peripheral);
     let deepest = level.iter().filter(|&&l| l != usize::MAX).max().copied()?;
     let mut count = vec![0usize; deepest + 1];
@@ -740,6 +764,26 @@ mod tests {
         assert_eq!(side_of[50], SEPARATOR);
         assert!(side_of[51..].iter().all(|&s| s == 0));
         assert!(side_of[..50].iter().all(|&s| s == 1));
+    }
+
+    #[test]
+    fn an_isolated_first_unknown_does_not_prevent_the_split() {
+        // Unknown 0 alone (a grain touching only a wall), then a path.
+        let n: usize = 102;
+        let neighbours: Vec<Vec<usize>> = (0..n)
+            .map(|u: usize| {
+                if u == 0 {
+                    return Vec::new();
+                }
+                [(u > 1).then(|| u - 1), (u + 1 < n).then_some(u + 1)]
+                    .into_iter()
+                    .flatten()
+                    .collect()
+            })
+            .collect();
+        let side_of = bisect(&neighbours).unwrap();
+        assert_eq!(side_of.iter().filter(|&&s| s == SEPARATOR).count(), 1);
+        assert_eq!(side_of[0], 1);
     }
 
     #[test]
