@@ -219,10 +219,26 @@ impl ContactLaw {
         let mut displacement = tangential_velocity * dt;
         let old_length_sq = history.norm_squared();
         if old_length_sq > 0.0 {
-            let rotated = history - history.dot(&normal) * normal;
-            let new_length_sq = rotated.norm_squared();
-            if new_length_sq > 0.0 {
-                displacement += rotated * (old_length_sq / new_length_sq).sqrt();
+            // The reciprocal depends on the history alone, so it is under way
+            // while the normal is still being formed.
+            let inverse_old_length_sq = 1.0 / old_length_sq;
+            let along = history.dot(&normal);
+            let rotated = history - along * normal;
+            // ε = (ξ·n)²/|ξ|²: how far the tangent plane turned since the
+            // last step (v_t Δt / R squared, about 1e-8 in a dense flow).
+            // The stretch back to the old length, (1 − ε)^(−1/2), is its
+            // series where the terms left out (35ε⁴/128 and beyond) are
+            // below round-off, which spares a division and a square root
+            // on the contact's chain of dependent operations.
+            let turned = along * along * inverse_old_length_sq;
+            if turned < 1e-4 {
+                let stretch = 1.0 + turned * (0.5 + turned * (0.375 + turned * 0.3125));
+                displacement += rotated * stretch;
+            } else {
+                let new_length_sq = rotated.norm_squared();
+                if new_length_sq > 0.0 {
+                    displacement += rotated * (old_length_sq / new_length_sq).sqrt();
+                }
             }
         }
 
@@ -365,6 +381,42 @@ mod tests {
         {
             let measured = clamped_restitution(stiffness_per_mass, damping_per_mass);
             assert!((measured - 0.55028).abs() < 1e-5, "{measured}");
+        }
+    }
+
+    /// The history carried into a turned tangent plane keeps its length:
+    /// |ξ'| = |ξ| to round-off, whether the turn is small enough for the
+    /// series or not (ε from 1e-12 to 0.5, on both sides of its 1e-4 limit),
+    /// and ξ' is the projection of ξ scaled by (1 − ε)^(−1/2).
+    #[test]
+    fn the_rotated_history_keeps_its_length() {
+        let law = ContactLaw {
+            normal: NormalStiffness::Fixed {
+                stiffness: 1e5,
+                damping: 0.0,
+            },
+            tangential_ratio: 0.2,
+            friction: 1e9,
+            rolling_friction: 0.0,
+        };
+        let history = Vec3::new(3e-6, -1e-6, 0.0);
+        for turned in [1e-12, 1e-8, 1e-6, 9.9e-5, 1.01e-4, 1e-3, 0.1, 0.5] {
+            // A normal tilted out of the plane z = const so that
+            // (ξ·n)²/|ξ|² = ε.
+            let along = history.normalize();
+            let sideways = Vec3::z();
+            let normal = along * f64::sqrt(turned) + sideways * f64::sqrt(1.0 - turned);
+            // No slip (zero velocity), no dt: ξ' is the carried history alone.
+            let result = law.force(1e-6, normal, Vec3::zeros(), 1.0, 1e9, history, 1.0);
+            let length_error = (result.history.norm() - history.norm()).abs() / history.norm();
+            assert!(
+                length_error < 1e-14,
+                "ε = {turned:e}: |ξ'| off by {length_error:e}"
+            );
+            let projected = history - history.dot(&normal) * normal;
+            let expected = projected / f64::sqrt(1.0 - turned);
+            let error = (result.history - expected).norm() / history.norm();
+            assert!(error < 1e-14, "ε = {turned:e}: ξ' off by {error:e}");
         }
     }
 }

@@ -14,7 +14,7 @@
 use crate::contact_law::{ContactLaw, ContactPoint};
 use crate::ghosts::Ghosts;
 use crate::lubrication::Lubrication;
-use crate::neighbours::{CellBins, CellGrid, NeighbourList, PreviousList, LUBRICATED, TOUCHING};
+use crate::neighbours::{CellGrid, NeighbourList, PreviousList, LUBRICATED, TOUCHING};
 use crate::particles::{NewParticle, Particles, PACKED_STATE};
 use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
@@ -23,6 +23,18 @@ use rayon::prelude::*;
 /// Smallest amount of work handed to one thread: below it the loops run on
 /// the calling thread, so small scenes pay no synchronisation.
 const PARTICLES_PER_TASK: usize = 256;
+
+/// Particles per chunk of the force loop among `n`: the largest of 256,
+/// 512 and 1024 that still leaves 16 chunks to share among threads. A pair
+/// within one chunk hands its result to the upper particle in cache; one
+/// across chunks goes through pass 2, so larger chunks save memory traffic.
+/// It depends on `n` alone, never on the number of threads.
+fn force_chunk(n: usize) -> usize {
+    [1024, 512]
+        .into_iter()
+        .find(|&chunk| n >= 16 * chunk)
+        .unwrap_or(PARTICLES_PER_TASK)
+}
 
 /// A contact as seen from one of its particles.
 #[derive(Clone, Copy, Debug)]
@@ -244,10 +256,15 @@ impl DemSystem {
         self.migrate(&mut previous);
         let grid = self.cell_grid();
 
-        // Sort owned particles by cell so that neighbours sit close in memory.
-        let mut bins = CellBins::default();
-        bins.fill(&grid, &self.particles.position);
-        let order: Vec<usize> = bins.members.iter().map(|&k| k as usize).collect();
+        // Sort owned particles by cell, cells in Z order, so that
+        // neighbours sit close in memory and most pairs fall in one chunk of
+        // the force loop (stable: a particle's rank within its cell is kept).
+        let mut order: Vec<usize> = (0..self.particles.n_owned).collect();
+        let keys: Vec<u64> = self.particles.position[..self.particles.n_owned]
+            .iter()
+            .map(|x| grid.z_order(x))
+            .collect();
+        order.sort_by_key(|&k| keys[k]);
         if order.iter().enumerate().any(|(k, &o)| k != o) {
             previous.reorder(&order);
             self.particles.permute_owned(&order);
@@ -569,13 +586,15 @@ impl DemSystem {
     /// Contact forces and gravity on every owned particle; `dt` advances the
     /// tangential histories (0 evaluates without advancing them).
     ///
-    /// Two parallel loops over particles, in a fixed order whatever the
-    /// number of threads:
+    /// Two parallel loops over fixed chunks of particles ([`force_chunk`]),
+    /// in a fixed order whatever the number of threads:
     /// 1. each particle evaluates its upper entries (each pair of owned
     ///    particles once, pairs with ghosts from both sides), its walls and
-    ///    gravity, and leaves each pair's result in the entry;
-    /// 2. each particle collects the results of its lower entries (−F on it,
-    ///    and its own torque), so Newton's third law holds bitwise.
+    ///    gravity; a pair whose upper particle is in the same chunk hands it
+    ///    −F and its torque at once (the chunk's sums stay in cache), any
+    ///    other leaves its result in the entry;
+    /// 2. each particle collects the results of its lower entries in earlier
+    ///    chunks, so Newton's third law holds bitwise.
     pub fn compute_forces(&mut self, dt: f64) -> StepDiagnostics {
         self.evaluate_forces(dt, dt)
     }
@@ -622,6 +641,7 @@ impl DemSystem {
         film_dt: f64,
     ) -> (f64, usize) {
         let n = forces.len();
+        let chunk_len = force_chunk(n);
         let law = self.law;
         let lubrication = self.lubrication;
         let contact_gap = self.contact_gap;
@@ -638,19 +658,17 @@ impl DemSystem {
             &mut list.state,
             &mut self.pair_force,
             &mut self.pair_partner_torque,
+            chunk_len,
         );
         let p = &self.particles;
         forces
-            .par_chunks_mut(PARTICLES_PER_TASK)
-            .zip(torques.par_chunks_mut(PARTICLES_PER_TASK))
-            .zip(
-                self.wall_history
-                    .par_chunks_mut(PARTICLES_PER_TASK * wall_stride),
-            )
-            .zip(self.contacts.par_chunks_mut(PARTICLES_PER_TASK))
+            .par_chunks_mut(chunk_len)
+            .zip(torques.par_chunks_mut(chunk_len))
+            .zip(self.wall_history.par_chunks_mut(chunk_len * wall_stride))
+            .zip(self.contacts.par_chunks_mut(chunk_len))
             .zip(entry_chunks.into_par_iter())
-            .zip(self.wall_touching.par_chunks_mut(PARTICLES_PER_TASK))
-            .zip(self.wall_candidates.par_chunks(PARTICLES_PER_TASK))
+            .zip(self.wall_touching.par_chunks_mut(chunk_len))
+            .zip(self.wall_candidates.par_chunks(chunk_len))
             .enumerate()
             .map(
                 |(
@@ -660,10 +678,17 @@ impl DemSystem {
                         candidates,
                     ),
                 )| {
-                    let first = chunk * PARTICLES_PER_TASK;
+                    let first = chunk * chunk_len;
+                    let end = first + forces.len();
                     let entry_base = offsets[first] as usize;
                     let mut max_overlap: f64 = 0.0;
                     let mut wall_contacts = 0usize;
+                    // What the chunk's pairs hand to their upper partner when
+                    // it lies in the chunk too: summed here, in cache, rather
+                    // than read back from the entries in pass 2.
+                    let mut handed_force = vec![Vec3::zeros(); forces.len()];
+                    let mut handed_torque = vec![Vec3::zeros(); forces.len()];
+                    let mut handed_count = vec![0u32; forces.len()];
                     for local in 0..forces.len() {
                         let i = first + local;
                         let (xi, vi, wi, ri) = (
@@ -703,9 +728,13 @@ impl DemSystem {
                                     );
                                     if force != Vec3::zeros() {
                                         total_force += force;
-                                        entry.force[e] = force;
-                                        entry.partner_torque[e] = Vec3::zeros();
                                         entry.state[e] = LUBRICATED;
+                                        if j < end {
+                                            handed_force[j - first] -= force;
+                                        } else {
+                                            entry.force[e] = force;
+                                            entry.partner_torque[e] = Vec3::zeros();
+                                        }
                                     }
                                 }
                                 continue;
@@ -744,10 +773,16 @@ impl DemSystem {
                             }
                             total_force += load.force;
                             total_torque += load.torque;
-                            // Pass 2 hands these to j (a ghost's owner
-                            // evaluates the pair itself).
-                            entry.force[e] = load.force;
-                            entry.partner_torque[e] = load.partner_torque;
+                            if j < end {
+                                handed_force[j - first] -= load.force;
+                                handed_torque[j - first] += load.partner_torque;
+                                handed_count[j - first] += 1;
+                            } else {
+                                // Pass 2 hands these to j (a ghost's owner
+                                // evaluates the pair itself).
+                                entry.force[e] = load.force;
+                                entry.partner_torque[e] = load.partner_torque;
+                            }
                             max_overlap = max_overlap.max(overlap / ri.min(rj));
                             count += 1;
                         }
@@ -806,9 +841,9 @@ impl DemSystem {
                             total_force += p.mass[i] * gravity + p.external_force[i];
                             total_torque += p.external_torque[i];
                         }
-                        forces[local] = total_force;
-                        torques[local] = total_torque;
-                        counts[local] = count;
+                        forces[local] = handed_force[local] + total_force;
+                        torques[local] = handed_torque[local] + total_torque;
+                        counts[local] = handed_count[local] + count;
                     }
                     (max_overlap, wall_contacts)
                 },
@@ -817,22 +852,30 @@ impl DemSystem {
     }
 
     /// Pass 2 of `compute_forces`: each particle adds the pairs evaluated by
-    /// its lower partners; returns the number of (particle, contact) entries.
+    /// its lower partners in earlier chunks (pass 1 handed over those within
+    /// the chunk); returns the number of (particle, contact) entries.
     fn collect_lower_pairs(&mut self, forces: &mut [Vec3], torques: &mut [Vec3]) -> usize {
         let list = &self.neighbours;
+        let chunk_len = force_chunk(forces.len());
         let (pair_force, pair_partner_torque) = (&self.pair_force, &self.pair_partner_torque);
         forces
-            .par_chunks_mut(PARTICLES_PER_TASK)
-            .zip(torques.par_chunks_mut(PARTICLES_PER_TASK))
-            .zip(self.contacts.par_chunks_mut(PARTICLES_PER_TASK))
+            .par_chunks_mut(chunk_len)
+            .zip(torques.par_chunks_mut(chunk_len))
+            .zip(self.contacts.par_chunks_mut(chunk_len))
             .enumerate()
             .map(|(chunk, ((forces, torques), counts))| {
-                let first = chunk * PARTICLES_PER_TASK;
+                let first = chunk * chunk_len;
                 let mut listed = 0usize;
                 for local in 0..forces.len() {
                     let i = first + local;
                     let lower = list.offsets[i] as usize..list.upper_start[i] as usize;
-                    for &upper in &list.mirror[lower] {
+                    // Partners in increasing index: those of earlier chunks
+                    // come first.
+                    for (&j, &upper) in list.partner[lower.clone()].iter().zip(&list.mirror[lower])
+                    {
+                        if j as usize >= first {
+                            break;
+                        }
                         let upper = upper as usize;
                         let state = list.state[upper];
                         if state != 0 {
@@ -1011,8 +1054,8 @@ struct EntryChunk<'a> {
 }
 
 impl<'a> EntryChunk<'a> {
-    /// Splits the per-entry arrays at the entries of every
-    /// `PARTICLES_PER_TASK` particles.
+    /// Splits the per-entry arrays at the entries of every `chunk_len`
+    /// particles.
     fn split(
         offsets: &[u32],
         n: usize,
@@ -1020,10 +1063,11 @@ impl<'a> EntryChunk<'a> {
         mut state: &'a mut [u8],
         mut force: &'a mut [Vec3],
         mut partner_torque: &'a mut [Vec3],
+        chunk_len: usize,
     ) -> Vec<EntryChunk<'a>> {
-        let mut chunks = Vec::with_capacity(n / PARTICLES_PER_TASK + 1);
-        for start in (0..n).step_by(PARTICLES_PER_TASK) {
-            let end = (start + PARTICLES_PER_TASK).min(n);
+        let mut chunks = Vec::with_capacity(n / chunk_len + 1);
+        for start in (0..n).step_by(chunk_len) {
+            let end = (start + chunk_len).min(n);
             let len = (offsets[end] - offsets[start]) as usize;
             let (history_head, history_tail) = std::mem::take(&mut history).split_at_mut(len);
             let (state_head, state_tail) = std::mem::take(&mut state).split_at_mut(len);
