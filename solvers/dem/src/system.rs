@@ -104,6 +104,9 @@ pub struct DemSystem {
     /// the skin at the last neighbour build: no other wall can reach it
     /// before the next build (a particle moves less than half the skin).
     wall_candidates: Vec<u64>,
+    /// Whether external loads were ever set (a scene with a fluid): the
+    /// force loop of a dry scene does not read them.
+    external_loads: bool,
     pub neighbours: NeighbourList,
     ghosts: Ghosts,
     /// Particle–particle contacts of each owned particle at the last force
@@ -138,6 +141,7 @@ impl DemSystem {
             wall_history: Vec::new(),
             wall_touching: Vec::new(),
             wall_candidates: Vec::new(),
+            external_loads: false,
             neighbours: NeighbourList::new(skin),
             ghosts: Ghosts::default(),
             contacts: Vec::new(),
@@ -392,6 +396,7 @@ impl DemSystem {
         whole.steps = self.steps;
         whole.last = self.last;
         whole.next_id = self.next_id;
+        whole.external_loads = self.external_loads;
         let adopted: Vec<Vec<(u64, Vec3)>> = grains.iter().map(|g| whole.push_grain(g)).collect();
         let mut previous = PreviousList::default();
         previous.retain_and_adopt(&[], &adopted);
@@ -520,6 +525,7 @@ impl DemSystem {
             force.len() == n && torque.len() == n,
             "one load per owned particle"
         );
+        self.external_loads = true;
         let p = &mut self.particles;
         for k in 0..n {
             if p.inverse_mass[k] == 0.0 {
@@ -649,6 +655,7 @@ impl DemSystem {
         let wall_stride = self.wall_stride();
         let time = self.time;
         let gravity = self.domain.gravity;
+        let external_loads = self.external_loads;
         let list = &mut self.neighbours;
         let (offsets, upper_start, partner) = (&list.offsets, &list.upper_start, &list.partner);
         let entry_chunks = EntryChunk::split(
@@ -691,12 +698,10 @@ impl DemSystem {
                     let mut handed_count = vec![0u32; forces.len()];
                     for local in 0..forces.len() {
                         let i = first + local;
-                        let (xi, vi, wi, ri) = (
-                            p.position[i],
-                            p.velocity[i],
-                            p.angular_velocity[i],
-                            p.radius[i],
-                        );
+                        // Velocities are read where a pair or wall acts: most
+                        // grains of a loose scene touch nothing, and their
+                        // velocities then stay out of the cache.
+                        let (xi, ri) = (p.position[i], p.radius[i]);
                         let mut total_force = Vec3::zeros();
                         let mut total_torque = Vec3::zeros();
                         let mut count = 0u32;
@@ -720,7 +725,7 @@ impl DemSystem {
                                     let force = film.force(
                                         distance - ri - rj,
                                         normal,
-                                        vi - p.velocity[j],
+                                        p.velocity[i] - p.velocity[j],
                                         ri,
                                         rj,
                                         p.inverse_mass[i] + p.inverse_mass[j],
@@ -744,6 +749,7 @@ impl DemSystem {
                             let distance = distance_sq.sqrt();
                             let normal = branch * (1.0 / distance);
                             let overlap = reach - distance;
+                            let (vi, wi) = (p.velocity[i], p.angular_velocity[i]);
                             let wj = p.angular_velocity[j];
                             let inverse_mass_sum = p.inverse_mass[i] + p.inverse_mass[j];
                             let contact = ContactPoint {
@@ -796,6 +802,7 @@ impl DemSystem {
                                 let w = near.trailing_zeros() as usize;
                                 near &= near - 1;
                                 let wall = &walls[w];
+                                let (vi, wi) = (p.velocity[i], p.angular_velocity[i]);
                                 let bit = 1u64 << w;
                                 let distance = wall.distance(&xi);
                                 let present = wall.is_present(time);
@@ -838,8 +845,11 @@ impl DemSystem {
                                 wall_contacts += 1;
                             }
                             touching[local] = touches;
-                            total_force += p.mass[i] * gravity + p.external_force[i];
-                            total_torque += p.external_torque[i];
+                            total_force += p.mass[i] * gravity;
+                            if external_loads {
+                                total_force += p.external_force[i];
+                                total_torque += p.external_torque[i];
+                            }
                         }
                         forces[local] = handed_force[local] + total_force;
                         torques[local] = handed_torque[local] + total_torque;
