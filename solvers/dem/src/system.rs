@@ -19,6 +19,7 @@ use crate::particles::{NewParticle, Particles, PACKED_STATE};
 use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Smallest amount of work handed to one thread: below it the loops run on
 /// the calling thread, so small scenes pay no synchronisation.
@@ -112,12 +113,12 @@ pub struct DemSystem {
     /// Particle–particle contacts of each owned particle at the last force
     /// evaluation (its coordination number).
     pub contacts: Vec<u32>,
-    /// Force on the owner and torque on the partner of each upper list entry
-    /// in contact, left by pass 1 of the force loop for pass 2.
-    pair_force: Vec<Vec3>,
-    pair_partner_torque: Vec<Vec3>,
     /// Largest radius over all ranks at the last neighbour build.
     max_radius: f64,
+    /// For the pair list of build `.0`: per chunk of the force loop, the
+    /// first chunk that owns a lower partner of one of its particles (the
+    /// chunks it receives hand-overs from start there).
+    handover_sources: (u64, Vec<usize>),
     pub time: f64,
     pub steps: u64,
     pub last: StepDiagnostics,
@@ -145,9 +146,8 @@ impl DemSystem {
             neighbours: NeighbourList::new(skin),
             ghosts: Ghosts::default(),
             contacts: Vec::new(),
-            pair_force: Vec::new(),
-            pair_partner_torque: Vec::new(),
             max_radius: 0.0,
+            handover_sources: (u64::MAX, Vec::new()),
             time: 0.0,
             steps: 0,
             last: StepDiagnostics::default(),
@@ -549,21 +549,29 @@ impl DemSystem {
             return true;
         }
         let p = &mut self.particles;
+        // Plain loops over fixed chunks: the compiler keeps them tight.
         p.position[..n]
-            .par_iter_mut()
-            .zip(p.velocity[..n].par_iter_mut())
-            .zip(p.angular_velocity[..n].par_iter_mut())
-            .zip(p.force[..n].par_iter())
-            .zip(p.torque[..n].par_iter())
-            .zip(p.inverse_mass[..n].par_iter())
-            .zip(p.inverse_inertia[..n].par_iter())
-            .zip(reference.par_iter())
-            .with_min_len(PARTICLES_PER_TASK)
-            .map(|(((((((x, v), w), f), t), &inv_m), &inv_i), x0)| {
-                *v += half_dt * inv_m * f;
-                *w += half_dt * inv_i * t;
-                *x += dt * *v;
-                (*x - x0).norm_squared() > limit_sq
+            .par_chunks_mut(PARTICLES_PER_TASK)
+            .zip(p.velocity[..n].par_chunks_mut(PARTICLES_PER_TASK))
+            .zip(p.angular_velocity[..n].par_chunks_mut(PARTICLES_PER_TASK))
+            .enumerate()
+            .map(|(chunk, ((x, v), w))| {
+                let first = chunk * PARTICLES_PER_TASK;
+                let range = first..first + x.len();
+                let (f, t) = (&p.force[range.clone()], &p.torque[range.clone()]);
+                let (inv_m, inv_i) = (
+                    &p.inverse_mass[range.clone()],
+                    &p.inverse_inertia[range.clone()],
+                );
+                let x0 = &reference[range];
+                let mut moved = false;
+                for k in 0..x.len() {
+                    v[k] += half_dt * inv_m[k] * f[k];
+                    w[k] += half_dt * inv_i[k] * t[k];
+                    x[k] += dt * v[k];
+                    moved |= (x[k] - x0[k]).norm_squared() > limit_sq;
+                }
+                moved
             })
             .reduce(|| false, |a, b| a || b)
     }
@@ -573,18 +581,27 @@ impl DemSystem {
         let n = self.particles.n_owned;
         let p = &mut self.particles;
         p.velocity[..n]
-            .par_iter_mut()
-            .zip(p.angular_velocity[..n].par_iter_mut())
-            .zip(p.force[..n].par_iter())
-            .zip(p.torque[..n].par_iter())
-            .zip(p.inverse_mass[..n].par_iter())
-            .zip(p.inverse_inertia[..n].par_iter())
-            .zip(p.position[..n].par_iter())
-            .with_min_len(PARTICLES_PER_TASK)
-            .map(|((((((v, w), f), t), &inv_m), &inv_i), x)| {
-                *v += half_dt * inv_m * f;
-                *w += half_dt * inv_i * t;
-                !(x.iter().chain(v.iter()).all(|c| c.is_finite()))
+            .par_chunks_mut(PARTICLES_PER_TASK)
+            .zip(p.angular_velocity[..n].par_chunks_mut(PARTICLES_PER_TASK))
+            .enumerate()
+            .map(|(chunk, (v, w))| {
+                let first = chunk * PARTICLES_PER_TASK;
+                let range = first..first + v.len();
+                let (f, t) = (&p.force[range.clone()], &p.torque[range.clone()]);
+                let (inv_m, inv_i) = (
+                    &p.inverse_mass[range.clone()],
+                    &p.inverse_inertia[range.clone()],
+                );
+                let x = &p.position[range];
+                let mut finite = true;
+                for k in 0..v.len() {
+                    v[k] += half_dt * inv_m[k] * f[k];
+                    w[k] += half_dt * inv_i[k] * t[k];
+                    // A sum is finite only if every term is (short of
+                    // overflowing, which no sound state comes near).
+                    finite &= (x[k].sum() + v[k].sum()).is_finite();
+                }
+                !finite
             })
             .reduce(|| false, |a, b| a || b)
     }
@@ -597,10 +614,16 @@ impl DemSystem {
     /// 1. each particle evaluates its upper entries (each pair of owned
     ///    particles once, pairs with ghosts from both sides), its walls and
     ///    gravity; a pair whose upper particle is in the same chunk hands it
-    ///    −F and its torque at once (the chunk's sums stay in cache), any
-    ///    other leaves its result in the entry;
-    /// 2. each particle collects the results of its lower entries in earlier
-    ///    chunks, so Newton's third law holds bitwise.
+    ///    −F and its torque at once (the chunk's sums stay in cache); one
+    ///    whose upper particle is owned by a later chunk is handed over in
+    ///    a list the chunk publishes when done;
+    /// 2. a chunk adds what earlier chunks handed to its particles, in
+    ///    increasing chunk and particle order, as soon as they have all
+    ///    published their lists: at once on one thread, while the chunk is
+    ///    still in cache; a chunk whose sources were not done yet is
+    ///    finished after the loop. The sums are the same either way, so
+    ///    the result does not depend on the number of threads, and Newton's
+    ///    third law holds bitwise.
     pub fn compute_forces(&mut self, dt: f64) -> StepDiagnostics {
         self.evaluate_forces(dt, dt)
     }
@@ -612,19 +635,11 @@ impl DemSystem {
         let n = self.particles.n_owned;
         assert_eq!(self.wall_candidates.len(), n, "wall candidates not built");
         self.contacts.resize(n, 0);
-        let entries = self.neighbours.len();
-        self.pair_force.resize(entries, Vec3::zeros());
-        self.pair_partner_torque.resize(entries, Vec3::zeros());
         let mut force = std::mem::take(&mut self.particles.force);
         let mut torque = std::mem::take(&mut self.particles.torque);
 
-        let (max_overlap_ratio, wall_contacts) = self.evaluate_upper_pairs_and_walls(
-            &mut force[..n],
-            &mut torque[..n],
-            history_dt,
-            film_dt,
-        );
-        let listed_contacts = self.collect_lower_pairs(&mut force[..n], &mut torque[..n]);
+        let (max_overlap_ratio, wall_contacts, listed_contacts) = self
+            .evaluate_upper_pairs_and_walls(&mut force[..n], &mut torque[..n], history_dt, film_dt);
 
         self.particles.force = force;
         self.particles.torque = torque;
@@ -637,17 +652,40 @@ impl DemSystem {
         }
     }
 
-    /// Pass 1 of `compute_forces`: returns the largest overlap ratio and the
-    /// number of wall contacts.
+    /// Recomputes [`DemSystem::handover_sources`] after a neighbour build.
+    fn refresh_handover_sources(&mut self, n: usize, chunk_len: usize) {
+        let list = &self.neighbours;
+        let chunks = n.div_ceil(chunk_len);
+        if self.handover_sources.0 == list.builds && self.handover_sources.1.len() == chunks {
+            return;
+        }
+        let sources = (0..chunks)
+            .map(|chunk| {
+                let particles = chunk * chunk_len..((chunk + 1) * chunk_len).min(n);
+                particles
+                    .filter(|&i| list.offsets[i] < list.upper_start[i])
+                    // Partners in increasing index: the first is the lowest.
+                    .map(|i| list.partner[list.offsets[i] as usize] as usize / chunk_len)
+                    .min()
+                    .unwrap_or(chunk)
+            })
+            .collect();
+        self.handover_sources = (list.builds, sources);
+    }
+
+    /// The two passes of `compute_forces`: returns the largest overlap
+    /// ratio, the number of wall contacts and the number of (particle,
+    /// contact) entries.
     fn evaluate_upper_pairs_and_walls(
         &mut self,
         forces: &mut [Vec3],
         torques: &mut [Vec3],
         dt: f64,
         film_dt: f64,
-    ) -> (f64, usize) {
+    ) -> (f64, usize, usize) {
         let n = forces.len();
         let chunk_len = force_chunk(n);
+        self.refresh_handover_sources(n, chunk_len);
         let law = self.law;
         let lubrication = self.lubrication;
         let contact_gap = self.contact_gap;
@@ -656,19 +694,16 @@ impl DemSystem {
         let time = self.time;
         let gravity = self.domain.gravity;
         let external_loads = self.external_loads;
+        let chunks = n.div_ceil(chunk_len);
+        let first_sources = &self.handover_sources.1;
         let list = &mut self.neighbours;
         let (offsets, upper_start, partner) = (&list.offsets, &list.upper_start, &list.partner);
-        let entry_chunks = EntryChunk::split(
-            offsets,
-            n,
-            &mut list.history,
-            &mut list.state,
-            &mut self.pair_force,
-            &mut self.pair_partner_torque,
-            chunk_len,
-        );
+        let entry_chunks =
+            EntryChunk::split(offsets, n, &mut list.history, &mut list.state, chunk_len);
+        let handovers: Vec<OnceLock<Vec<Handover>>> =
+            (0..chunks).map(|_| OnceLock::new()).collect();
         let p = &self.particles;
-        forces
+        let (max_overlap, wall_contacts, unfinished) = forces
             .par_chunks_mut(chunk_len)
             .zip(torques.par_chunks_mut(chunk_len))
             .zip(self.wall_history.par_chunks_mut(chunk_len * wall_stride))
@@ -690,6 +725,8 @@ impl DemSystem {
                     let entry_base = offsets[first] as usize;
                     let mut max_overlap: f64 = 0.0;
                     let mut wall_contacts = 0usize;
+                    // Pairs whose upper particle a later chunk owns.
+                    let mut outgoing = Vec::new();
                     // What the chunk's pairs hand to their upper partner when
                     // it lies in the chunk too: summed here, in cache, rather
                     // than read back from the entries in pass 2.
@@ -736,9 +773,13 @@ impl DemSystem {
                                         entry.state[e] = LUBRICATED;
                                         if j < end {
                                             handed_force[j - first] -= force;
-                                        } else {
-                                            entry.force[e] = force;
-                                            entry.partner_torque[e] = Vec3::zeros();
+                                        } else if j < n {
+                                            outgoing.push(Handover {
+                                                target: j as u32,
+                                                touching: false,
+                                                force,
+                                                partner_torque: Vec3::zeros(),
+                                            });
                                         }
                                     }
                                 }
@@ -783,11 +824,14 @@ impl DemSystem {
                                 handed_force[j - first] -= load.force;
                                 handed_torque[j - first] += load.partner_torque;
                                 handed_count[j - first] += 1;
-                            } else {
-                                // Pass 2 hands these to j (a ghost's owner
-                                // evaluates the pair itself).
-                                entry.force[e] = load.force;
-                                entry.partner_torque[e] = load.partner_torque;
+                            } else if j < n {
+                                // (A ghost's owner evaluates the pair itself.)
+                                outgoing.push(Handover {
+                                    target: j as u32,
+                                    touching: true,
+                                    force: load.force,
+                                    partner_torque: load.partner_torque,
+                                });
                             }
                             max_overlap = max_overlap.max(overlap / ri.min(rj));
                             count += 1;
@@ -855,50 +899,55 @@ impl DemSystem {
                         torques[local] = handed_torque[local] + total_torque;
                         counts[local] = handed_count[local] + count;
                     }
-                    (max_overlap, wall_contacts)
+                    // By target chunk, each target's pairs kept in order.
+                    outgoing.sort_by_key(|h| h.target as usize / chunk_len);
+                    handovers[chunk]
+                        .set(outgoing)
+                        .unwrap_or_else(|_| unreachable!("each chunk publishes once"));
+                    let sources = first_sources[chunk]..chunk;
+                    let finished = receive_handovers(
+                        chunk,
+                        chunk_len,
+                        sources.clone(),
+                        &handovers,
+                        forces,
+                        torques,
+                        counts,
+                    );
+                    let unfinished = (!finished).then_some((chunk, sources));
+                    (max_overlap, wall_contacts, Vec::from_iter(unfinished))
                 },
             )
-            .reduce(|| (0.0, 0), |a, b| (a.0.max(b.0), a.1 + b.1))
-    }
-
-    /// Pass 2 of `compute_forces`: each particle adds the pairs evaluated by
-    /// its lower partners in earlier chunks (pass 1 handed over those within
-    /// the chunk); returns the number of (particle, contact) entries.
-    fn collect_lower_pairs(&mut self, forces: &mut [Vec3], torques: &mut [Vec3]) -> usize {
-        let list = &self.neighbours;
-        let chunk_len = force_chunk(forces.len());
-        let (pair_force, pair_partner_torque) = (&self.pair_force, &self.pair_partner_torque);
-        forces
-            .par_chunks_mut(chunk_len)
-            .zip(torques.par_chunks_mut(chunk_len))
-            .zip(self.contacts.par_chunks_mut(chunk_len))
-            .enumerate()
-            .map(|(chunk, ((forces, torques), counts))| {
-                let first = chunk * chunk_len;
-                let mut listed = 0usize;
-                for local in 0..forces.len() {
-                    let i = first + local;
-                    let lower = list.offsets[i] as usize..list.upper_start[i] as usize;
-                    // Partners in increasing index: those of earlier chunks
-                    // come first.
-                    for (&j, &upper) in list.partner[lower.clone()].iter().zip(&list.mirror[lower])
-                    {
-                        if j as usize >= first {
-                            break;
-                        }
-                        let upper = upper as usize;
-                        let state = list.state[upper];
-                        if state != 0 {
-                            forces[local] -= pair_force[upper];
-                            torques[local] += pair_partner_torque[upper];
-                            counts[local] += u32::from(state & TOUCHING);
-                        }
+            .reduce(
+                || (0.0, 0, Vec::new()),
+                |mut a, b| {
+                    a.2.extend(b.2);
+                    (a.0.max(b.0), a.1 + b.1, a.2)
+                },
+            );
+        // Chunks whose sources were still running: every list is out now.
+        if !unfinished.is_empty() {
+            let mut sources = vec![None; chunks];
+            for (chunk, range) in unfinished {
+                sources[chunk] = Some(range);
+            }
+            forces
+                .par_chunks_mut(chunk_len)
+                .zip(torques.par_chunks_mut(chunk_len))
+                .zip(self.contacts.par_chunks_mut(chunk_len))
+                .zip(sources.into_par_iter())
+                .enumerate()
+                .for_each(|(chunk, (((forces, torques), counts), range))| {
+                    if let Some(range) = range {
+                        let finished = receive_handovers(
+                            chunk, chunk_len, range, &handovers, forces, torques, counts,
+                        );
+                        debug_assert!(finished);
                     }
-                    listed += counts[local] as usize;
-                }
-                listed
-            })
-            .sum()
+                });
+        }
+        let listed = self.contacts.par_iter().map(|&c| c as usize).sum();
+        (max_overlap, wall_contacts, listed)
     }
 
     /// The contacts of owned particle i with other particles, as evaluated
@@ -1054,13 +1103,56 @@ impl<'a> Iterator for PackedGrains<'a> {
     }
 }
 
+/// What a pair hands to its upper particle when a later chunk of the force
+/// loop owns it.
+#[derive(Clone, Copy, Debug)]
+struct Handover {
+    target: u32,
+    touching: bool,
+    /// Force on the lower particle (the target receives −force).
+    force: Vec3,
+    partner_torque: Vec3,
+}
+
+/// Adds to the particles of `chunk` what the chunks `sources` handed them,
+/// in increasing chunk order and, within a chunk, in the order it made
+/// them (increasing lower particle); returns false, changing nothing, when
+/// a source has not published its list yet.
+fn receive_handovers(
+    chunk: usize,
+    chunk_len: usize,
+    sources: std::ops::Range<usize>,
+    handovers: &[OnceLock<Vec<Handover>>],
+    forces: &mut [Vec3],
+    torques: &mut [Vec3],
+    counts: &mut [u32],
+) -> bool {
+    if !sources
+        .clone()
+        .all(|source| handovers[source].get().is_some())
+    {
+        return false;
+    }
+    let first = chunk * chunk_len;
+    for source in sources {
+        let list = handovers[source].get().expect("checked above");
+        let start = list.partition_point(|h| (h.target as usize) < first);
+        let stop = list.partition_point(|h| (h.target as usize) < first + forces.len());
+        for h in &list[start..stop] {
+            let local = h.target as usize - first;
+            forces[local] -= h.force;
+            torques[local] += h.partner_torque;
+            counts[local] += u32::from(h.touching);
+        }
+    }
+    true
+}
+
 /// The per-entry arrays of one chunk of particles (pass 1 of the force
 /// loop writes them for its own particles' entries only).
 struct EntryChunk<'a> {
     history: &'a mut [Vec3],
     state: &'a mut [u8],
-    force: &'a mut [Vec3],
-    partner_torque: &'a mut [Vec3],
 }
 
 impl<'a> EntryChunk<'a> {
@@ -1071,8 +1163,6 @@ impl<'a> EntryChunk<'a> {
         n: usize,
         mut history: &'a mut [Vec3],
         mut state: &'a mut [u8],
-        mut force: &'a mut [Vec3],
-        mut partner_torque: &'a mut [Vec3],
         chunk_len: usize,
     ) -> Vec<EntryChunk<'a>> {
         let mut chunks = Vec::with_capacity(n / chunk_len + 1);
@@ -1081,16 +1171,11 @@ impl<'a> EntryChunk<'a> {
             let len = (offsets[end] - offsets[start]) as usize;
             let (history_head, history_tail) = std::mem::take(&mut history).split_at_mut(len);
             let (state_head, state_tail) = std::mem::take(&mut state).split_at_mut(len);
-            let (force_head, force_tail) = std::mem::take(&mut force).split_at_mut(len);
-            let (torque_head, torque_tail) = std::mem::take(&mut partner_torque).split_at_mut(len);
             chunks.push(EntryChunk {
                 history: history_head,
                 state: state_head,
-                force: force_head,
-                partner_torque: torque_head,
             });
-            (history, state, force, partner_torque) =
-                (history_tail, state_tail, force_tail, torque_tail);
+            (history, state) = (history_tail, state_tail);
         }
         chunks
     }
