@@ -712,6 +712,7 @@ impl DemSystem {
             .zip(self.wall_touching.par_chunks_mut(chunk_len))
             .zip(self.wall_candidates.par_chunks(chunk_len))
             .enumerate()
+            .with_max_len(1)
             .map(
                 |(
                     chunk,
