@@ -4,8 +4,9 @@
 //! Partners are candidate contacts within r_i + r_j + skin. Each owned
 //! particle lists all its partners (a full list, both sides of every pair),
 //! in increasing index. A pair of owned particles i < j is evaluated once,
-//! from i's entry (the upper entry); j's entry (the lower one) points back
-//! to it (`mirror`) to collect the result. A pair with a ghost is evaluated
+//! from i's entry (the upper entry), which holds the pair's history; j's
+//! entry (the lower one) points back to it (`mirror`), for analyses and for
+//! carrying histories across builds. A pair with a ghost is evaluated
 //! from both sides, each side keeping its own history. The list is rebuilt
 //! when some particle has moved by more than half the skin since the last
 //! build, and the tangential displacement of every open contact is carried
