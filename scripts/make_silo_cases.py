@@ -24,14 +24,15 @@ HEADER_SMALL = """# A reduced silo for the tests (the full one is cases/silo.tom
 """
 
 
-def silo(width, fill_top, end, seed, exclude_bottom, slab, liner=0.011):
+def silo(width, fill_top, end, seed, exclude_bottom, slab, liner=0.011, layer=None, liner_top=None):
     top = fill_top + 0.05
+    liner_top = liner_top or top
     r = 0.5 * liner  # half the liner spacing: liner grains are centred on the walls
     liners = [
-        ([-r, 0.0, 0.0], [r, width, top]),
-        ([width - r, 0.0, 0.0], [width + r, width, top]),
-        ([r, -r, 0.0], [width - r, r, top]),
-        ([r, width - r, 0.0], [width - r, width + r, top]),
+        ([-r, 0.0, 0.0], [r, width, liner_top]),
+        ([width - r, 0.0, 0.0], [width + r, width, liner_top]),
+        ([r, -r, 0.0], [width - r, r, liner_top]),
+        ([r, width - r, 0.0], [width - r, width + r, liner_top]),
     ]
     text = f"""
 [domain]
@@ -56,13 +57,20 @@ spacing = {liner}
 fixed = true
 
 """
-    text += f"""# The grains: a loose jittered lattice that settles under gravity.
-[[particles.block]]
+    if layer is None:
+        text += "# The grains: a loose jittered lattice that settles under gravity.\n"
+    else:
+        text += ("# The grains: sparse layers that rain down one after the other onto the\n"
+                 "# growing deposit, like a poured fill.\n")
+    text += f"""[[particles.block]]
 kind = "lattice"
 lower = [{r}, {r}, 0.0]
 upper = [{width - r}, {width - r}, {fill_top}]
 spacing = 0.0112
-jitter = 0.5
+"""
+    if layer is not None:
+        text += f"layer_spacing = {layer}\n"
+    text += """jitter = 0.5
 
 [contact]
 model = "soft"
