@@ -554,19 +554,19 @@ fn bisect(neighbours: &[Vec<usize>]) -> Option<Vec<u8>> {
     };
     // Start in the largest connected part (a grain touching only walls or
     // glued grains is a part of its own).
-    let mut part = vec![usize::MAX; n];
+    let mut reached = vec![false; n];
     let (mut largest, mut largest_size) = (0, 0);
     for start in 0..n {
-        if part[start] != usize::MAX {
+        if reached[start] {
             continue;
         }
-        part[start] = start;
+        reached[start] = true;
         let (mut queue, mut size) = (vec![start], 0);
         while let Some(u) = queue.pop() {
             size += 1;
             for &v in &neighbours[u] {
-                if part[v] == usize::MAX {
-                    part[v] = start;
+                if !reached[v] {
+                    reached[v] = true;
                     queue.push(v);
                 }
             }

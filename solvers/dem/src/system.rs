@@ -28,7 +28,8 @@ const PARTICLES_PER_TASK: usize = 256;
 /// Particles per chunk of the force loop among `n`: the largest of 256,
 /// 512 and 1024 that still leaves 16 chunks to share among threads. A pair
 /// within one chunk hands its result to the upper particle in cache; one
-/// across chunks goes through pass 2, so larger chunks save memory traffic.
+/// across chunks goes through a hand-over list, so larger chunks save
+/// memory traffic.
 /// It depends on `n` alone, never on the number of threads.
 fn force_chunk(n: usize) -> usize {
     [1024, 512]
@@ -703,7 +704,7 @@ impl DemSystem {
         let handovers: Vec<OnceLock<Vec<Handover>>> =
             (0..chunks).map(|_| OnceLock::new()).collect();
         let p = &self.particles;
-        let (max_overlap, wall_contacts, unfinished) = forces
+        let chunk_results: Vec<(f64, usize, bool)> = forces
             .par_chunks_mut(chunk_len)
             .zip(torques.par_chunks_mut(chunk_len))
             .zip(self.wall_history.par_chunks_mut(chunk_len * wall_stride))
@@ -726,14 +727,11 @@ impl DemSystem {
                     let entry_base = offsets[first] as usize;
                     let mut max_overlap: f64 = 0.0;
                     let mut wall_contacts = 0usize;
-                    // Pairs whose upper particle a later chunk owns.
-                    let mut outgoing = Vec::new();
-                    // What the chunk's pairs hand to their upper partner when
-                    // it lies in the chunk too: summed here, in cache, rather
-                    // than read back from the entries in pass 2.
-                    let mut handed_force = vec![Vec3::zeros(); forces.len()];
-                    let mut handed_torque = vec![Vec3::zeros(); forces.len()];
-                    let mut handed_count = vec![0u32; forces.len()];
+                    // What the chunk's pairs hand to their upper partner: summed
+                    // here, in cache, when it lies in the chunk too; listed in
+                    // `outgoing` when a later chunk owns it (a ghost's owner
+                    // evaluates the pair itself).
+                    let mut handed = HandedOver::new(first..end, n);
                     for local in 0..forces.len() {
                         let i = first + local;
                         // Velocities are read where a pair or wall acts: most
@@ -772,16 +770,12 @@ impl DemSystem {
                                     if force != Vec3::zeros() {
                                         total_force += force;
                                         entry.state[e] = LUBRICATED;
-                                        if j < end {
-                                            handed_force[j - first] -= force;
-                                        } else if j < n {
-                                            outgoing.push(Handover {
-                                                target: j as u32,
-                                                touching: false,
-                                                force,
-                                                partner_torque: Vec3::zeros(),
-                                            });
-                                        }
+                                        handed.give(Handover {
+                                            target: j as u32,
+                                            touching: false,
+                                            force,
+                                            partner_torque: Vec3::zeros(),
+                                        });
                                     }
                                 }
                                 continue;
@@ -821,19 +815,12 @@ impl DemSystem {
                             }
                             total_force += load.force;
                             total_torque += load.torque;
-                            if j < end {
-                                handed_force[j - first] -= load.force;
-                                handed_torque[j - first] += load.partner_torque;
-                                handed_count[j - first] += 1;
-                            } else if j < n {
-                                // (A ghost's owner evaluates the pair itself.)
-                                outgoing.push(Handover {
-                                    target: j as u32,
-                                    touching: true,
-                                    force: load.force,
-                                    partner_torque: load.partner_torque,
-                                });
-                            }
+                            handed.give(Handover {
+                                target: j as u32,
+                                touching: true,
+                                force: load.force,
+                                partner_torque: load.partner_torque,
+                            });
                             max_overlap = max_overlap.max(overlap / ri.min(rj));
                             count += 1;
                         }
@@ -896,57 +883,53 @@ impl DemSystem {
                                 total_torque += p.external_torque[i];
                             }
                         }
-                        forces[local] = handed_force[local] + total_force;
-                        torques[local] = handed_torque[local] + total_torque;
-                        counts[local] = handed_count[local] + count;
+                        forces[local] = handed.force[local] + total_force;
+                        torques[local] = handed.torque[local] + total_torque;
+                        counts[local] = handed.count[local] + count;
                     }
                     // By target chunk, each target's pairs kept in order.
+                    let mut outgoing = handed.outgoing;
                     outgoing.sort_by_key(|h| h.target as usize / chunk_len);
                     handovers[chunk]
                         .set(outgoing)
                         .unwrap_or_else(|_| unreachable!("each chunk publishes once"));
-                    let sources = first_sources[chunk]..chunk;
                     let finished = receive_handovers(
                         chunk,
                         chunk_len,
-                        sources.clone(),
+                        first_sources[chunk]..chunk,
                         &handovers,
                         forces,
                         torques,
                         counts,
                     );
-                    let unfinished = (!finished).then_some((chunk, sources));
-                    (max_overlap, wall_contacts, Vec::from_iter(unfinished))
+                    (max_overlap, wall_contacts, finished)
                 },
             )
-            .reduce(
-                || (0.0, 0, Vec::new()),
-                |mut a, b| {
-                    a.2.extend(b.2);
-                    (a.0.max(b.0), a.1 + b.1, a.2)
-                },
-            );
+            .collect();
         // Chunks whose sources were still running: every list is out now.
-        if !unfinished.is_empty() {
-            let mut sources = vec![None; chunks];
-            for (chunk, range) in unfinished {
-                sources[chunk] = Some(range);
-            }
+        if chunk_results.iter().any(|&(_, _, finished)| !finished) {
             forces
                 .par_chunks_mut(chunk_len)
                 .zip(torques.par_chunks_mut(chunk_len))
                 .zip(self.contacts.par_chunks_mut(chunk_len))
-                .zip(sources.into_par_iter())
+                .zip(&chunk_results)
                 .enumerate()
-                .for_each(|(chunk, (((forces, torques), counts), range))| {
-                    if let Some(range) = range {
-                        let finished = receive_handovers(
-                            chunk, chunk_len, range, &handovers, forces, torques, counts,
-                        );
-                        debug_assert!(finished);
-                    }
+                .filter(|(_, (_, &(_, _, finished)))| !finished)
+                .for_each(|(chunk, (((forces, torques), counts), _))| {
+                    let finished = receive_handovers(
+                        chunk,
+                        chunk_len,
+                        first_sources[chunk]..chunk,
+                        &handovers,
+                        forces,
+                        torques,
+                        counts,
+                    );
+                    debug_assert!(finished);
                 });
         }
+        let max_overlap = chunk_results.iter().map(|r| r.0).fold(0.0, f64::max);
+        let wall_contacts = chunk_results.iter().map(|r| r.1).sum();
         let listed = self.contacts.par_iter().map(|&c| c as usize).sum();
         (max_overlap, wall_contacts, listed)
     }
@@ -1113,6 +1096,51 @@ struct Handover {
     /// Force on the lower particle (the target receives −force).
     force: Vec3,
     partner_torque: Vec3,
+}
+
+/// What the pairs of one chunk of the force loop hand to their upper
+/// particles.
+struct HandedOver {
+    /// The chunk's particles, and the owned ones (`0..owned`).
+    chunk: std::ops::Range<usize>,
+    owned: usize,
+    /// Sums for upper particles in the chunk (−F, the partner torque,
+    /// contacts), indexed from the chunk's first particle.
+    force: Vec<Vec3>,
+    torque: Vec<Vec3>,
+    count: Vec<u32>,
+    /// Pairs whose upper particle a later chunk owns, in the order made.
+    outgoing: Vec<Handover>,
+}
+
+impl HandedOver {
+    fn new(chunk: std::ops::Range<usize>, owned: usize) -> Self {
+        let len = chunk.len();
+        HandedOver {
+            chunk,
+            owned,
+            force: vec![Vec3::zeros(); len],
+            torque: vec![Vec3::zeros(); len],
+            count: vec![0; len],
+            outgoing: Vec::new(),
+        }
+    }
+
+    /// Sums a pair for its upper particle in the chunk, lists it for one a
+    /// later chunk owns; drops it for a ghost (its owner evaluates the pair
+    /// itself).
+    #[inline]
+    fn give(&mut self, handover: Handover) {
+        let j = handover.target as usize;
+        if j < self.chunk.end {
+            let local = j - self.chunk.start;
+            self.force[local] -= handover.force;
+            self.torque[local] += handover.partner_torque;
+            self.count[local] += u32::from(handover.touching);
+        } else if j < self.owned {
+            self.outgoing.push(handover);
+        }
+    }
 }
 
 /// Adds to the particles of `chunk` what the chunks `sources` handed them,
