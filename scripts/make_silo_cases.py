@@ -24,7 +24,11 @@ HEADER_SMALL = """# A reduced silo for the tests (the full one is cases/silo.tom
 """
 
 
-def silo(width, fill_top, end, seed, exclude_bottom, slab, liner=0.011, layer=None, liner_top=None):
+def silo(width, fill_top, end, seed, exclude_bottom, slab, liner=0.011, layer=None, liner_top=None,
+         pour=None):
+    """pour = (count, batch_layers, interval, gap, settled_speed): the grains are
+    poured batch after batch just above the deposit instead of starting on a
+    lattice; fill_top is then the domain's height less 5 cm."""
     top = fill_top + 0.05
     liner_top = liner_top or top
     r = 0.5 * liner  # half the liner spacing: liner grains are centred on the walls
@@ -57,21 +61,37 @@ spacing = {liner}
 fixed = true
 
 """
-    if layer is None:
+    if pour is not None:
+        count, batch_layers, interval, gap, settled = pour
+        text += f"""# The grains: poured in batches of {batch_layers} lattice layers, each released
+# {gap} m above the highest moving grain once the previous one has landed, so
+# that grains land from a small height however high the deposit has grown.
+[[particles.pour]]
+lower = [{r}, {r}, 0.0]
+upper = [{width - r}, {width - r}, {round(batch_layers * 0.0112 + 1e-6, 7)}]
+spacing = 0.0112
+jitter = 0.5
+count = {count}
+interval = {interval}
+gap = {gap}
+settled_speed = {settled}
+"""
+    elif layer is None:
         text += "# The grains: a loose jittered lattice that settles under gravity.\n"
     else:
         text += ("# The grains: sparse layers that rain down one after the other onto the\n"
                  "# growing deposit, like a poured fill.\n")
-    text += f"""[[particles.block]]
+    if pour is None:
+        text += f"""[[particles.block]]
 kind = "lattice"
 lower = [{r}, {r}, 0.0]
 upper = [{width - r}, {width - r}, {fill_top}]
 spacing = 0.0112
 """
-    if layer is not None:
-        text += f"layer_spacing = {layer}\n"
-    text += """jitter = 0.5
-
+        if layer is not None:
+            text += f"layer_spacing = {layer}\n"
+        text += "jitter = 0.5\n"
+    text += """
 [contact]
 model = "soft"
 restitution = 0.3
@@ -109,6 +129,10 @@ exclude_bottom = {exclude_bottom}
 
 
 import sys
+if len(sys.argv) == 3 and sys.argv[1] == "pour-small":  # make_silo_cases.py pour-small OUT
+    open(sys.argv[2], "w").write(HEADER_SMALL + silo(0.1, 0.95, 4.0, 3, 0.2, 0.02,
+                                                     pour=(6125, 10, 0.1, 0.01, 0.05)))
+    sys.exit(0)
 if len(sys.argv) == 3 and sys.argv[1] == "poured":  # make_silo_cases.py poured OUT
     # The full silo's grains in 732 layers 16.8 mm apart (docs/validation.md, section 4).
     open(sys.argv[2], "w").write(HEADER_FULL + silo(0.1, 12.3, 4.0, 5, 0.7, 0.05, layer=0.0168, liner_top=6.0))

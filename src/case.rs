@@ -281,6 +281,42 @@ pub struct ParticlesSection {
     /// Generators, applied in order; ids follow the order of creation.
     #[serde(default)]
     pub block: Vec<BlockSection>,
+    /// Grains poured during the run, batch after batch, each released
+    /// just above the deposit (dry scenes with soft contact).
+    #[serde(default)]
+    pub pour: Vec<PourSection>,
+}
+
+/// A pour: batches of grains on a jittered lattice, the first at t = 0 and
+/// then every `interval`, each lifted along −gravity so that its lowest
+/// grain is `gap` above the highest mobile grain. Grains land from a
+/// small height whatever the height the deposit has reached, as in a
+/// filling that follows the free surface.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PourSection {
+    /// The batch's box at its lowest position (a batch is never placed
+    /// below it).
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    /// Lattice spacing of a batch [m].
+    pub spacing: f64,
+    /// Random displacement as a fraction of each site's free room.
+    #[serde(default)]
+    pub jitter: f64,
+    /// Grains to pour in all (the last batch keeps its lowest sites).
+    pub count: usize,
+    /// Time between two batches [s].
+    pub interval: f64,
+    /// Gap between the highest mobile grain and a new batch [m].
+    #[serde(default)]
+    pub gap: f64,
+    /// A batch also waits until no mobile grain is faster than this [m/s]
+    /// (the previous batch has landed); no wait if absent.
+    #[serde(default)]
+    pub settled_speed: Option<f64>,
+    #[serde(default)]
+    pub velocity: Vec<f64>,
 }
 
 fn default_seed() -> u64 {
@@ -791,13 +827,14 @@ impl Case {
                 "allowed: 0 ≤ radius_spread < 1",
             ));
         }
-        if p.block.is_empty() {
+        if p.block.is_empty() && p.pour.is_empty() {
             return Err(invalid(
                 "particles.block",
                 "[]",
-                "allowed: at least one [[particles.block]] generator",
+                "allowed: at least one [[particles.block]] generator or [[particles.pour]]",
             ));
         }
+        self.validate_pours(p, c)?;
         for (k, block) in p.block.iter().enumerate() {
             let key = |name: &str| format!("particles.block[{k}].{name}");
             match block {
@@ -950,6 +987,80 @@ impl Case {
         }
         if let Some(s) = c.skin {
             positive("contact.skin", s)?;
+        }
+        Ok(())
+    }
+
+    fn validate_pours(&self, p: &ParticlesSection, c: &ContactSection) -> Result<(), CaseError> {
+        let dim = self.dimension();
+        let need = format!("allowed: a list of {dim} numbers (one per axis)");
+        for (k, pour) in p.pour.iter().enumerate() {
+            let key = |name: &str| format!("particles.pour[{k}].{name}");
+            if self.fluid.is_some() || c.model != "soft" {
+                return Err(invalid(
+                    &key("count"),
+                    pour.count,
+                    "a pour runs in a dry scene with contact.model = \"soft\" in this version; \
+                     allowed elsewhere: [[particles.block]] generators",
+                ));
+            }
+            if self.domain.gravity.iter().all(|g| *g == 0.0) {
+                return Err(invalid(
+                    "domain.gravity",
+                    format!("{:?}", self.domain.gravity),
+                    "a pour needs gravity: its batches are released above the deposit, \
+                     against gravity",
+                ));
+            }
+            check_len(&key("lower"), &pour.lower, dim, &need)?;
+            check_len(&key("upper"), &pour.upper, dim, &need)?;
+            if pour.spacing < 2.0 * p.radius * (1.0 + p.radius_spread) * (1.0 - 1e-12) {
+                return Err(invalid(
+                    &key("spacing"),
+                    pour.spacing,
+                    "allowed: at least the largest diameter, 2 radius (1 + radius_spread)",
+                ));
+            }
+            let d = &self.domain;
+            for a in 0..dim {
+                let periodic = d.periodic.get(a).copied().unwrap_or(false);
+                if !periodic && (pour.lower[a] < d.lower[a] || pour.upper[a] > d.upper[a]) {
+                    return Err(invalid(
+                        &key("lower"),
+                        format!("{:?} .. {:?}", pour.lower, pour.upper),
+                        "allowed: a box inside domain.lower .. domain.upper",
+                    ));
+                }
+            }
+            let sites: f64 = (0..dim)
+                .map(|a| ((pour.upper[a] - pour.lower[a]) / pour.spacing + 1e-9).floor())
+                .product();
+            if sites < 1.0 || sites.is_nan() {
+                return Err(invalid(
+                    &key("upper"),
+                    format!("{:?}", pour.upper),
+                    "allowed: a box that holds at least one lattice site (upper − lower ≥ \
+                     spacing along every axis)",
+                ));
+            }
+            if !(0.0..=1.0).contains(&pour.jitter) {
+                return Err(invalid(
+                    &key("jitter"),
+                    pour.jitter,
+                    "allowed: 0 ≤ jitter ≤ 1",
+                ));
+            }
+            if pour.count == 0 {
+                return Err(invalid(&key("count"), pour.count, "allowed: at least 1"));
+            }
+            positive(&key("interval"), pour.interval)?;
+            non_negative(&key("gap"), pour.gap)?;
+            if let Some(speed) = pour.settled_speed {
+                positive(&key("settled_speed"), speed)?;
+            }
+            if !pour.velocity.is_empty() {
+                check_len(&key("velocity"), &pour.velocity, dim, &need)?;
+            }
         }
         Ok(())
     }

@@ -52,7 +52,10 @@ pub fn report(case: &Case) -> Result<String, RunError> {
     if case.fluid.is_some() {
         return coupled_report(case);
     }
-    let system = scene::build(case).map_err(RunError::Case)?;
+    let mut system = scene::build(case).map_err(RunError::Case)?;
+    // The first batch of a pour is there at t = 0: its grains count in the
+    // time step.
+    let (pouring, pour_lines) = crate::pouring::start(case, &mut system).map_err(RunError::Case)?;
     let hard = scene::hard_contact(case);
     let p = &system.particles;
     let n = p.n_owned;
@@ -105,7 +108,17 @@ pub fn report(case: &Case) -> Result<String, RunError> {
             periodic.join(", ")
         }
     );
-    let _ = writeln!(out, "particles: {n} ({glued} glued)");
+    let _ = writeln!(out, "particles: {n} ({glued} glued) at t = 0");
+    if !pour_lines.is_empty() {
+        let _ = writeln!(
+            out,
+            "  {} more to be poured during the run",
+            pouring.remaining()
+        );
+        for line in &pour_lines {
+            let _ = writeln!(out, "  {line}");
+        }
+    }
     let masses: Vec<f64> = (0..n).map(|k| p.mass[k]).collect();
     let (m_min, m_max) = (
         masses.iter().cloned().fold(f64::MAX, f64::min),
@@ -180,7 +193,8 @@ pub fn report(case: &Case) -> Result<String, RunError> {
     let _ = writeln!(
         out,
         "memory estimate: {:.1} MiB",
-        (n * bytes_per_particle(dim, system.walls.len())) as f64 / (1 << 20) as f64
+        ((n + pouring.remaining()) * bytes_per_particle(dim, system.walls.len())) as f64
+            / (1 << 20) as f64
     );
     Ok(out)
 }

@@ -6,7 +6,7 @@ use crate::case::Case;
 use crate::dry_stepping::DryStepper;
 use crate::output::Outputs;
 use crate::stability::{self, TimeStepVerdict};
-use crate::{coupled_simulation, fluid_simulation, scene, sharing, RunError};
+use crate::{coupled_simulation, fluid_simulation, pouring, scene, sharing, RunError};
 use grainflow_core::Communicator;
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
@@ -133,17 +133,25 @@ fn run_here(
     let started = Instant::now();
     let root = communicator.is_root();
     let mut system = scene::build_on(case, communicator.clone()).map_err(RunError::Case)?;
+    let (mut pouring, pour_log) = pouring::start(case, &mut system).map_err(RunError::Case)?;
     let (mut stepper, dt, warning) = DryStepper::new(case, &mut system)?;
 
     let mut outputs = Outputs::create_on(out, case, communicator.clone()).map_err(RunError::Io)?;
     let p = &system.particles;
-    let particles = communicator.sum_count(p.n_owned);
+    let mut particles = communicator.sum_count(p.n_owned);
     let glued = communicator.sum_count((0..p.n_owned).filter(|&k| p.is_fixed(k)).count());
+    let to_pour = match pouring.remaining() {
+        0 => String::new(),
+        n => format!(", {n} more to be poured"),
+    };
     outputs.run.log(&format!(
-        "grainflow {}: {particles} particles ({glued} glued), {}D, dry scene (no fluid grid)",
+        "grainflow {}: {particles} particles ({glued} glued{to_pour}), {}D, dry scene (no fluid grid)",
         env!("CARGO_PKG_VERSION"),
         system.domain.dimension.count()
     ));
+    for line in &pour_log {
+        outputs.run.log(line);
+    }
     if communicator.size() > 1 {
         let s = &system.subdomain;
         outputs.run.log(&format!(
@@ -204,6 +212,7 @@ fn run_here(
     let mut failure: Option<String> = None;
     let total_steps = (end / dt).ceil() as u64;
     let mut logged_decile = 0;
+    let mut particle_steps = 0.0;
     let mut wall_state: Vec<bool> = system.walls.iter().map(|w| w.is_present(0.0)).collect();
 
     outputs.write_frame(&system, dt).map_err(RunError::Io)?;
@@ -224,6 +233,20 @@ fn run_here(
                 }
             }
         }
+        if failure.is_none() && !pouring.is_done() {
+            match pouring.release_due(&mut system) {
+                Ok(lines) => {
+                    for line in &lines {
+                        outputs.run.log(line);
+                    }
+                    if !lines.is_empty() {
+                        particles = communicator.sum_count(system.particles.n_owned);
+                    }
+                }
+                Err(why) => failure = Some(why),
+            }
+        }
+        particle_steps += particles as f64;
         if failure.is_some() {
             break;
         }
@@ -244,10 +267,11 @@ fn run_here(
                 .map_err(RunError::Io)?;
             next_tracked += tracked_interval;
         }
-        // At rest: after rest_after, once the grains have moved faster than
-        // the rest speed and then slowed below it.
+        // At rest: after rest_after and the last batch of a pour, once the
+        // grains have moved faster than the rest speed and then slowed
+        // below it.
         let at_rest = match case.time.rest_speed {
-            Some(v) if system.time >= rest_after => {
+            Some(v) if system.time >= rest_after && pouring.is_done() => {
                 let speed = rms_speed(&system);
                 moving |= speed > v;
                 moving && speed < v
@@ -298,7 +322,6 @@ fn run_here(
             .map_err(RunError::Io)?;
     }
     metrics.extend(stepper.metrics());
-    let particle_steps = particles as f64 * system.steps as f64;
     let json = json!({
         "analysis": case.analysis,
         "status": if failure.is_some() { "unstable" } else { "ok" },
