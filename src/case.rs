@@ -311,8 +311,8 @@ pub struct PourSection {
     /// Gap between the highest mobile grain and a new batch [m].
     #[serde(default)]
     pub gap: f64,
-    /// A batch also waits until no mobile grain is faster than this [m/s]
-    /// (the previous batch has landed); no wait if absent.
+    /// A batch also waits until the rms speed of the previous batch's
+    /// grains is below this [m/s] (it has landed); no wait if absent.
     #[serde(default)]
     pub settled_speed: Option<f64>,
     #[serde(default)]
@@ -1057,6 +1057,28 @@ impl Case {
             non_negative(&key("gap"), pour.gap)?;
             if let Some(speed) = pour.settled_speed {
                 positive(&key("settled_speed"), speed)?;
+                // A batch released at rest falls faster than the settled
+                // speed only after speed/g: an earlier test would pass at
+                // once and stack the next batch on a falling one.
+                let g = self
+                    .domain
+                    .gravity
+                    .iter()
+                    .map(|g| g * g)
+                    .sum::<f64>()
+                    .sqrt();
+                let least = 1.2 * speed / g;
+                if pour.interval < least {
+                    return Err(invalid(
+                        &key("interval"),
+                        pour.interval,
+                        &format!(
+                            "allowed with settled_speed = {speed}: interval ≥ {least:.3e} s \
+                             (1.2 settled_speed/|g|: a batch released at rest must be falling \
+                             faster than settled_speed before the next one is considered)"
+                        ),
+                    ));
+                }
             }
             if !pour.velocity.is_empty() {
                 check_len(&key("velocity"), &pour.velocity, dim, &need)?;

@@ -4,7 +4,8 @@
 //! (a filling that follows the free surface, as a silo is filled).
 //!
 //! A batch is released at t = 0 and then every `interval` (and, if
-//! `settled_speed` is set, once no mobile grain moves faster). It is the
+//! `settled_speed` is set, once the previous batch has landed: the rms
+//! speed of its grains is below it). It is the
 //! lattice of the pour's box, lifted along −g so that its lowest surface
 //! lies `gap` above the highest surface of the mobile grains; it is never
 //! placed below the box itself. Every rank draws the same batch from the
@@ -38,6 +39,8 @@ struct Pour {
     settled_speed: Option<f64>,
     /// Grains released so far, and in how many batches.
     poured: usize,
+    /// Ids of the grains of the last batch.
+    last_batch: std::ops::Range<u64>,
     batches: usize,
     next_release: f64,
     /// The pour's own stream, the same on every rank.
@@ -77,7 +80,7 @@ impl Pouring {
             .map(|p| {
                 let wait = p
                     .settled_speed
-                    .map(|v| format!(" and once no grain is faster than {v} m/s"))
+                    .map(|v| format!(" and once the last batch's rms speed is below {v} m/s"))
                     .unwrap_or_default();
                 format!(
                     "particles.pour[{}]: {} grains in batches of up to {}, every {} s{wait}, \
@@ -102,7 +105,7 @@ impl Pouring {
                 continue;
             }
             if let Some(speed) = pour.settled_speed {
-                if system.max_speed() > speed {
+                if pour.last_batch_speed(system) > speed {
                     continue;
                 }
             }
@@ -137,6 +140,7 @@ impl Pour {
             gap: section.gap,
             settled_speed: section.settled_speed,
             poured: 0,
+            last_batch: 0..0,
             batches: 0,
             next_release: 0.0,
             // A stream of its own: the blocks' grains and radii do not
@@ -150,6 +154,18 @@ impl Pour {
             .map(|a| ((self.upper[a] - self.lower[a]) / self.spacing + 1e-9).floor() as usize)
             .product::<usize>()
             .min(self.count)
+    }
+
+    /// Root-mean-square speed of the grains of the last batch (collective).
+    fn last_batch_speed(&self, system: &DemSystem) -> f64 {
+        let p = &system.particles;
+        let (mut sum, mut count) = (0.0, 0usize);
+        for k in (0..p.n_owned).filter(|&k| self.last_batch.contains(&p.id[k])) {
+            sum += p.velocity[k].norm_squared();
+            count += 1;
+        }
+        let c = &system.communicator;
+        (c.sum(sum) / c.sum_count(count).max(1) as f64).sqrt()
     }
 
     /// Draws the next batch, lifts it above the deposit and adds it.
@@ -203,7 +219,9 @@ impl Pour {
                 ));
             }
         }
+        let first_id = system.next_id();
         system.add_particles(&batch);
+        self.last_batch = first_id..system.next_id();
         self.poured += batch.len();
         self.batches += 1;
         // A pour that waits for the deposit to settle counts its interval

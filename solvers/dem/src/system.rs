@@ -203,6 +203,11 @@ impl DemSystem {
         self.compute_forces(0.0);
     }
 
+    /// The id the next added particle gets (the same on every rank).
+    pub fn next_id(&self) -> u64 {
+        self.next_id
+    }
+
     /// Entries per particle in `wall_history` (at least one, so that the
     /// per-particle chunks exist without walls).
     pub fn wall_stride(&self) -> usize {
