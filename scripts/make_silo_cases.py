@@ -25,7 +25,7 @@ HEADER_SMALL = """# A reduced silo for the tests (the full one is cases/silo.tom
 
 
 def silo(width, fill_top, end, seed, exclude_bottom, slab, liner=0.011, layer=None, liner_top=None,
-         pour=None):
+         pour=None, dt_ratio=0.05):
     """pour = (count, batch_layers, interval, gap, settled_speed): the grains are
     poured batch after batch just above the deposit instead of starting on a
     lattice; fill_top is then the domain's height less 5 cm."""
@@ -114,7 +114,7 @@ normal = {normal}
     text += f"""
 [time]
 end = {end}
-dt_over_contact_time = 0.05
+dt_over_contact_time = {dt_ratio}
 rest_speed = 1.0e-3
 
 [output]
@@ -129,9 +129,19 @@ exclude_bottom = {exclude_bottom}
 
 
 import sys
-if len(sys.argv) == 3 and sys.argv[1] == "pour-small":  # make_silo_cases.py pour-small OUT
-    open(sys.argv[2], "w").write(HEADER_SMALL + silo(0.1, 0.95, 4.0, 3, 0.2, 0.02,
-                                                     pour=(6125, 10, 0.1, 0.01, 0.05)))
+if len(sys.argv) == 3 and sys.argv[1] == "pour-full":  # make_silo_cases.py pour-full OUT
+    # The full silo's 35,868 grains poured in batches of 5 layers (docs/validation.md, section 4).
+    open(sys.argv[2], "w").write(HEADER_FULL + silo(0.1, 4.25, 40.0, 5, 0.7, 0.05,
+                                                    pour=(35868, 5, 0.03, 0.005, 0.1), dt_ratio=0.1))
+    sys.exit(0)
+if len(sys.argv) >= 3 and sys.argv[1] == "pour-small":
+    # make_silo_cases.py pour-small OUT [LAYERS INTERVAL GAP SETTLED SEED]: the reduced
+    # silo's 6,125 grains poured in batches (docs/validation.md, section 4).
+    layers, interval, gap, settled, seed = (sys.argv[3:] + [None] * 5)[:5]
+    pour = (6125, int(layers or 5), float(interval or 0.03), float(gap or 0.005),
+            float(settled or 0.05))
+    open(sys.argv[2], "w").write(HEADER_SMALL + silo(0.1, 0.95, 8.0, int(seed or 3), 0.2, 0.02,
+                                                     pour=pour, dt_ratio=0.1))
     sys.exit(0)
 if len(sys.argv) == 3 and sys.argv[1] == "poured":  # make_silo_cases.py poured OUT
     # The full silo's grains in 732 layers 16.8 mm apart (docs/validation.md, section 4).

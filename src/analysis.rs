@@ -428,6 +428,14 @@ fn silo(
     let measured: Vec<f64> = fit.iter().map(|&s| pressure[s]).collect();
     let (saturation, length) = janssen_fit(&depth, &measured);
     let mean_fraction = bulk_fraction;
+    // Eq. 22 as the paper fits it: f_w K alone, the saturation tied to it
+    // by the weight of the column, ρ_gm = C ρ_p (C the bulk solid fraction).
+    let grain_density = mobile
+        .first()
+        .map(|&k| p.mass[k] / (4.0 / 3.0 * std::f64::consts::PI * p.radius[k].powi(3)))
+        .unwrap_or(0.0);
+    let weight_density = mean_fraction * grain_density * g.norm();
+    let fwk_eq22 = janssen_fit_eq22(&depth, &measured, weight_density, section / perimeter);
     // Janssen's redirection K = σ_h/σ_v, averaged over the fitted slabs.
     let redirection = fit
         .iter()
@@ -467,6 +475,7 @@ fn silo(
         json!(wall_friction * redirection),
     );
     metrics.insert("janssen_fwK".into(), json!(section / (perimeter * length)));
+    metrics.insert("janssen_fwK_eq22".into(), json!(fwk_eq22));
     metrics.insert("janssen_length".into(), json!(length));
     metrics.insert("saturation_pressure".into(), json!(saturation));
     metrics.insert("column_height".into(), json!(top - base));
@@ -502,6 +511,37 @@ pub fn janssen_fit(depth: &[f64], pressure: &[f64]) -> (f64, f64) {
     }
     let length = (0.5 * (a + b)).exp();
     (residual(length).1, length)
+}
+
+/// Least squares of eq. 22, p = ρ_gm g λ (1 − exp(−d/λ)) with
+/// λ = (S/P)/(f_w K), over f_w K alone (`weight_density` = ρ_gm g,
+/// `section_over_perimeter` = S/P): golden-section search on ln f_w K.
+pub fn janssen_fit_eq22(
+    depth: &[f64],
+    pressure: &[f64],
+    weight_density: f64,
+    section_over_perimeter: f64,
+) -> f64 {
+    let residual = |fwk: f64| {
+        let length = section_over_perimeter / fwk;
+        depth
+            .iter()
+            .zip(pressure)
+            .map(|(d, p)| (weight_density * length * (1.0 - (-d / length).exp()) - p).powi(2))
+            .sum::<f64>()
+    };
+    let (mut a, mut b) = (1e-4f64.ln(), 1e2f64.ln());
+    let ratio = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..200 {
+        let c = b - ratio * (b - a);
+        let d = a + ratio * (b - a);
+        if residual(c.exp()) < residual(d.exp()) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    (0.5 * (a + b)).exp()
 }
 
 /// Symmetric collapse of a column between the gate walls (Izard et al.
@@ -698,5 +738,51 @@ impl ColumnCollapse {
         metrics.insert("final_height".into(), json!(Self::height(system)));
         metrics.insert("runout".into(), json!((front - r0) / r0));
         Ok(metrics)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Eq. 22 for the silo's shaft (S/P = 0.025 m) at f_w K = 0.3, ρ_gm g =
+    /// 0.49 · 1317 · 9.81, sampled every 5 cm over 3 m.
+    fn janssen_profile(fwk: f64) -> (Vec<f64>, Vec<f64>, f64) {
+        let weight_density = 0.49 * 1317.0 * 9.81;
+        let length = 0.025 / fwk;
+        let depth: Vec<f64> = (1..=60).map(|k| 0.05 * k as f64).collect();
+        let pressure = depth
+            .iter()
+            .map(|d| weight_density * length * (1.0 - (-d / length).exp()))
+            .collect();
+        (depth, pressure, weight_density)
+    }
+
+    #[test]
+    fn both_fits_recover_the_janssen_factor_of_an_exact_profile() {
+        for fwk in [0.1, 0.3, 0.6] {
+            let (depth, pressure, weight_density) = janssen_profile(fwk);
+            let eq22 = janssen_fit_eq22(&depth, &pressure, weight_density, 0.025);
+            assert!(
+                (eq22 / fwk - 1.0).abs() < 1e-6,
+                "eq. 22 fit {eq22} for {fwk}"
+            );
+            let (saturation, length) = janssen_fit(&depth, &pressure);
+            assert!((0.025 / length / fwk - 1.0).abs() < 1e-6, "λ = {length}");
+            assert!((saturation / (weight_density * 0.025 / fwk) - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn the_one_parameter_fit_reads_the_plateau_the_two_parameter_fit_the_shape() {
+        // A plateau 1.5 times Janssen's with the same λ: the free-saturation
+        // fit keeps f_w K from the shape; eq. 22, where the plateau is
+        // ρ_gm g λ, reads about f_w K / 1.5 from its level.
+        let (depth, pressure, weight_density) = janssen_profile(0.3);
+        let raised: Vec<f64> = pressure.iter().map(|p| 1.5 * p).collect();
+        let (_, length) = janssen_fit(&depth, &raised);
+        assert!((0.025 / length / 0.3 - 1.0).abs() < 1e-6);
+        let eq22 = janssen_fit_eq22(&depth, &raised, weight_density, 0.025);
+        assert!((eq22 - 0.2).abs() < 0.02, "eq. 22 fit {eq22}");
     }
 }
