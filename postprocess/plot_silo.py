@@ -40,6 +40,13 @@ fig, ax = plt.subplots(figsize=(4, 6))
 ax.plot(p, z, "o", ms=3, mfc="none", label="grainflow, coarse-grained")
 zz = [h * k / 400 for k in range(401)]
 ax.plot([pinf * (1 - math.exp(-(h - x) / lam)) for x in zz], zz, "-", label=label)
+if len(sys.argv) <= 3 and "janssen_fwK_eq22" in m:
+    weight = m["solid_fraction"] * 1317.0 * 9.81  # rho_gm g, the silo's grains
+    for fwk, style, name in [(m["janssen_fwK_eq22"], "--", "eq. 22 fit"),
+                             (0.30, ":", "eq. 22, paper")]:
+        l22 = width / 4 / fwk
+        ax.plot([weight * l22 * (1 - math.exp(-(h - x) / l22)) for x in zz], zz, style,
+                label=f"{name}: $f_wK$ = {fwk:.3f}")
 ax.set_xlabel("granular pressure [Pa]")
 ax.set_ylabel("z [m]")
 ax.legend(fontsize=7)
