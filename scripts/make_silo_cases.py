@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
-"""Writes cases/silo.toml (the paper's silo) and cases/silo_small.toml (its
-reduced version for the tests). Both: a square shaft of width W lined with
-glued grains centred on the side walls, filled from a loose jittered lattice
-that settles under gravity. Run from the repository root."""
+"""Writes cases/silo.toml (the paper's silo, poured batch after batch just
+above the deposit) and cases/silo_small.toml (a reduced silo for the tests,
+filled from a loose jittered lattice that settles under gravity), both a
+square shaft lined with glued grains centred on the side walls; with
+arguments, the variants of the studies of docs/validation.md, section 4.
+Run from the repository root."""
 
 HEADER_FULL = """# The silo of Izard et al. 2014, section 3.3: about 56,000 grains
 # (rho = 1317 kg/m3, R = 5 mm +- 10 %, mu = 0.25, e_n = 0.3, t_c = 1e-4 s) in a
@@ -11,6 +13,16 @@ HEADER_FULL = """# The silo of Izard et al. 2014, section 3.3: about 56,000 grai
 # coarse-grained pressure is fitted with Janssen's law (eq. 22), to compare
 # with the paper's f_w K = 0.30 +- 0.06. A validation run (docs/validation.md),
 # not part of the tests. Written by scripts/make_silo_cases.py.
+"""
+
+HEADER_POURED = """# The silo of Izard et al. 2014, section 3.3 (rho = 1317 kg/m3, R = 5 mm +- 10 %,
+# mu = 0.25, e_n = 0.3, t_c = 1e-4 s) in a 0.1 x 0.1 m shaft lined with glued
+# grains: 35,868 grains poured in batches of five lattice layers, each released
+# 5 mm above the deposit once the previous one has landed, a column of 3.9 m.
+# At rest the coarse-grained pressure is fitted with Janssen's law (eq. 22), to
+# compare with the paper's f_w K = 0.30 +- 0.06. A validation run of about an
+# hour on 2 threads (docs/validation.md, section 4), not part of the tests.
+# Written by scripts/make_silo_cases.py.
 """
 
 HEADER_SMALL = """# A reduced silo for the tests (the full one is cases/silo.toml): the grains
@@ -129,10 +141,16 @@ exclude_bottom = {exclude_bottom}
 
 
 import sys
-if len(sys.argv) == 3 and sys.argv[1] == "pour-full":  # make_silo_cases.py pour-full OUT
-    # The full silo's 35,868 grains poured in batches of 5 layers (docs/validation.md, section 4).
-    open(sys.argv[2], "w").write(HEADER_FULL + silo(0.1, 4.25, 40.0, 5, 0.7, 0.05,
-                                                    pour=(35868, 5, 0.03, 0.005, 0.1), dt_ratio=0.1))
+
+def poured_full():
+    # The full silo's 35,868 grains poured in batches of 5 layers.
+    return HEADER_POURED + silo(0.1, 4.25, 40.0, 5, 0.7, 0.05,
+                                pour=(35868, 5, 0.03, 0.005, 0.1), dt_ratio=0.1)
+
+
+if len(sys.argv) == 3 and sys.argv[1] == "lattice-full":  # make_silo_cases.py lattice-full OUT
+    # The full silo filled from a loose lattice (the first validation run).
+    open(sys.argv[2], "w").write(HEADER_FULL + silo(0.1, 8.2, 6.0, 5, 0.7, 0.05))
     sys.exit(0)
 if len(sys.argv) >= 3 and sys.argv[1] == "pour-small":
     # make_silo_cases.py pour-small OUT [LAYERS INTERVAL GAP SETTLED SEED]: the reduced
@@ -150,5 +168,5 @@ if len(sys.argv) == 3 and sys.argv[1] == "poured":  # make_silo_cases.py poured 
 if len(sys.argv) > 2:  # variants for studies: make_silo_cases.py OUT LINER_SPACING
     open(sys.argv[1], "w").write(HEADER_SMALL + silo(0.1, 1.4, 2.0, 3, 0.2, 0.02, float(sys.argv[2])))
     sys.exit(0)
-open("cases/silo.toml", "w").write(HEADER_FULL + silo(0.1, 8.2, 6.0, 5, 0.7, 0.05))
+open("cases/silo.toml", "w").write(poured_full())
 open("cases/silo_small.toml", "w").write(HEADER_SMALL + silo(0.1, 1.4, 2.0, 3, 0.2, 0.02))

@@ -168,6 +168,28 @@ fn deviation(reference: &BTreeMap<u64, Vec<f64>>, other: &BTreeMap<u64, Vec<f64>
     largest
 }
 
+/// Runs `case` on `ranks` ranks into `out` and asserts that its final
+/// time and tracked states are the serial run's `(end, states)` within the
+/// decomposition's bound 1e-10 (relative).
+fn assert_states_match(
+    case: &Path,
+    out: &Path,
+    ranks: usize,
+    overrides: &[&str],
+    (end, reference): (f64, &BTreeMap<u64, Vec<f64>>),
+) {
+    let (code, stderr) = run(case, out, ranks, overrides, Duration::from_secs(120));
+    assert_eq!(code, 0, "{ranks} ranks {overrides:?}: {stderr}");
+    let (other_end, states) = final_states(out);
+    assert_eq!(other_end, end);
+    let largest = deviation(reference, &states);
+    println!("{ranks} ranks {overrides:?}: largest relative deviation {largest:.3e}");
+    assert!(
+        largest <= 1e-10,
+        "{ranks} ranks {overrides:?}: deviation {largest:e}"
+    );
+}
+
 fn metrics(out: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
     let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -230,16 +252,7 @@ fn a_column_collapse_on_2_and_4_ranks_matches_the_serial_run() {
             .join(format!("ranks_{ranks}_{}", grid.unwrap_or("auto")));
         let setting = grid.map(|g| format!("parallel.process_grid={g}"));
         let overrides: Vec<&str> = setting.iter().map(|s| s.as_str()).collect();
-        let (code, stderr) = run(&collapse, &out, ranks, &overrides, Duration::from_secs(120));
-        assert_eq!(code, 0, "{ranks} ranks {grid:?}: {stderr}");
-        let (other_end, states) = final_states(&out);
-        assert_eq!(other_end, end);
-        let largest = deviation(&reference, &states);
-        println!("{ranks} ranks, process grid {grid:?}: largest relative deviation {largest:.3e}");
-        assert!(
-            largest <= 1e-10,
-            "{ranks} ranks {grid:?}: deviation {largest:e}"
-        );
+        assert_states_match(&collapse, &out, ranks, &overrides, (end, &reference));
         // The analysis runs on the root over the gathered grains.
         let measured = metrics(&out);
         for key in ["initial_height", "final_front", "final_height", "runout"] {
@@ -842,15 +855,6 @@ interval = 5.0e-4
     for (ranks, grid) in [(2, "[1,1,2]"), (4, "[2,1,2]")] {
         let out = dir.path().join(format!("ranks_{ranks}"));
         let setting = format!("parallel.process_grid={grid}");
-        let (code, stderr) = run(&case, &out, ranks, &[&setting], Duration::from_secs(120));
-        assert_eq!(code, 0, "{ranks} ranks {grid}: {stderr}");
-        let (other_end, states) = final_states(&out);
-        assert_eq!(other_end, end);
-        let largest = deviation(&reference, &states);
-        println!("{ranks} ranks, process grid {grid}: largest relative deviation {largest:.3e}");
-        assert!(
-            largest <= 1e-10,
-            "{ranks} ranks {grid}: deviation {largest:e}"
-        );
+        assert_states_match(&case, &out, ranks, &[&setting], (end, &reference));
     }
 }
