@@ -709,7 +709,7 @@ impl DemSystem {
         let handovers: Vec<OnceLock<Vec<Handover>>> =
             (0..chunks).map(|_| OnceLock::new()).collect();
         let p = &self.particles;
-        let chunk_results: Vec<(f64, usize, bool)> = forces
+        let chunk_results: Vec<(f64, usize, Option<usize>)> = forces
             .par_chunks_mut(chunk_len)
             .zip(torques.par_chunks_mut(chunk_len))
             .zip(self.wall_history.par_chunks_mut(chunk_len * wall_stride))
@@ -907,20 +907,24 @@ impl DemSystem {
                         torques,
                         counts,
                     );
-                    (max_overlap, wall_contacts, finished)
+                    // A finished chunk's contact counts are final: summed
+                    // here rather than in a pass of their own.
+                    let listed = finished.then(|| counts.iter().map(|&c| c as usize).sum());
+                    (max_overlap, wall_contacts, listed)
                 },
             )
             .collect();
         // Chunks whose sources were still running: every list is out now.
-        if chunk_results.iter().any(|&(_, _, finished)| !finished) {
-            forces
+        let mut listed: usize = chunk_results.iter().filter_map(|r| r.2).sum();
+        if chunk_results.iter().any(|r| r.2.is_none()) {
+            listed += forces
                 .par_chunks_mut(chunk_len)
                 .zip(torques.par_chunks_mut(chunk_len))
                 .zip(self.contacts.par_chunks_mut(chunk_len))
                 .zip(&chunk_results)
                 .enumerate()
-                .filter(|(_, (_, &(_, _, finished)))| !finished)
-                .for_each(|(chunk, (((forces, torques), counts), _))| {
+                .filter(|(_, (_, result))| result.2.is_none())
+                .map(|(chunk, (((forces, torques), counts), _))| {
                     let finished = receive_handovers(
                         chunk,
                         chunk_len,
@@ -931,11 +935,12 @@ impl DemSystem {
                         counts,
                     );
                     debug_assert!(finished);
-                });
+                    counts.iter().map(|&c| c as usize).sum::<usize>()
+                })
+                .sum::<usize>();
         }
         let max_overlap = chunk_results.iter().map(|r| r.0).fold(0.0, f64::max);
         let wall_contacts = chunk_results.iter().map(|r| r.1).sum();
-        let listed = self.contacts.par_iter().map(|&c| c as usize).sum();
         (max_overlap, wall_contacts, listed)
     }
 
