@@ -86,8 +86,9 @@ jitter = 0.5
 count = {count}
 interval = {interval}
 gap = {gap}
-settled_speed = {settled}
 """
+        if settled > 0:  # 0: no wait, a batch every interval
+            text += f"settled_speed = {settled}\n"
     elif layer is None:
         text += "# The grains: a loose jittered lattice that settles under gravity.\n"
     else:

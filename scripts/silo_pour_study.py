@@ -28,10 +28,6 @@ for k, (name, layers, interval, gap, settled, seed) in enumerate(RUNS):
     case = os.path.join(work, f"run{k}.toml")
     subprocess.run([sys.executable, "scripts/make_silo_cases.py", "pour-small", case,
                     str(layers), str(interval), str(gap), str(settled), str(seed)], check=True)
-    if settled == 0:  # no wait: the batches follow each other every interval
-        text = open(case).read()
-        text = "\n".join(l for l in text.splitlines() if not l.startswith("settled_speed"))
-        open(case, "w").write(text + "\n")
     out = os.path.join(work, f"run{k}")
     subprocess.run(["rm", "-rf", out], check=True)
     subprocess.run([binary, "run", case, "--out", out], check=True,

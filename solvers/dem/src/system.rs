@@ -898,7 +898,7 @@ impl DemSystem {
                     handovers[chunk]
                         .set(outgoing)
                         .unwrap_or_else(|_| unreachable!("each chunk publishes once"));
-                    let finished = receive_handovers(
+                    let listed = receive_handovers(
                         chunk,
                         chunk_len,
                         first_sources[chunk]..chunk,
@@ -907,9 +907,6 @@ impl DemSystem {
                         torques,
                         counts,
                     );
-                    // A finished chunk's contact counts are final: summed
-                    // here rather than in a pass of their own.
-                    let listed = finished.then(|| counts.iter().map(|&c| c as usize).sum());
                     (max_overlap, wall_contacts, listed)
                 },
             )
@@ -925,7 +922,7 @@ impl DemSystem {
                 .enumerate()
                 .filter(|(_, (_, result))| result.2.is_none())
                 .map(|(chunk, (((forces, torques), counts), _))| {
-                    let finished = receive_handovers(
+                    receive_handovers(
                         chunk,
                         chunk_len,
                         first_sources[chunk]..chunk,
@@ -933,9 +930,8 @@ impl DemSystem {
                         forces,
                         torques,
                         counts,
-                    );
-                    debug_assert!(finished);
-                    counts.iter().map(|&c| c as usize).sum::<usize>()
+                    )
+                    .expect("every chunk has published its list")
                 })
                 .sum::<usize>();
         }
@@ -1155,8 +1151,9 @@ impl HandedOver {
 
 /// Adds to the particles of `chunk` what the chunks `sources` handed them,
 /// in increasing chunk order and, within a chunk, in the order it made
-/// them (increasing lower particle); returns false, changing nothing, when
-/// a source has not published its list yet.
+/// them (increasing lower particle); returns the chunk's (particle,
+/// contact) entries, or None, changing nothing, when a source has not
+/// published its list yet.
 fn receive_handovers(
     chunk: usize,
     chunk_len: usize,
@@ -1165,12 +1162,12 @@ fn receive_handovers(
     forces: &mut [Vec3],
     torques: &mut [Vec3],
     counts: &mut [u32],
-) -> bool {
+) -> Option<usize> {
     if !sources
         .clone()
         .all(|source| handovers[source].get().is_some())
     {
-        return false;
+        return None;
     }
     let first = chunk * chunk_len;
     for source in sources {
@@ -1184,7 +1181,9 @@ fn receive_handovers(
             counts[local] += u32::from(h.touching);
         }
     }
-    true
+    // The chunk's counts are final now: summed here rather than in a pass
+    // of their own.
+    Some(counts.iter().map(|&c| c as usize).sum())
 }
 
 /// The per-entry arrays of one chunk of particles (pass 1 of the force
