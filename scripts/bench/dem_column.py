@@ -18,6 +18,13 @@ once, from a single run, as it has no restart here). Prints ns per
 particle-step for each code and thread count, their ratios, and peak memory
 per particle, and writes the table as JSON.
 
+Before and after each grainflow run on more than one thread, the script
+times a cache line's round trip between two threads (core_latency.c): about
+100 ns when the two CPUs share a last-level cache, about 400 ns when they
+do not (two dies, or a virtual machine's CPUs placed on two dies by its
+host). The two-thread gain depends on it, and the JSON keeps it beside each
+window.
+
 With --ranks 1,2 the settling window is timed instead on MPI ranks of
 one thread each (grainflow built with the feature `mpi`, LAMMPS under
 mpirun), interleaved, each code's strong-scaling efficiency t1 / (r t_r)
@@ -138,6 +145,14 @@ def on_ranks(command, ranks):
     return ["mpirun", "--oversubscribe", "--bind-to", "none", "-n", str(ranks)] + command
 
 
+def core_latency_probe(work):
+    """Builds the round-trip probe and returns a function that runs it (ns)."""
+    source = os.path.join(os.path.dirname(os.path.abspath(__file__)), "core_latency.c")
+    binary = os.path.join(work, "core_latency")
+    subprocess.run(["cc", "-O2", "-pthread", source, "-o", binary], check=True)
+    return lambda: float(subprocess.run([binary], check=True, capture_output=True, text=True).stdout)
+
+
 def grainflow_windows(binary, work, n, csv, box, threads, windows, ranks=1):
     """Runs grainflow once and returns [(ns per particle-step, contacts)] for
     each (first_step, last_step) window, and the peak memory in bytes."""
@@ -190,18 +205,24 @@ def main():
     shared = os.path.abspath(args.shared)
     inputs = os.path.join(shared, "bench/lammps")
     threads = [int(t) for t in args.threads.split(",")]
+    round_trip = core_latency_probe(args.work)
     report = []
     for n in [int(s) for s in args.sizes.split(",")]:
         data, csv, box = generate(shared, args.work, n)
         entry = {"particles": n}
         # Settling window: steps 1000-3000, repeated runs.
         for t in threads:
-            samples, memory = [], 0
+            samples, memory, probes = [], 0, []
             for _ in range(args.repeats):
+                before = round_trip() if t > 1 else None
                 (w,), memory = grainflow_windows(binary, args.work, n, csv, box, t, [(1000, 3000)])
                 samples.append(w[0])
+                if t > 1:
+                    probes.append([before, round_trip()])
             entry[f"grainflow_settling_ns_t{t}"] = statistics.median(samples)
             entry[f"grainflow_settling_samples_t{t}"] = samples
+            if probes:
+                entry[f"core_round_trip_ns_settling_t{t}"] = probes
             entry["grainflow_bytes_per_particle"] = memory / n
         if lmp:
             samples = []
@@ -233,7 +254,10 @@ def main():
         if args.dense:
             windows = [(50200, 52200), (52200, 54200), (54200, 56200)]
             for t in threads:
+                before = round_trip() if t > 1 else None
                 result, _ = grainflow_windows(binary, args.work, n, csv, box, t, windows)
+                if t > 1:
+                    entry[f"core_round_trip_ns_dense_t{t}"] = [before, round_trip()]
                 entry[f"grainflow_dense_ns_t{t}"] = statistics.median(r[0] for r in result)
                 entry[f"grainflow_dense_samples_t{t}"] = [r[0] for r in result]
                 entry["grainflow_dense_contacts"] = result[0][1]
@@ -264,7 +288,9 @@ def main():
                 if ours is None:
                     continue
                 ratio = f", LAMMPS/grainflow = {peer / ours:.2f}" if peer else ""
-                print(f"N={e['particles']:>6} {window:>8} grainflow {t} thread(s): {ours:7.1f} ns{ratio}")
+                probe = e.get(f"core_round_trip_ns_{window}_t{t}")
+                probe = f" (core round trip {json.dumps(probe)} ns)" if probe else ""
+                print(f"N={e['particles']:>6} {window:>8} grainflow {t} thread(s): {ours:7.1f} ns{ratio}{probe}")
             if peer:
                 print(f"N={e['particles']:>6} {window:>8} LAMMPS 1 rank:         {peer:7.1f} ns")
             other = e.get(f"liggghts_{window}_ns")

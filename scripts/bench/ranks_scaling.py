@@ -19,6 +19,12 @@ A fourth configuration runs two independent one-rank runs of the small
 case at once: the efficiency two cores sharing this machine's memory give
 without any communication, the ceiling of the weak scaling.
 
+Before and after each 2-rank run the script times a cache line's round
+trip between two threads (core_latency.c): about 100 ns when the two CPUs
+share a last-level cache, about 400 ns when they do not. Ranks that
+exchange through shared memory pay more in the second case; each
+repeat's weak-scaling efficiency is listed beside its probe.
+
 Runs are interleaved; each configuration's median over the repeats is
 reported with the wall seconds per step, the peak memory per rank, the
 weak-scaling efficiency t(1 rank, N) / t(2 ranks, 2N) and the
@@ -192,13 +198,26 @@ def avalanche_configurations(work):
     ]
 
 
+def core_latency_probe(work):
+    """Builds the round-trip probe and returns a function that runs it (ns)."""
+    binary = os.path.join(work, "core_latency")
+    subprocess.run(["cc", "-O2", "-pthread", os.path.join(ROOT, "scripts/bench/core_latency.c"),
+                    "-o", binary], check=True)
+    return lambda: float(subprocess.run([binary], check=True, capture_output=True, text=True).stdout)
+
+
 def measure(name, configurations, binary, work, repeats):
     samples = {c[0]: [] for c in configurations}
     memory = {}
+    probes = []
+    round_trip = core_latency_probe(work)
     for repeat in range(repeats):
         for label, case, ranks, overrides, _ in configurations:
             out = os.path.join(work, f"{name}_{label.replace(' ', '_').replace(',', '')}_{repeat}")
+            before = round_trip() if ranks == 2 else None
             seconds, peak = run(binary, case, out, ranks, overrides)
+            if ranks == 2:
+                probes.append([before, round_trip()])
             samples[label].append(seconds)
             memory[label] = peak
             print(f"{name} {label}: {seconds:.4f} s/step", file=sys.stderr)
@@ -214,9 +233,13 @@ def measure(name, configurations, binary, work, repeats):
     print(f"  weak-scaling efficiency (2 ranks): {weak:.3f}")
     print(f"  strong-scaling efficiency (2 ranks): {strong:.3f}")
     print(f"  two independent runs at once: efficiency {ceiling:.3f} (the machine's limit)")
+    weak_by_repeat = [a / b for a, b in zip(samples["1 rank, N"], samples["2 ranks, 2N"])]
+    for repeat, (weak_r, probe) in enumerate(zip(weak_by_repeat, probes)):
+        print(f"  repeat {repeat}: weak {weak_r:.3f}, core round trip {probe[0]:.0f} / {probe[1]:.0f} ns")
     return {"samples_seconds_per_step": samples, "median": median, "peak_memory_bytes": memory,
             "weak_efficiency": weak, "strong_efficiency": strong,
-            "independent_runs_efficiency": ceiling}
+            "independent_runs_efficiency": ceiling, "weak_efficiency_by_repeat": weak_by_repeat,
+            "core_round_trip_ns_by_repeat": probes}
 
 
 def main():

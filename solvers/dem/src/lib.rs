@@ -25,6 +25,7 @@ pub mod neighbours;
 pub mod particles;
 pub mod stress;
 pub mod system;
+mod thread_share;
 pub mod walls;
 
 pub use contact_law::{ContactLaw, NormalCalibration, NormalStiffness};

@@ -9,17 +9,20 @@
 //!    walls, gravity and the external (hydrodynamic) load; then each
 //!    particle collects the pairs evaluated by its partners, in a fixed
 //!    order;
-//! 4. half kick with the new forces.
+//! 4. half kick with the new forces, each chunk's as soon as its forces are
+//!    complete (in the force loop's pass).
 
 use crate::contact_law::{ContactLaw, ContactPoint};
 use crate::ghosts::Ghosts;
 use crate::lubrication::Lubrication;
 use crate::neighbours::{CellGrid, NeighbourList, PreviousList, LUBRICATED, TOUCHING};
 use crate::particles::{NewParticle, Particles, PACKED_STATE};
+use crate::thread_share::{wait_until, LazyTeam, ThreadShare};
 use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
 use rayon::prelude::*;
 use std::sync::OnceLock;
+use std::time::Instant;
 
 /// Smallest amount of work handed to one thread: below it the loops run on
 /// the calling thread, so small scenes pay no synchronisation.
@@ -120,6 +123,10 @@ pub struct DemSystem {
     /// first chunk that owns a lower partner of one of its particles (the
     /// chunks it receives hand-overs from start there).
     handover_sources: (u64, Vec<usize>),
+    /// The run of force-loop chunks each thread works on in every pass.
+    share: ThreadShare,
+    /// The threads that run those passes.
+    team: LazyTeam,
     pub time: f64,
     pub steps: u64,
     pub last: StepDiagnostics,
@@ -149,6 +156,8 @@ impl DemSystem {
             contacts: Vec::new(),
             max_radius: 0.0,
             handover_sources: (u64::MAX, Vec::new()),
+            share: ThreadShare::default(),
+            team: LazyTeam::default(),
             time: 0.0,
             steps: 0,
             last: StepDiagnostics::default(),
@@ -447,9 +456,7 @@ impl DemSystem {
         } else {
             self.ghosts.refresh(&mut self.particles, &self.communicator);
         }
-        let mut diagnostics = self.compute_forces(dt);
-        let non_finite = self.kick(0.5 * dt);
-        diagnostics.non_finite = self.communicator.any(non_finite);
+        let diagnostics = self.evaluate_forces_and_kick(dt, dt, Some(0.5 * dt));
         self.steps += 1;
         self.last = diagnostics;
         diagnostics
@@ -550,73 +557,59 @@ impl DemSystem {
         let n = self.particles.n_owned;
         let half_dt = 0.5 * dt;
         let limit_sq = (0.5 * self.neighbours.skin).powi(2);
-        let reference = &self.neighbours.reference_position;
-        if reference.len() != n {
+        if self.neighbours.reference_position.len() != n {
             return true;
         }
+        self.update_share(n);
+        let share = &self.share;
+        let team = self.team.of(share.threads());
+        let reference = &self.neighbours.reference_position;
         let p = &mut self.particles;
-        // Plain loops over fixed chunks: the compiler keeps them tight.
-        p.position[..n]
-            .par_chunks_mut(PARTICLES_PER_TASK)
-            .zip(p.velocity[..n].par_chunks_mut(PARTICLES_PER_TASK))
-            .zip(p.angular_velocity[..n].par_chunks_mut(PARTICLES_PER_TASK))
-            .enumerate()
-            .map(|(chunk, ((x, v), w))| {
-                let first = chunk * PARTICLES_PER_TASK;
-                let range = first..first + x.len();
-                let (f, t) = (&p.force[range.clone()], &p.torque[range.clone()]);
-                let (inv_m, inv_i) = (
-                    &p.inverse_mass[range.clone()],
-                    &p.inverse_inertia[range.clone()],
-                );
-                let x0 = &reference[range];
-                let mut moved = false;
-                for k in 0..x.len() {
-                    v[k] += half_dt * inv_m[k] * f[k];
-                    w[k] += half_dt * inv_i[k] * t[k];
-                    x[k] += dt * v[k];
-                    moved |= (x[k] - x0[k]).norm_squared() > limit_sq;
-                }
-                moved
-            })
-            .reduce(|| false, |a, b| a || b)
+        let parts: Vec<_> = share
+            .split(&mut p.position[..n], n)
+            .into_iter()
+            .zip(share.split(&mut p.velocity[..n], n))
+            .zip(share.split(&mut p.angular_velocity[..n], n))
+            .map(|((x, v), w)| (x, v, w))
+            .collect();
+        let (f, t) = (&p.force, &p.torque);
+        let (inv_m, inv_i) = (&p.inverse_mass, &p.inverse_inertia);
+        // Plain loops over each thread's run: the compiler keeps them tight.
+        team.run_parts(parts, |thread, (x, v, w)| {
+            let run = share.particles_of(thread, n);
+            let (f, t) = (&f[run.clone()], &t[run.clone()]);
+            let (inv_m, inv_i) = (&inv_m[run.clone()], &inv_i[run.clone()]);
+            let x0 = &reference[run];
+            let mut moved = false;
+            for k in 0..x.len() {
+                v[k] += half_dt * inv_m[k] * f[k];
+                w[k] += half_dt * inv_i[k] * t[k];
+                x[k] += dt * v[k];
+                moved |= (x[k] - x0[k]).norm_squared() > limit_sq;
+            }
+            moved
+        })
+        .into_iter()
+        .any(|moved| moved)
     }
 
-    /// Half kick; returns whether a position or velocity is not finite.
-    fn kick(&mut self, half_dt: f64) -> bool {
-        let n = self.particles.n_owned;
-        let p = &mut self.particles;
-        p.velocity[..n]
-            .par_chunks_mut(PARTICLES_PER_TASK)
-            .zip(p.angular_velocity[..n].par_chunks_mut(PARTICLES_PER_TASK))
-            .enumerate()
-            .map(|(chunk, (v, w))| {
-                let first = chunk * PARTICLES_PER_TASK;
-                let range = first..first + v.len();
-                let (f, t) = (&p.force[range.clone()], &p.torque[range.clone()]);
-                let (inv_m, inv_i) = (
-                    &p.inverse_mass[range.clone()],
-                    &p.inverse_inertia[range.clone()],
-                );
-                let x = &p.position[range];
-                let mut finite = true;
-                for k in 0..v.len() {
-                    v[k] += half_dt * inv_m[k] * f[k];
-                    w[k] += half_dt * inv_i[k] * t[k];
-                    // A sum is finite only if every term is (short of
-                    // overflowing, which no sound state comes near).
-                    finite &= (x[k].sum() + v[k].sum()).is_finite();
-                }
-                !finite
-            })
-            .reduce(|| false, |a, b| a || b)
+    /// Fits the threads' runs of chunks to `n` owned particles and the
+    /// current neighbour build.
+    fn update_share(&mut self, n: usize) {
+        self.share.update(
+            n,
+            force_chunk(n),
+            rayon::current_num_threads(),
+            self.neighbours.builds,
+        );
     }
 
     /// Contact forces and gravity on every owned particle; `dt` advances the
     /// tangential histories (0 evaluates without advancing them).
     ///
-    /// Two parallel loops over fixed chunks of particles ([`force_chunk`]),
-    /// in a fixed order whatever the number of threads:
+    /// Two passes over fixed chunks of particles ([`force_chunk`]), each
+    /// thread over its run of chunks in increasing order
+    /// ([`ThreadShare`]), in a fixed order of sums whatever the threads:
     /// 1. each particle evaluates its upper entries (each pair of owned
     ///    particles once, pairs with ghosts from both sides), its walls and
     ///    gravity; a pair whose upper particle is in the same chunk hands it
@@ -625,9 +618,10 @@ impl DemSystem {
     ///    a list the chunk publishes when done;
     /// 2. a chunk adds what earlier chunks handed to its particles, in
     ///    increasing chunk and particle order, as soon as they have all
-    ///    published their lists: at once on one thread, while the chunk is
-    ///    still in cache; a chunk whose sources were not done yet is
-    ///    finished after the loop. The sums are the same either way, so
+    ///    published their lists: at once within a thread's run, while the
+    ///    chunk is still in cache; the first chunks of a run, whose sources
+    ///    end the run before it, when that thread has published them. The
+    ///    sums are the same either way, so
     ///    the result does not depend on the number of threads, and Newton's
     ///    third law holds bitwise.
     pub fn compute_forces(&mut self, dt: f64) -> StepDiagnostics {
@@ -637,24 +631,47 @@ impl DemSystem {
     /// [`DemSystem::compute_forces`] advancing the tangential histories by
     /// `history_dt` and making the film forces implicit over `film_dt`.
     fn evaluate_forces(&mut self, history_dt: f64, film_dt: f64) -> StepDiagnostics {
+        self.evaluate_forces_and_kick(history_dt, film_dt, None)
+    }
+
+    /// [`DemSystem::evaluate_forces`], then the closing half kick of
+    /// `closing_kick` (Δt/2) if given, each chunk's as soon as its forces
+    /// are complete (no pass of its own).
+    fn evaluate_forces_and_kick(
+        &mut self,
+        history_dt: f64,
+        film_dt: f64,
+        closing_kick: Option<f64>,
+    ) -> StepDiagnostics {
         self.film_dt = film_dt;
         let n = self.particles.n_owned;
         assert_eq!(self.wall_candidates.len(), n, "wall candidates not built");
         self.contacts.resize(n, 0);
         let mut force = std::mem::take(&mut self.particles.force);
         let mut torque = std::mem::take(&mut self.particles.torque);
+        let mut velocity = std::mem::take(&mut self.particles.velocity);
+        let mut angular_velocity = std::mem::take(&mut self.particles.angular_velocity);
 
-        let (max_overlap_ratio, wall_contacts, listed_contacts) = self
-            .evaluate_upper_pairs_and_walls(&mut force[..n], &mut torque[..n], history_dt, film_dt);
+        let velocities = PassVelocities::new(&mut velocity, &mut angular_velocity);
+        let totals = self.evaluate_upper_pairs_and_walls(
+            &mut force[..n],
+            &mut torque[..n],
+            &velocities,
+            history_dt,
+            film_dt,
+            closing_kick,
+        );
 
         self.particles.force = force;
         self.particles.torque = torque;
+        self.particles.velocity = velocity;
+        self.particles.angular_velocity = angular_velocity;
         StepDiagnostics {
-            max_overlap_ratio: self.communicator.max(max_overlap_ratio),
+            max_overlap_ratio: self.communicator.max(totals.max_overlap_ratio),
             // Each contact is counted by both of its particles.
-            particle_contacts: self.communicator.sum_count(listed_contacts) / 2,
-            wall_contacts: self.communicator.sum_count(wall_contacts),
-            non_finite: false,
+            particle_contacts: self.communicator.sum_count(totals.listed_contacts) / 2,
+            wall_contacts: self.communicator.sum_count(totals.wall_contacts),
+            non_finite: self.communicator.any(totals.non_finite),
         }
     }
 
@@ -679,19 +696,21 @@ impl DemSystem {
         self.handover_sources = (list.builds, sources);
     }
 
-    /// The two passes of `compute_forces`: returns the largest overlap
-    /// ratio, the number of wall contacts and the number of (particle,
-    /// contact) entries.
+    /// The two passes of `compute_forces`, and the closing half kick of
+    /// `closing_kick` (Δt/2) of each chunk once it is complete.
     fn evaluate_upper_pairs_and_walls(
         &mut self,
         forces: &mut [Vec3],
         torques: &mut [Vec3],
+        velocities: &PassVelocities,
         dt: f64,
         film_dt: f64,
-    ) -> (f64, usize, usize) {
+        closing_kick: Option<f64>,
+    ) -> PassTotals {
         let n = forces.len();
         let chunk_len = force_chunk(n);
         self.refresh_handover_sources(n, chunk_len);
+        self.update_share(n);
         let law = self.law;
         let lubrication = self.lubrication;
         let contact_gap = self.contact_gap;
@@ -709,235 +728,294 @@ impl DemSystem {
         let handovers: Vec<OnceLock<Vec<Handover>>> =
             (0..chunks).map(|_| OnceLock::new()).collect();
         let p = &self.particles;
-        let chunk_results: Vec<(f64, usize, Option<usize>)> = forces
-            .par_chunks_mut(chunk_len)
-            .zip(torques.par_chunks_mut(chunk_len))
-            .zip(self.wall_history.par_chunks_mut(chunk_len * wall_stride))
-            .zip(self.contacts.par_chunks_mut(chunk_len))
-            .zip(entry_chunks.into_par_iter())
-            .zip(self.wall_touching.par_chunks_mut(chunk_len))
-            .zip(self.wall_candidates.par_chunks(chunk_len))
-            .enumerate()
-            .with_max_len(1)
-            .map(
-                |(
-                    chunk,
-                    (
-                        (((((forces, torques), wall_histories), counts), entry), touching),
-                        candidates,
-                    ),
-                )| {
-                    let first = chunk * chunk_len;
-                    let end = first + forces.len();
-                    let entry_base = offsets[first] as usize;
-                    let mut max_overlap: f64 = 0.0;
-                    let mut wall_contacts = 0usize;
-                    // What the chunk's pairs hand to their upper partner: summed
-                    // here, in cache, when it lies in the chunk too; listed in
-                    // `outgoing` when a later chunk owns it (a ghost's owner
-                    // evaluates the pair itself).
-                    let mut handed = HandedOver::new(first..end, n);
-                    for local in 0..forces.len() {
-                        let i = first + local;
-                        // Velocities are read where a pair or wall acts: most
-                        // grains of a loose scene touch nothing, and their
-                        // velocities then stay out of the cache.
-                        let (xi, ri) = (p.position[i], p.radius[i]);
-                        let mut total_force = Vec3::zeros();
-                        let mut total_torque = Vec3::zeros();
-                        let mut count = 0u32;
-                        let upper = upper_start[i] as usize..offsets[i + 1] as usize;
-                        for (e, &j) in (upper.start - entry_base..).zip(&partner[upper]) {
-                            let j = j as usize;
-                            let branch = xi - p.position[j];
-                            let rj = p.radius[j];
-                            let reach = ri + rj + contact_gap;
-                            let distance_sq = branch.norm_squared();
-                            if distance_sq >= reach * reach {
-                                // Most listed partners are apart: touch the
-                                // history only when a contact has just ended.
-                                if entry.state[e] != 0 {
-                                    entry.state[e] = 0;
-                                    entry.history[e] = Vec3::zeros();
-                                }
-                                if let Some(film) = &lubrication {
-                                    let distance = distance_sq.sqrt();
-                                    let normal = branch * (1.0 / distance);
-                                    let force = film.force(
-                                        distance - ri - rj,
-                                        normal,
-                                        p.velocity[i] - p.velocity[j],
-                                        ri,
-                                        rj,
-                                        p.inverse_mass[i] + p.inverse_mass[j],
-                                        film_dt,
-                                    );
-                                    if force != Vec3::zeros() {
-                                        total_force += force;
-                                        entry.state[e] = LUBRICATED;
-                                        handed.give(Handover {
-                                            target: j as u32,
-                                            touching: false,
-                                            force,
-                                            partner_torque: Vec3::zeros(),
-                                        });
-                                    }
-                                }
-                                continue;
-                            }
-                            entry.state[e] = TOUCHING;
-                            // Eq. 13–16, normal from j to i.
+        // One chunk's pass 1, and its pass 2 when its sources are done.
+        let evaluate = |chunk: usize, arrays: &mut ChunkArrays| -> (f64, usize, Option<usize>) {
+            let ChunkArrays {
+                forces,
+                torques,
+                wall_histories,
+                counts,
+                entry,
+                touching,
+                candidates,
+            } = arrays;
+            let first = chunk * chunk_len;
+            let end = first + forces.len();
+            let entry_base = offsets[first] as usize;
+            let mut max_overlap: f64 = 0.0;
+            let mut wall_contacts = 0usize;
+            // What the chunk's pairs hand to their upper partner: summed
+            // here, in cache, when it lies in the chunk too; listed in
+            // `outgoing` when a later chunk owns it (a ghost's owner
+            // evaluates the pair itself).
+            let mut handed = HandedOver::new(first..end, n);
+            for local in 0..forces.len() {
+                let i = first + local;
+                // Velocities are read where a pair or wall acts: most
+                // grains of a loose scene touch nothing, and their
+                // velocities then stay out of the cache.
+                let (xi, ri) = (p.position[i], p.radius[i]);
+                let mut total_force = Vec3::zeros();
+                let mut total_torque = Vec3::zeros();
+                let mut count = 0u32;
+                let upper = upper_start[i] as usize..offsets[i + 1] as usize;
+                for (e, &j) in (upper.start - entry_base..).zip(&partner[upper]) {
+                    let j = j as usize;
+                    let branch = xi - p.position[j];
+                    let rj = p.radius[j];
+                    let reach = ri + rj + contact_gap;
+                    let distance_sq = branch.norm_squared();
+                    if distance_sq >= reach * reach {
+                        // Most listed partners are apart: touch the
+                        // history only when a contact has just ended.
+                        if entry.state[e] != 0 {
+                            entry.state[e] = 0;
+                            entry.history[e] = Vec3::zeros();
+                        }
+                        if let Some(film) = &lubrication {
                             let distance = distance_sq.sqrt();
                             let normal = branch * (1.0 / distance);
-                            let overlap = reach - distance;
-                            let (vi, wi) = (p.velocity[i], p.angular_velocity[i]);
-                            let wj = p.angular_velocity[j];
-                            let inverse_mass_sum = p.inverse_mass[i] + p.inverse_mass[j];
-                            let contact = ContactPoint {
-                                overlap,
+                            let force = film.force(
+                                distance - ri - rj,
                                 normal,
-                                relative_velocity: vi
-                                    - p.velocity[j]
-                                    - (ri * wi + rj * wj).cross(&normal),
-                                relative_spin: wi - wj,
-                                radius: ri,
-                                partner_radius: rj,
-                                inverse_mass_sum,
-                                inverse_inertia_sum: p.inverse_inertia[i] + p.inverse_inertia[j],
-                                friction: law.friction,
-                            };
-                            let mut load = law.load(&contact, &mut entry.history[e], dt);
-                            if let Some(film) = &lubrication {
-                                load.force += film.force(
-                                    contact_gap - overlap,
-                                    normal,
-                                    vi - p.velocity[j],
-                                    ri,
-                                    rj,
-                                    inverse_mass_sum,
-                                    film_dt,
-                                );
-                            }
-                            total_force += load.force;
-                            total_torque += load.torque;
-                            handed.give(Handover {
-                                target: j as u32,
-                                touching: true,
-                                force: load.force,
-                                partner_torque: load.partner_torque,
-                            });
-                            max_overlap = max_overlap.max(overlap / ri.min(rj));
-                            count += 1;
-                        }
-                        if p.inverse_mass[i] > 0.0 {
-                            let wall_history =
-                                &mut wall_histories[local * wall_stride..(local + 1) * wall_stride];
-                            let mut touches = touching[local];
-                            // In increasing w, as a loop over all walls would.
-                            let mut near = candidates[local] | touches;
-                            while near != 0 {
-                                let w = near.trailing_zeros() as usize;
-                                near &= near - 1;
-                                let wall = &walls[w];
-                                let (vi, wi) = (p.velocity[i], p.angular_velocity[i]);
-                                let bit = 1u64 << w;
-                                let distance = wall.distance(&xi);
-                                let present = wall.is_present(time);
-                                if let (Some(film), true) = (&lubrication, present) {
-                                    // Eq. 19 against a wall: the true gap.
-                                    total_force += film.force(
-                                        distance - ri,
-                                        wall.normal,
-                                        vi,
-                                        ri,
-                                        f64::INFINITY,
-                                        p.inverse_mass[i],
-                                        film_dt,
-                                    );
-                                }
-                                let overlap = ri + contact_gap - distance;
-                                if overlap <= 0.0 || !present {
-                                    if touches & bit != 0 {
-                                        wall_history[w] = Vec3::zeros();
-                                        touches &= !bit;
-                                    }
-                                    continue;
-                                }
-                                touches |= bit;
-                                let contact = ContactPoint {
-                                    overlap,
-                                    normal: wall.normal,
-                                    relative_velocity: vi - (ri * wi).cross(&wall.normal),
-                                    relative_spin: wi,
-                                    radius: ri,
-                                    partner_radius: f64::INFINITY,
-                                    inverse_mass_sum: p.inverse_mass[i],
-                                    inverse_inertia_sum: p.inverse_inertia[i],
-                                    friction: wall.friction,
-                                };
-                                let load = law.load(&contact, &mut wall_history[w], dt);
-                                total_force += load.force;
-                                total_torque += load.torque;
-                                max_overlap = max_overlap.max(overlap / ri);
-                                wall_contacts += 1;
-                            }
-                            touching[local] = touches;
-                            total_force += p.mass[i] * gravity;
-                            if external_loads {
-                                total_force += p.external_force[i];
-                                total_torque += p.external_torque[i];
+                                velocities.linear(i) - velocities.linear(j),
+                                ri,
+                                rj,
+                                p.inverse_mass[i] + p.inverse_mass[j],
+                                film_dt,
+                            );
+                            if force != Vec3::zeros() {
+                                total_force += force;
+                                entry.state[e] = LUBRICATED;
+                                handed.give(Handover {
+                                    target: j as u32,
+                                    touching: false,
+                                    force,
+                                    partner_torque: Vec3::zeros(),
+                                });
                             }
                         }
-                        forces[local] = handed.force[local] + total_force;
-                        torques[local] = handed.torque[local] + total_torque;
-                        counts[local] = handed.count[local] + count;
+                        continue;
                     }
-                    // By target chunk, each target's pairs kept in order.
-                    let mut outgoing = handed.outgoing;
-                    outgoing.sort_by_key(|h| h.target as usize / chunk_len);
-                    handovers[chunk]
-                        .set(outgoing)
-                        .unwrap_or_else(|_| unreachable!("each chunk publishes once"));
-                    let listed = receive_handovers(
-                        chunk,
-                        chunk_len,
-                        first_sources[chunk]..chunk,
-                        &handovers,
+                    entry.state[e] = TOUCHING;
+                    // Eq. 13–16, normal from j to i.
+                    let distance = distance_sq.sqrt();
+                    let normal = branch * (1.0 / distance);
+                    let overlap = reach - distance;
+                    let (vi, wi) = (velocities.linear(i), velocities.angular(i));
+                    let wj = velocities.angular(j);
+                    let inverse_mass_sum = p.inverse_mass[i] + p.inverse_mass[j];
+                    let contact = ContactPoint {
+                        overlap,
+                        normal,
+                        relative_velocity: vi
+                            - velocities.linear(j)
+                            - (ri * wi + rj * wj).cross(&normal),
+                        relative_spin: wi - wj,
+                        radius: ri,
+                        partner_radius: rj,
+                        inverse_mass_sum,
+                        inverse_inertia_sum: p.inverse_inertia[i] + p.inverse_inertia[j],
+                        friction: law.friction,
+                    };
+                    let mut load = law.load(&contact, &mut entry.history[e], dt);
+                    if let Some(film) = &lubrication {
+                        load.force += film.force(
+                            contact_gap - overlap,
+                            normal,
+                            vi - velocities.linear(j),
+                            ri,
+                            rj,
+                            inverse_mass_sum,
+                            film_dt,
+                        );
+                    }
+                    total_force += load.force;
+                    total_torque += load.torque;
+                    handed.give(Handover {
+                        target: j as u32,
+                        touching: true,
+                        force: load.force,
+                        partner_torque: load.partner_torque,
+                    });
+                    max_overlap = max_overlap.max(overlap / ri.min(rj));
+                    count += 1;
+                }
+                if p.inverse_mass[i] > 0.0 {
+                    let wall_history =
+                        &mut wall_histories[local * wall_stride..(local + 1) * wall_stride];
+                    let mut touches = touching[local];
+                    // In increasing w, as a loop over all walls would.
+                    let mut near = candidates[local] | touches;
+                    while near != 0 {
+                        let w = near.trailing_zeros() as usize;
+                        near &= near - 1;
+                        let wall = &walls[w];
+                        let (vi, wi) = (velocities.linear(i), velocities.angular(i));
+                        let bit = 1u64 << w;
+                        let distance = wall.distance(&xi);
+                        let present = wall.is_present(time);
+                        if let (Some(film), true) = (&lubrication, present) {
+                            // Eq. 19 against a wall: the true gap.
+                            total_force += film.force(
+                                distance - ri,
+                                wall.normal,
+                                vi,
+                                ri,
+                                f64::INFINITY,
+                                p.inverse_mass[i],
+                                film_dt,
+                            );
+                        }
+                        let overlap = ri + contact_gap - distance;
+                        if overlap <= 0.0 || !present {
+                            if touches & bit != 0 {
+                                wall_history[w] = Vec3::zeros();
+                                touches &= !bit;
+                            }
+                            continue;
+                        }
+                        touches |= bit;
+                        let contact = ContactPoint {
+                            overlap,
+                            normal: wall.normal,
+                            relative_velocity: vi - (ri * wi).cross(&wall.normal),
+                            relative_spin: wi,
+                            radius: ri,
+                            partner_radius: f64::INFINITY,
+                            inverse_mass_sum: p.inverse_mass[i],
+                            inverse_inertia_sum: p.inverse_inertia[i],
+                            friction: wall.friction,
+                        };
+                        let load = law.load(&contact, &mut wall_history[w], dt);
+                        total_force += load.force;
+                        total_torque += load.torque;
+                        max_overlap = max_overlap.max(overlap / ri);
+                        wall_contacts += 1;
+                    }
+                    touching[local] = touches;
+                    total_force += p.mass[i] * gravity;
+                    if external_loads {
+                        total_force += p.external_force[i];
+                        total_torque += p.external_torque[i];
+                    }
+                }
+                forces[local] = handed.force[local] + total_force;
+                torques[local] = handed.torque[local] + total_torque;
+                counts[local] = handed.count[local] + count;
+            }
+            // By target chunk, each target's pairs kept in order.
+            let mut outgoing = handed.outgoing;
+            outgoing.sort_by_key(|h| h.target as usize / chunk_len);
+            handovers[chunk]
+                .set(outgoing)
+                .unwrap_or_else(|_| unreachable!("each chunk publishes once"));
+            let listed = receive_handovers(
+                chunk,
+                chunk_len,
+                first_sources[chunk]..chunk,
+                &handovers,
+                forces,
+                torques,
+                counts,
+            );
+            (max_overlap, wall_contacts, listed)
+        };
+        let share = &self.share;
+        let mut arrays = forces
+            .chunks_mut(chunk_len)
+            .zip(torques.chunks_mut(chunk_len))
+            .zip(self.wall_history.chunks_mut(chunk_len * wall_stride))
+            .zip(self.contacts.chunks_mut(chunk_len))
+            .zip(entry_chunks)
+            .zip(self.wall_touching.chunks_mut(chunk_len))
+            .zip(self.wall_candidates.chunks(chunk_len))
+            .map(
+                |(
+                    (((((forces, torques), wall_histories), counts), entry), touching),
+                    candidates,
+                )| {
+                    ChunkArrays {
                         forces,
                         torques,
+                        wall_histories,
                         counts,
-                    );
-                    (max_overlap, wall_contacts, listed)
+                        entry,
+                        touching,
+                        candidates,
+                    }
                 },
-            )
+            );
+        let parts: Vec<Vec<ChunkArrays>> = (0..share.threads())
+            .map(|t| arrays.by_ref().take(share.chunks_of(t).len()).collect())
             .collect();
-        // Chunks whose sources were still running: every list is out now.
-        let mut listed: usize = chunk_results.iter().filter_map(|r| r.2).sum();
-        if chunk_results.iter().any(|r| r.2.is_none()) {
-            listed += forces
-                .par_chunks_mut(chunk_len)
-                .zip(torques.par_chunks_mut(chunk_len))
-                .zip(self.contacts.par_chunks_mut(chunk_len))
-                .zip(&chunk_results)
-                .enumerate()
-                .filter(|(_, (_, result))| result.2.is_none())
-                .map(|(chunk, (((forces, torques), counts), _))| {
-                    receive_handovers(
-                        chunk,
-                        chunk_len,
-                        first_sources[chunk]..chunk,
-                        &handovers,
-                        forces,
-                        torques,
-                        counts,
-                    )
-                    .expect("every chunk has published its list")
-                })
-                .sum::<usize>();
+        let team = self.team.of(share.threads());
+        // The closing half kick of a complete chunk: every pair that reads
+        // its grains' velocities has been evaluated by then (its own pairs
+        // in this chunk, those with lower partners in the chunks it
+        // received from, which published after evaluating them).
+        let kick = |chunk: usize, forces: &[Vec3], torques: &[Vec3]| -> bool {
+            let Some(half_dt) = closing_kick else {
+                return false;
+            };
+            let first = chunk * chunk_len;
+            // SAFETY: as above, no pair of this pass reads these grains
+            // any more, and only this thread owns the chunk.
+            unsafe { velocities.kick(first, forces, torques, half_dt, p) }
+        };
+        let thread_results = team.run_parts(parts, |thread, run| {
+            let mut max_overlap: f64 = 0.0;
+            let mut wall_contacts = 0;
+            let mut listed = 0;
+            let mut non_finite = false;
+            let mut seconds = Vec::with_capacity(run.len());
+            let mut waiting = Vec::new();
+            for (chunk, mut arrays) in share.chunks_of(thread).zip(run) {
+                let start = Instant::now();
+                let (overlap, walls, chunk_listed) = evaluate(chunk, &mut arrays);
+                max_overlap = max_overlap.max(overlap);
+                wall_contacts += walls;
+                match chunk_listed {
+                    Some(count) => {
+                        listed += count;
+                        non_finite |= kick(chunk, arrays.forces, arrays.torques);
+                    }
+                    None => waiting.push((chunk, arrays)),
+                }
+                seconds.push(start.elapsed().as_secs_f64());
+            }
+            // The first chunks of a run receive from the end of the run
+            // before it, which that thread publishes last.
+            for (chunk, arrays) in waiting {
+                let sources = first_sources[chunk]..chunk;
+                wait_until(|| all_published(sources.clone(), &handovers));
+                listed += receive_handovers(
+                    chunk,
+                    chunk_len,
+                    sources,
+                    &handovers,
+                    arrays.forces,
+                    arrays.torques,
+                    arrays.counts,
+                )
+                .expect("every source has published its list");
+                non_finite |= kick(chunk, arrays.forces, arrays.torques);
+            }
+            (max_overlap, wall_contacts, listed, non_finite, seconds)
+        });
+        let mut totals = PassTotals::default();
+        for (thread, (overlap, walls, count, non_finite, seconds)) in
+            thread_results.into_iter().enumerate()
+        {
+            totals.max_overlap_ratio = totals.max_overlap_ratio.max(overlap);
+            totals.wall_contacts += walls;
+            totals.listed_contacts += count;
+            totals.non_finite |= non_finite;
+            for (chunk, s) in self.share.chunks_of(thread).zip(seconds) {
+                self.share.record(chunk, s);
+            }
         }
-        let max_overlap = chunk_results.iter().map(|r| r.0).fold(0.0, f64::max);
-        let wall_contacts = chunk_results.iter().map(|r| r.1).sum();
-        (max_overlap, wall_contacts, listed)
+        totals
     }
 
     /// The contacts of owned particle i with other particles, as evaluated
@@ -1149,6 +1227,14 @@ impl HandedOver {
     }
 }
 
+/// Whether every chunk of `sources` has published its hand-over list.
+fn all_published(
+    mut sources: std::ops::Range<usize>,
+    handovers: &[OnceLock<Vec<Handover>>],
+) -> bool {
+    sources.all(|source| handovers[source].get().is_some())
+}
+
 /// Adds to the particles of `chunk` what the chunks `sources` handed them,
 /// in increasing chunk order and, within a chunk, in the order it made
 /// them (increasing lower particle); returns the chunk's (particle,
@@ -1163,10 +1249,7 @@ fn receive_handovers(
     torques: &mut [Vec3],
     counts: &mut [u32],
 ) -> Option<usize> {
-    if !sources
-        .clone()
-        .all(|source| handovers[source].get().is_some())
-    {
+    if !all_published(sources.clone(), handovers) {
         return None;
     }
     let first = chunk * chunk_len;
@@ -1184,6 +1267,109 @@ fn receive_handovers(
     // The chunk's counts are final now: summed here rather than in a pass
     // of their own.
     Some(counts.iter().map(|&c| c as usize).sum())
+}
+
+/// What the passes of the force loop add up over the threads.
+#[derive(Default)]
+struct PassTotals {
+    max_overlap_ratio: f64,
+    wall_contacts: usize,
+    /// (particle, contact) entries: each contact twice.
+    listed_contacts: usize,
+    /// A closing kick left a position or velocity not finite.
+    non_finite: bool,
+}
+
+/// The velocities of all local grains during a force pass, which reads
+/// them for any grain and kicks each chunk's grains once its forces are
+/// complete (on the thread that completed it).
+struct PassVelocities<'a> {
+    linear: *mut Vec3,
+    angular: *mut Vec3,
+    len: usize,
+    _arrays: std::marker::PhantomData<&'a mut [Vec3]>,
+}
+
+// SAFETY: grains are written only through `kick`, whose caller guarantees
+// that no other thread reads them at the same time.
+unsafe impl Sync for PassVelocities<'_> {}
+
+impl<'a> PassVelocities<'a> {
+    fn new(linear: &'a mut [Vec3], angular: &'a mut [Vec3]) -> Self {
+        assert_eq!(
+            linear.len(),
+            angular.len(),
+            "one angular velocity per grain"
+        );
+        PassVelocities {
+            linear: linear.as_mut_ptr(),
+            angular: angular.as_mut_ptr(),
+            len: linear.len(),
+            _arrays: std::marker::PhantomData,
+        }
+    }
+
+    #[inline]
+    fn linear(&self, i: usize) -> Vec3 {
+        assert!(i < self.len);
+        // SAFETY: in bounds; no grain is read while it is being kicked.
+        unsafe { *self.linear.add(i) }
+    }
+
+    #[inline]
+    fn angular(&self, i: usize) -> Vec3 {
+        assert!(i < self.len);
+        // SAFETY: as for `linear`.
+        unsafe { *self.angular.add(i) }
+    }
+
+    /// Half kick of Δt/2 = `half_dt` of the grains from `first` on, one
+    /// per force; returns whether a position or velocity is not finite.
+    ///
+    /// # Safety
+    /// No other thread may read or write these grains' velocities during
+    /// the call.
+    unsafe fn kick(
+        &self,
+        first: usize,
+        forces: &[Vec3],
+        torques: &[Vec3],
+        half_dt: f64,
+        p: &Particles,
+    ) -> bool {
+        let end = first + forces.len();
+        assert!(end <= self.len);
+        // SAFETY: in bounds, and no other thread touches these grains
+        // (the caller's promise).
+        let (v, w) = unsafe {
+            (
+                std::slice::from_raw_parts_mut(self.linear.add(first), forces.len()),
+                std::slice::from_raw_parts_mut(self.angular.add(first), forces.len()),
+            )
+        };
+        let (inv_m, inv_i) = (&p.inverse_mass[first..end], &p.inverse_inertia[first..end]);
+        let x = &p.position[first..end];
+        let mut finite = true;
+        for k in 0..v.len() {
+            v[k] += half_dt * inv_m[k] * forces[k];
+            w[k] += half_dt * inv_i[k] * torques[k];
+            // A sum is finite only if every term is (short of overflowing,
+            // which no sound state comes near).
+            finite &= (x[k].sum() + v[k].sum()).is_finite();
+        }
+        !finite
+    }
+}
+
+/// The arrays one chunk of the force loop writes.
+struct ChunkArrays<'a> {
+    forces: &'a mut [Vec3],
+    torques: &'a mut [Vec3],
+    wall_histories: &'a mut [Vec3],
+    counts: &'a mut [u32],
+    entry: EntryChunk<'a>,
+    touching: &'a mut [u64],
+    candidates: &'a [u64],
 }
 
 /// The per-entry arrays of one chunk of particles (pass 1 of the force

@@ -1,0 +1,433 @@
+//! Which grains each thread works on, and the threads that do it.
+//!
+//! A DEM step passes over the grains twice, microseconds apart: the half
+//! kick with the drift, then the force loop, which gives each chunk its
+//! closing half kick once the chunk's forces are complete. Two things kept
+//! two threads from doubling its speed, and this module answers both:
+//!
+//! - **Waking a sleeping thread for every pass.** A pool whose idle threads
+//!   sleep at once (rayon's) pays for a wake-up in each pass: in a virtual
+//!   machine, two 20,000-grain half kicks took 75 and 62 µs per step on two
+//!   threads against 69 and 54 µs on one. A [`Team`]'s helpers spin between
+//!   passes and park only after [`SPIN_BEFORE_PARKING`] without work.
+//! - **Grains changing threads between passes and steps.** Each thread
+//!   keeps the same run of the force loop's chunks in both passes and from
+//!   step to step ([`ThreadShare`]), so that its grains stay in its core's
+//!   caches. The runs are balanced on the chunks' measured cost (a
+//!   column's dense base costs ten times its loose top) and move only at a
+//!   neighbour build, when the grains are reordered anyway.
+//!
+//! What two threads still share every step are the grains at the boundary
+//! between their runs; where two cores do not share a last-level cache
+//! that costs about a sixth of the step (docs/performance.md).
+//!
+//! Which thread runs a chunk never changes what the chunk computes, nor the
+//! order of any sum, so the results do not depend on the threads.
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// The runs of grains of the threads of a step.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ThreadShare {
+    chunk_len: usize,
+    chunks: usize,
+    /// Thread t runs chunks `bounds[t]..bounds[t + 1]` of the force loop.
+    bounds: Vec<usize>,
+    /// Seconds of force evaluation of each chunk since the runs were set.
+    chunk_seconds: Vec<f64>,
+    /// The neighbour build at which the runs were set.
+    build: u64,
+}
+
+impl ThreadShare {
+    /// Makes the runs fit `n` particles in chunks of `chunk_len` on up to
+    /// `threads` threads; at a new neighbour `build`, balances them on the
+    /// times recorded since the last one.
+    pub(crate) fn update(&mut self, n: usize, chunk_len: usize, threads: usize, build: u64) {
+        let chunks = n.div_ceil(chunk_len);
+        let parts = threads.min(chunks).max(1);
+        let same_shape =
+            self.chunk_len == chunk_len && self.chunks == chunks && self.bounds.len() == parts + 1;
+        if same_shape && build == self.build {
+            return;
+        }
+        let measured = same_shape && self.chunk_seconds.iter().any(|&s| s > 0.0);
+        self.bounds = if measured {
+            balanced_bounds(&self.chunk_seconds, parts)
+        } else {
+            (0..=parts).map(|t| t * chunks / parts).collect()
+        };
+        self.chunk_len = chunk_len;
+        self.chunks = chunks;
+        self.chunk_seconds = vec![0.0; chunks];
+        self.build = build;
+    }
+
+    /// Number of threads given a run (at least one).
+    pub(crate) fn threads(&self) -> usize {
+        self.bounds.len().saturating_sub(1).max(1)
+    }
+
+    /// The chunks of the force loop thread `t` runs.
+    pub(crate) fn chunks_of(&self, t: usize) -> Range<usize> {
+        self.bounds[t]..self.bounds[t + 1]
+    }
+
+    /// The particles (of `n`) in thread `t`'s run.
+    pub(crate) fn particles_of(&self, t: usize, n: usize) -> Range<usize> {
+        let run = self.chunks_of(t);
+        (run.start * self.chunk_len).min(n)..(run.end * self.chunk_len).min(n)
+    }
+
+    /// Splits a per-particle array (of `n`) into the threads' runs.
+    pub(crate) fn split<'a, T>(&self, mut items: &'a mut [T], n: usize) -> Vec<&'a mut [T]> {
+        assert_eq!(items.len(), n, "one item per particle");
+        (0..self.threads())
+            .map(|t| {
+                let (run, rest) =
+                    std::mem::take(&mut items).split_at_mut(self.particles_of(t, n).len());
+                items = rest;
+                run
+            })
+            .collect()
+    }
+
+    /// Adds the time a chunk's force evaluation took.
+    pub(crate) fn record(&mut self, chunk: usize, seconds: f64) {
+        self.chunk_seconds[chunk] += seconds;
+    }
+}
+
+/// Bounds of `parts` contiguous runs of `costs` whose sums are as close to
+/// equal as whole items allow: run t ends at the item boundary nearest to
+/// t/parts of the total, and no run is empty while there are items left.
+pub(crate) fn balanced_bounds(costs: &[f64], parts: usize) -> Vec<usize> {
+    let items = costs.len();
+    let total: f64 = costs.iter().sum();
+    let mut bounds = vec![0; parts + 1];
+    bounds[parts] = items;
+    let mut prefix = 0.0;
+    let mut k = 0;
+    for t in 1..parts {
+        let target = total * t as f64 / parts as f64;
+        // Leave at least one item for each run after this one.
+        let last = items - (parts - t);
+        while k < last && prefix + costs[k] <= target {
+            prefix += costs[k];
+            k += 1;
+        }
+        // The next item goes in too if that brings the sum nearer.
+        if k < last && target - prefix > prefix + costs[k] - target {
+            k += 1;
+        }
+        k = k.max(bounds[t - 1] + 1).min(last);
+        bounds[t] = k;
+        prefix = costs[..k].iter().sum();
+    }
+    bounds
+}
+
+/// The threads that run the passes of a DEM step: the calling thread and
+/// helpers that spin for up to [`SPIN_BEFORE_PARKING`] after a pass, and
+/// only then park until the next one.
+pub(crate) struct Team {
+    shared: Arc<TeamShared>,
+    helpers: Vec<JoinHandle<()>>,
+}
+
+/// How long a helper spins for the next pass before it parks.
+const SPIN_BEFORE_PARKING: Duration = Duration::from_micros(300);
+
+/// The current pass, borrowed from the caller for its duration.
+#[derive(Clone, Copy)]
+struct PassWork(*const (dyn Fn(usize) + Sync + 'static));
+
+// SAFETY: the pointer is dereferenced only while `Team::run` waits for the
+// pass to end, so the closure (which is `Sync`) outlives every use.
+unsafe impl Send for PassWork {}
+
+struct TeamShared {
+    /// Counts the passes started; a helper runs a pass when it changes.
+    generation: AtomicU64,
+    /// Helpers still running the current pass.
+    running: AtomicUsize,
+    work: Mutex<Option<PassWork>>,
+    /// Helpers parked on `wake`, and whether the team is being dropped.
+    parking: Mutex<(usize, bool)>,
+    wake: Condvar,
+    /// A helper's pass panicked.
+    panicked: AtomicBool,
+}
+
+impl Team {
+    /// A team of `threads` threads in all (the caller and `threads − 1`
+    /// helpers).
+    pub(crate) fn new(threads: usize) -> Team {
+        let shared = Arc::new(TeamShared {
+            generation: AtomicU64::new(0),
+            running: AtomicUsize::new(0),
+            work: Mutex::new(None),
+            parking: Mutex::new((0, false)),
+            wake: Condvar::new(),
+            panicked: AtomicBool::new(false),
+        });
+        let helpers = (1..threads.max(1))
+            .map(|t| {
+                let shared = Arc::clone(&shared);
+                std::thread::Builder::new()
+                    .name(format!("grainflow-dem-{t}"))
+                    .spawn(move || helper_loop(&shared, t))
+                    .expect("cannot start a DEM helper thread")
+            })
+            .collect();
+        Team { shared, helpers }
+    }
+
+    /// Threads in the team, the caller's included.
+    pub(crate) fn threads(&self) -> usize {
+        self.helpers.len() + 1
+    }
+
+    /// Runs `work(t, parts[t])` with part 0 on the calling thread and part
+    /// t on helper t, and returns the results in part order. There must be
+    /// no more parts than threads.
+    pub(crate) fn run_parts<P, R, W>(&self, parts: Vec<P>, work: W) -> Vec<R>
+    where
+        P: Send,
+        R: Send,
+        W: Fn(usize, P) -> R + Sync,
+    {
+        let count = parts.len();
+        assert!(count <= self.threads(), "a part per thread at most");
+        if count == 1 {
+            let part = parts.into_iter().next().expect("one part");
+            return vec![work(0, part)];
+        }
+        let slots: Vec<Mutex<Option<P>>> = parts.into_iter().map(|p| Mutex::new(Some(p))).collect();
+        let results: Vec<Mutex<Option<R>>> = (0..count).map(|_| Mutex::new(None)).collect();
+        self.run(&|t| {
+            let Some(part) = slots
+                .get(t)
+                .and_then(|slot| slot.lock().expect("part").take())
+            else {
+                return;
+            };
+            let result = work(t, part);
+            *results[t].lock().expect("result") = Some(result);
+        });
+        results
+            .into_iter()
+            .map(|r| r.into_inner().expect("result").expect("every part ran"))
+            .collect()
+    }
+
+    /// Runs `work(t)` for every thread t of the team and returns when all
+    /// have finished.
+    fn run(&self, work: &(dyn Fn(usize) + Sync)) {
+        let shared = &*self.shared;
+        // SAFETY: only the lifetime is erased; the helpers drop their copy
+        // of the pointer before `running` reaches zero, which this function
+        // waits for before it returns (also when the caller's part panics).
+        let erased: *const (dyn Fn(usize) + Sync + 'static) =
+            unsafe { std::mem::transmute(work as *const (dyn Fn(usize) + Sync)) };
+        *shared.work.lock().expect("pass") = Some(PassWork(erased));
+        shared.running.store(self.helpers.len(), Ordering::Release);
+        shared.generation.fetch_add(1, Ordering::AcqRel);
+        {
+            let parking = shared.parking.lock().expect("parking");
+            if parking.0 > 0 {
+                shared.wake.notify_all();
+            }
+        }
+        struct WaitForHelpers<'a>(&'a TeamShared);
+        impl Drop for WaitForHelpers<'_> {
+            fn drop(&mut self) {
+                wait_until(|| self.0.running.load(Ordering::Acquire) == 0);
+                *self.0.work.lock().expect("pass") = None;
+            }
+        }
+        let waiting = WaitForHelpers(shared);
+        work(0);
+        drop(waiting);
+        if shared.panicked.swap(false, Ordering::AcqRel) {
+            panic!("a DEM helper thread panicked");
+        }
+    }
+}
+
+fn helper_loop(shared: &TeamShared, thread: usize) {
+    let mut seen = 0u64;
+    loop {
+        // Spin for the next pass, then park.
+        let started = Instant::now();
+        let mut spins = 0u32;
+        while shared.generation.load(Ordering::Acquire) == seen {
+            std::hint::spin_loop();
+            spins = spins.wrapping_add(1);
+            if spins.is_multiple_of(256) && started.elapsed() > SPIN_BEFORE_PARKING {
+                let mut parking = shared.parking.lock().expect("parking");
+                parking.0 += 1;
+                while shared.generation.load(Ordering::Acquire) == seen && !parking.1 {
+                    parking = shared.wake.wait(parking).expect("parking");
+                }
+                parking.0 -= 1;
+                if parking.1 {
+                    return;
+                }
+            }
+        }
+        seen = shared.generation.load(Ordering::Acquire);
+        if shared.parking.lock().expect("parking").1 {
+            return;
+        }
+        let pass = *shared.work.lock().expect("pass");
+        if let Some(PassWork(work)) = pass {
+            // SAFETY: `Team::run` keeps the closure alive until `running`
+            // reaches zero below.
+            let work = unsafe { &*work };
+            if std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(thread))).is_err() {
+                shared.panicked.store(true, Ordering::Release);
+            }
+        }
+        shared.running.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+impl Drop for Team {
+    fn drop(&mut self) {
+        self.shared.parking.lock().expect("parking").1 = true;
+        self.shared.generation.fetch_add(1, Ordering::AcqRel);
+        self.shared.wake.notify_all();
+        for helper in self.helpers.drain(..) {
+            let _ = helper.join();
+        }
+    }
+}
+
+impl std::fmt::Debug for Team {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Team({} threads)", self.threads())
+    }
+}
+
+/// A DEM system's team, started when first needed; a clone of the system
+/// starts its own.
+#[derive(Debug, Default)]
+pub(crate) struct LazyTeam(Option<Team>);
+
+impl Clone for LazyTeam {
+    fn clone(&self) -> Self {
+        LazyTeam(None)
+    }
+}
+
+impl LazyTeam {
+    /// The team, of `threads` threads.
+    pub(crate) fn of(&mut self, threads: usize) -> &Team {
+        if self.0.as_ref().map(Team::threads) != Some(threads) {
+            self.0 = Some(Team::new(threads));
+        }
+        self.0.as_ref().expect("just started")
+    }
+}
+
+/// Waits, spinning and then yielding, until `ready` holds; for a result
+/// that another thread of the same pass is about to publish.
+pub(crate) fn wait_until(ready: impl Fn() -> bool) {
+    let mut spins = 0u32;
+    while !ready() {
+        if spins < 1 << 14 {
+            std::hint::spin_loop();
+            spins += 1;
+        } else {
+            std::thread::yield_now();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn balanced_bounds_split_equal_costs_evenly() {
+        assert_eq!(balanced_bounds(&[1.0; 20], 2), vec![0, 10, 20]);
+        assert_eq!(balanced_bounds(&[1.0; 9], 3), vec![0, 3, 6, 9]);
+        assert_eq!(balanced_bounds(&[1.0; 5], 1), vec![0, 5]);
+    }
+
+    #[test]
+    fn balanced_bounds_follow_the_costs() {
+        // A dense base (cost 3) under a loose top (cost 1): half the total
+        // (20 of 40) falls in the 7th base chunk, nearer its end (21) than
+        // its start (18).
+        let costs: Vec<f64> = (0..20).map(|k| if k < 10 { 3.0 } else { 1.0 }).collect();
+        assert_eq!(balanced_bounds(&costs, 2), vec![0, 7, 20]);
+        // The nearer boundary: 1 + 1 + 10 = 12 of 24 — the run ends after
+        // the expensive item rather than before it.
+        assert_eq!(
+            balanced_bounds(&[1.0, 1.0, 10.0, 1.0, 11.0], 2),
+            vec![0, 3, 5]
+        );
+    }
+
+    #[test]
+    fn balanced_bounds_leave_no_run_empty() {
+        let b = balanced_bounds(&[100.0, 1.0, 1.0], 3);
+        assert_eq!(b, vec![0, 1, 2, 3]);
+        let b = balanced_bounds(&[0.0, 0.0, 0.0, 50.0], 2);
+        assert!(b[1] >= 1 && b[1] <= 3, "{b:?}");
+    }
+
+    #[test]
+    fn the_share_rebalances_only_at_a_new_build() {
+        let mut share = ThreadShare::default();
+        share.update(20 * 1024, 1024, 2, 1);
+        assert_eq!(share.chunks_of(0), 0..10);
+        for k in 0..20 {
+            share.record(k, if k < 10 { 3.0 } else { 1.0 });
+        }
+        share.update(20 * 1024, 1024, 2, 1);
+        assert_eq!(share.chunks_of(0), 0..10, "same build: unchanged");
+        share.update(20 * 1024, 1024, 2, 2);
+        assert_eq!(share.chunks_of(0), 0..7);
+        assert_eq!(share.chunks_of(1), 7..20);
+        assert_eq!(
+            share.particles_of(1, 20 * 1024 - 5),
+            7 * 1024..20 * 1024 - 5
+        );
+        // Fewer chunks than threads: one thread per chunk.
+        share.update(300, 256, 4, 3);
+        assert_eq!(share.threads(), 2);
+    }
+
+    #[test]
+    fn a_team_returns_results_in_part_order_pass_after_pass() {
+        let team = Team::new(3);
+        for pass in 0..1000 {
+            let results = team.run_parts(vec![10, 20, 30], |t, p| (t, p + pass));
+            assert_eq!(
+                results,
+                vec![(0, 10 + pass), (1, 20 + pass), (2, 30 + pass)]
+            );
+        }
+        // Fewer parts than threads, and a pass after the helpers parked.
+        std::thread::sleep(Duration::from_millis(5));
+        assert_eq!(team.run_parts(vec![5, 6], |t, p| t * 100 + p), vec![5, 106]);
+    }
+
+    #[test]
+    fn a_helper_that_panics_fails_the_pass() {
+        let team = Team::new(2);
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            team.run_parts(vec![0, 1], |t, _| assert!(t == 0, "helper fails"))
+        }));
+        assert!(outcome.is_err());
+        // The team still works afterwards.
+        assert_eq!(team.run_parts(vec![1, 2], |_, p| p * 2), vec![2, 4]);
+    }
+}
