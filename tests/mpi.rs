@@ -575,9 +575,10 @@ fn field_deviation(
 /// every side: walls across the split axes) and after the start-up of a
 /// Couette flow on a stretched grid: the velocity of every cell deviates from the serial run's by at
 /// most 1e-10 of the largest speed, and the analyses agree. The ranks of
-/// one node read one another's pencils directly; the grids marked
-/// `messages` send them instead (`parallel.shared_memory = false`, the
-/// path between nodes).
+/// one node read one another's pencils directly, and a slab along x
+/// (`[2,1,1]`, `[4,1,1]`) solves its planes across the ranks' arrays; the
+/// grids marked `messages` send pencils instead
+/// (`parallel.shared_memory = false`, the path between nodes).
 #[test]
 fn flows_on_2_and_4_ranks_match_the_serial_run() {
     let dir = tempfile::tempdir().unwrap();
@@ -621,6 +622,7 @@ interval = 0.2
             vec!["time.end=2.0", "output.interval=2.0"],
             vec![
                 "[2,1,1]",
+                "[4,1,1]",
                 "[2,2,1]",
                 "[1,4,1]",
                 "[2,1,1] messages",
@@ -632,7 +634,7 @@ interval = 0.2
         (
             cavity,
             vec!["time.end=1.0", "output.interval=1.0"],
-            vec!["[2,1,1]", "[2,2,1]"],
+            vec!["[2,1,1]", "[4,1,1]", "[2,2,1]"],
             1,
             None,
         ),

@@ -11,7 +11,10 @@
 //!
 //! Reads of another rank's array are only valid between two
 //! [`crate::Communicator::synchronize_shared`] calls during which that
-//! rank does not write it; the caller keeps to that.
+//! rank does not write it; the caller keeps to that. A rank may also write
+//! into another rank's array through [`SharedArray::segments_mut`], between
+//! two such calls, to parts that no other rank reads or writes meanwhile
+//! (the flow's slab solve writes each plane back where it came from).
 
 use std::ops::{Deref, DerefMut};
 
@@ -63,6 +66,22 @@ impl SharedArray {
             }
             #[cfg(feature = "mpi")]
             Storage::Window(window) => window.of_rank(rank),
+        }
+    }
+
+    /// The first value and the length of every rank's array, indexed by
+    /// rank (one entry, this rank's, when the array is not shared), for
+    /// reads and writes across ranks between two
+    /// [`crate::Communicator::synchronize_shared`] calls. The pointers stay
+    /// valid while the array lives; the caller keeps every part that one
+    /// rank or thread writes apart from what all others read or write
+    /// until the next synchronisation, and does not use this rank's array
+    /// through `Deref` meanwhile.
+    pub fn segments_mut(&mut self) -> Vec<(*mut f64, usize)> {
+        match &mut self.storage {
+            Storage::Local(values) => vec![(values.as_mut_ptr(), values.len())],
+            #[cfg(feature = "mpi")]
+            Storage::Window(window) => window.segments().to_vec(),
         }
     }
 
@@ -199,9 +218,16 @@ pub(crate) mod window {
             self.of_rank(self.rank)
         }
 
+        /// Every rank's segment: its first value and its length.
+        pub(crate) fn segments(&self) -> &[(*mut f64, usize)] {
+            &self.segments
+        }
+
         pub(crate) fn own_mut(&mut self) -> &mut [f64] {
             let (start, len) = self.segments[self.rank];
-            // SAFETY: this rank's segment, written by no other rank.
+            // SAFETY: this rank's segment, which other ranks write only
+            // between synchronisations that this borrow does not span
+            // (see the module's rule).
             unsafe { std::slice::from_raw_parts_mut(start, len) }
         }
 

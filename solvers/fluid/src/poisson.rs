@@ -81,8 +81,7 @@ enum LineTransforms {
 
 /// A planned direct solver for one field's unknowns and end conditions.
 pub struct DirectSolver {
-    /// The last active axis, solved by tridiagonal elimination.
-    line_axis: usize,
+    /// The ends of the last active axis, solved by tridiagonal elimination.
     line_ends: [EndKind; 2],
     /// The line operator per row, in units of the Laplacian's coefficient.
     rows: LineRows,
@@ -137,6 +136,9 @@ struct Pencils {
     y_pencils: Option<Layout>,
     x_data: SharedArray,
     y_data: SharedArray,
+    /// A slab along x on ranks that share memory: the lines solved where
+    /// they lie, no pencils (`x_data` then stays empty).
+    planes: Option<SlabPlanes>,
     /// Send and receive buffers of the all-to-all, kept between solves
     /// (allocating megabytes at every transpose costs more than moving them).
     buffers: std::cell::RefCell<(Vec<f64>, Vec<f64>)>,
@@ -215,6 +217,24 @@ impl Pencils {
             }
         }
     }
+}
+
+/// The solve of a slab split along x only (3D), on ranks that share
+/// memory, with no pencils: each rank takes the y-planes of its share of
+/// the x pencils and, plane by plane, copies the plane's x rows from every
+/// rank's array into `plane` (x fastest, then the line axis z), transforms
+/// them along x, solves the z lines of the plane's modes, transforms back
+/// and writes the rows back where they came from. Each value is read and
+/// written once per solve, and the transform and line solve work on a
+/// plane in cache; pencils copy every value out to another array and back
+/// again, and sweep it there three times more.
+struct SlabPlanes {
+    /// This rank's planes, `[first, end)` in global unknown indices along y.
+    planes: [usize; 2],
+    /// The shape of one plane: the whole x, one y, the whole z.
+    shape: [usize; 3],
+    plane: Vec<f64>,
+    lines: ModeLines,
 }
 
 /// One arrangement of a solve's unknowns among the ranks ([`Pencils`]).
@@ -504,6 +524,11 @@ impl DirectSolver {
             })
             .collect();
         let total = shape.iter().product();
+        // A slab along x whose ranks share memory solves in planes.
+        let in_planes = partition.size() > 1
+            && line_axis == 2
+            && solve_in == Arrangement::XPencils
+            && communicator.shares_memory();
         // On ranks of one node the arrays the transposes read live in shared
         // memory (every rank allocates them in the same order).
         let array = |len: usize| communicator.shared_array(len);
@@ -513,8 +538,18 @@ impl DirectSolver {
         let mut pencils = (partition.size() > 1).then(|| {
             let [physical, x_pencils, y_pencils] = layouts;
             Pencils {
-                // No array for pencils that are the ranks' own boxes.
-                x_data: if x_pencils.boxes != physical.boxes {
+                planes: in_planes.then(|| {
+                    let shape = [global_shape[0], 1, global_shape[2]];
+                    SlabPlanes {
+                        planes: x_pencils.boxes[me][1],
+                        shape,
+                        plane: vec![0.0; shape.iter().product()],
+                        lines: ModeLines::new(shape[0], shape[2], periodic_line[0]),
+                    }
+                }),
+                // No array for pencils that are the ranks' own boxes, nor
+                // for those a slab solved in planes skips.
+                x_data: if x_pencils.boxes != physical.boxes && !in_planes {
                     array(x_pencils.len(me))
                 } else {
                     SharedArray::default()
@@ -545,6 +580,12 @@ impl DirectSolver {
                         // there, else its pencils.
                         let (data, shape) = match (&mut pencils, axis) {
                             (None, _) => (&mut modes, shape),
+                            (
+                                Some(Pencils {
+                                    planes: Some(p), ..
+                                }),
+                                0,
+                            ) => (&mut p.plane, p.shape),
                             (Some(p), 0) if p.x_pencils.boxes != p.physical.boxes => {
                                 (&mut p.x_data, p.x_pencils.shape(me))
                             }
@@ -564,7 +605,6 @@ impl DirectSolver {
             TransformBackend::Fftw => unreachable!("refused above"),
         };
         Ok(DirectSolver {
-            line_axis,
             line_ends,
             rows,
             block,
@@ -572,7 +612,12 @@ impl DirectSolver {
             transforms,
             modal,
             modes,
-            lines: ModeLines::new(mode_count, shape[line_axis], periodic_line[0]),
+            // Planes bring their own work arrays, one plane's worth.
+            lines: ModeLines::new(
+                if in_planes { 0 } else { mode_count },
+                shape[line_axis],
+                periodic_line[0],
+            ),
             pencils,
         })
     }
@@ -598,9 +643,19 @@ impl DirectSolver {
     /// Solves `(identity I + laplacian L) x = r` in place.
     pub fn solve(&mut self, grid: &Grid, field: &mut [f64], identity: f64, laplacian: f64) {
         self.gather(grid, field);
-        self.transform(Direction::Forward);
-        self.solve_lines(identity, laplacian);
-        self.transform(Direction::Backward);
+        if matches!(
+            &self.pencils,
+            Some(Pencils {
+                planes: Some(_),
+                ..
+            })
+        ) {
+            self.solve_in_planes(identity, laplacian);
+        } else {
+            self.transform(Direction::Forward);
+            self.solve_lines(identity, laplacian);
+            self.transform(Direction::Backward);
+        }
         self.scatter(grid, field);
     }
 
@@ -735,42 +790,87 @@ impl DirectSolver {
     /// modes swept together: at each row the modes are contiguous, so the
     /// elimination runs over flat arrays.
     fn solve_lines(&mut self, identity: f64, laplacian: f64) {
-        let length = self.shape[self.line_axis];
         let modes = match &mut self.pencils {
             Some(p) if p.solve_in == Arrangement::XPencils => &mut p.x_data,
             Some(p) if p.solve_in == Arrangement::YPencils => &mut p.y_data,
             _ => &mut self.modes,
         };
-        let work = &mut self.lines;
-        self.rows.scaled(laplacian, &mut work.rows);
-        let periodic = self.line_ends[0] == EndKind::Periodic;
-        let singular = identity == 0.0
-            && self.modal[0] == 0.0
-            && self
-                .line_ends
-                .iter()
-                .all(|&kind| matches!(kind, EndKind::Periodic | EndKind::Neumann));
-        for (m, &modal) in self.modal.iter().enumerate() {
-            work.base[m] = identity + laplacian * modal;
-        }
-        if singular {
-            // Set the singular mode aside; it is swept as the identity.
-            work.singular_line.clear();
-            work.singular_line
-                .extend((0..length).map(|j| modes[j * self.modal.len()]));
-        }
-        if periodic {
-            work.solve_cyclic(modes, length, singular);
-        } else {
-            work.sweep(modes, length, singular);
-        }
-        if singular {
-            let line = work.solve_singular(length, &self.rows.width);
-            let stride = self.modal.len();
-            for (j, value) in line.iter().enumerate() {
-                modes[j * stride] = *value;
+        self.lines.solve(
+            modes,
+            &self.modal,
+            &self.rows,
+            self.line_ends,
+            identity,
+            laplacian,
+        );
+    }
+
+    /// The transforms and line solves of [`DirectSolver::solve`] on a slab
+    /// split along x whose ranks share memory ([`SlabPlanes`]): y
+    /// transformed in the ranks' own boxes, then, once every rank has done
+    /// so, x and the lines plane by plane across all the ranks' arrays,
+    /// and y back once every rank has written its planes.
+    fn solve_in_planes(&mut self, identity: f64, laplacian: f64) {
+        let pencils = self.pencils.as_mut().expect("several ranks");
+        let planes = pencils.planes.as_mut().expect("a slab solved in planes");
+        let communicator = &pencils.communicator;
+        let boxes = &pencils.physical.boxes;
+        let own_shape = pencils.physical.shape(communicator.rank());
+        let transforms = &mut self.transforms;
+        let mut apply = |axis: usize, data: &mut [f64], shape: [usize; 3], direction: Direction| {
+            match transforms {
+                LineTransforms::Rust(t) => t[axis].apply_along(data, shape, axis, direction),
+                #[cfg(feature = "fftw")]
+                LineTransforms::Fftw(t) => t[axis].apply(data, direction),
             }
+        };
+        apply(1, &mut self.modes, own_shape, Direction::Forward);
+        communicator.synchronize_shared(&[&self.modes]);
+        let segments = self.modes.segments_mut();
+        debug_assert_eq!(segments.len(), boxes.len());
+        let [length_x, _, length_z] = planes.shape;
+        // Visits the x rows of plane `y` in every rank's array: the rank's
+        // first value of the row, the row's offset in the plane, its length.
+        let rows_of = |y: usize, visit: &mut dyn FnMut(*mut f64, usize, usize)| {
+            for (whole, &(start, len)) in boxes.iter().zip(&segments) {
+                let width = whole[0][1] - whole[0][0];
+                for z in 0..length_z {
+                    let from = flat_index(whole, [whole[0][0], y, whole[2][0] + z]);
+                    assert!(from + width <= len, "a row inside the rank's array");
+                    // SAFETY: within the segment (checked above).
+                    visit(
+                        unsafe { start.add(from) },
+                        whole[0][0] + z * length_x,
+                        width,
+                    );
+                }
+            }
+        };
+        for y in planes.planes[0]..planes.planes[1] {
+            let plane = &mut planes.plane;
+            // SAFETY (both copies): the rows of plane `y` belong to this
+            // rank's planes, which no other rank reads or writes between
+            // the two synchronisations, and `plane` is this rank's own.
+            rows_of(y, &mut |row, at, width| unsafe {
+                std::ptr::copy_nonoverlapping(row, plane[at..at + width].as_mut_ptr(), width)
+            });
+            apply(0, plane, planes.shape, Direction::Forward);
+            let first = (y - planes.planes[0]) * length_x;
+            planes.lines.solve(
+                plane,
+                &self.modal[first..first + length_x],
+                &self.rows,
+                self.line_ends,
+                identity,
+                laplacian,
+            );
+            apply(0, plane, planes.shape, Direction::Backward);
+            rows_of(y, &mut |row, at, width| unsafe {
+                std::ptr::copy_nonoverlapping(plane[at..at + width].as_ptr(), row, width)
+            });
         }
+        communicator.synchronize_shared(&[&self.modes]);
+        apply(1, &mut self.modes, own_shape, Direction::Backward);
     }
 }
 
@@ -893,6 +993,53 @@ impl ModeLines {
                 Vec::new()
             },
             singular_line: Vec::with_capacity(length),
+        }
+    }
+
+    /// Solves the lines of every mode of `values` (row `j` of mode `m` at
+    /// `m + j · modes`, `modes = modal.len()`):
+    /// `(identity + laplacian Σλ_m) x + laplacian L_line x = r`, with
+    /// `Σλ_m` in `modal` and `line` the line operator `L_line`, closed by
+    /// `ends`. The one singular mode of a pure Neumann or periodic Poisson
+    /// problem (`Σλ = 0`) is solved apart ([`ModeLines::solve_singular`]).
+    fn solve(
+        &mut self,
+        values: &mut [f64],
+        modal: &[f64],
+        line: &LineRows,
+        ends: [EndKind; 2],
+        identity: f64,
+        laplacian: f64,
+    ) {
+        let length = line.shift.len();
+        let stride = modal.len();
+        debug_assert_eq!(values.len(), stride * length);
+        line.scaled(laplacian, &mut self.rows);
+        let periodic = ends[0] == EndKind::Periodic;
+        let singular = identity == 0.0
+            && modal[0] == 0.0
+            && ends
+                .iter()
+                .all(|&kind| matches!(kind, EndKind::Periodic | EndKind::Neumann));
+        for (base, &modal) in self.base.iter_mut().zip(modal) {
+            *base = identity + laplacian * modal;
+        }
+        if singular {
+            // Set the singular mode aside; it is swept as the identity.
+            self.singular_line.clear();
+            self.singular_line
+                .extend((0..length).map(|j| values[j * stride]));
+        }
+        if periodic {
+            self.solve_cyclic(values, length, singular);
+        } else {
+            self.sweep(values, length, singular);
+        }
+        if singular {
+            let solution = self.solve_singular(length, &line.width);
+            for (j, value) in solution.iter().enumerate() {
+                values[j * stride] = *value;
+            }
         }
     }
 
