@@ -29,7 +29,8 @@
 //! the cells ([`partition`]: x, and y in 3D, split; the last axis whole),
 //! ghosts across shared faces come from the neighbours, and the direct
 //! solvers run through pencil transposes (one all-to-all per change of
-//! arrangement).
+//! arrangement), or, for a 3D slab along x whose ranks share memory,
+//! plane by plane across the ranks' arrays with no transposes.
 //!
 //! Limits of this version, each refused or stated where it applies: the
 //! last axis is never split among ranks; uniform spacing except along the

@@ -578,8 +578,9 @@ impl DirectSolver {
                         // Each axis is planned on the array it transforms:
                         // the ranks' own boxes where its lines are whole
                         // there, else its pencils.
-                        let (data, shape) = match (&mut pencils, axis) {
+                        let (data, shape): (&mut [f64], _) = match (&mut pencils, axis) {
                             (None, _) => (&mut modes, shape),
+                            // A slab solved in planes: x on one plane.
                             (
                                 Some(Pencils {
                                     planes: Some(p), ..
