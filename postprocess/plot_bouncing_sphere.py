@@ -6,13 +6,18 @@ reference band of ../shared/reference/bouncing_e_over_emax_fit_curves.csv
 not data points: Legendre's exp(-35/St) and the thin-film 1 - 10/St).
 
 Filled markers: the rebound's peak read after every stage; crosses: the
-same runs read at the ends of fluid steps only.
+same runs read at the ends of fluid steps only. Dash-dotted: the answer of
+the lubrication film alone (eq. 19 from gap R/2 in to contact and out
+again, the contact returning e_n), 1 - (1 + 1/e_n) ln(1 + R/(2 eta)) / St,
+with e_n and eta of cases/bouncing_sphere.toml.
 
 usage: postprocess/plot_bouncing_sphere.py [CSV] [PNG] [REFERENCE_CSV]
 """
 import csv
+import math
 import os
 import sys
+import tomllib
 
 import matplotlib
 
@@ -36,6 +41,13 @@ if os.path.exists(reference):
                     color="0.85", label="exp(−35/St) ± 0.1 (experiments' spread)")
     ax.plot(st, legendre, "k-", lw=1)
     ax.plot(st, film, "k:", lw=1, label="1 − 10/St")
+case = tomllib.load(open(os.path.join(root, "cases/bouncing_sphere.toml"), "rb"))
+e_n = case["contact"]["restitution"]
+eta = case["lubrication"]["roughness"]
+film_critical = (1.0 + 1.0 / e_n) * math.log(1.0 + 0.5 / eta)
+st = [10 ** (k / 20) for k in range(0, 81)]
+ax.plot(st, [max(0.0, 1.0 - film_critical / s) for s in st], "-.", color="tab:red", lw=1,
+        label=f"film alone (eq. 19, η/R = {eta:g}): 1 − {film_critical:.1f}/St")
 runs = [r for r in csv.DictReader(open(source)) if r["status"] == "ok" and r["stokes"]]
 markers = {"8": "o", "12": "s", "16": "D", "24": "^"}
 for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
@@ -58,6 +70,19 @@ for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
                          for r in group]
             ax.plot(stokes, step_ends, "x", color=line.get_color(), alpha=0.6,
                     label="  same, read at step ends only")
+# The roughness study (scripts/bouncing_sphere_sweep.py --roughness), if run.
+study = os.path.join(os.path.dirname(source), "bouncing_sphere_roughness.csv")
+if os.path.exists(study):
+    rows = sorted((r for r in csv.DictReader(open(study)) if r["status"] == "ok"),
+                  key=lambda r: float(r["stokes"]))
+    for roughness in sorted({r["roughness"] for r in rows}):
+        group = [r for r in rows if r["roughness"] == roughness]
+        critical = (1.0 + 1.0 / e_n) * math.log(1.0 + 0.5 / float(roughness))
+        line, = ax.plot([float(r["stokes"]) for r in group],
+                        [float(r["restitution_ratio"]) for r in group], "v-", lw=0.8,
+                        label=f"grainflow, D/Δx = {group[0]['cells_per_diameter']}, η/R = {roughness}")
+        ax.plot(st, [max(0.0, 1.0 - critical / s) for s in st], "-.", lw=0.8,
+                color=line.get_color(), label=f"film alone, η/R = {roughness}: 1 − {critical:.1f}/St")
 ax.set_xscale("log")
 ax.set_xlabel("St = (ρp + ρ/2) V_T D / (9 μ)")
 ax.set_ylabel("e / e_n")
