@@ -970,6 +970,7 @@ impl DemSystem {
             let mut non_finite = false;
             let mut seconds = Vec::with_capacity(run.len());
             let mut waiting = Vec::new();
+            let first_chunk = share.chunks_of(thread).start;
             for (chunk, mut arrays) in share.chunks_of(thread).zip(run) {
                 let start = Instant::now();
                 let (overlap, walls, chunk_listed) = evaluate(chunk, &mut arrays);
@@ -985,10 +986,13 @@ impl DemSystem {
                 seconds.push(start.elapsed().as_secs_f64());
             }
             // The first chunks of a run receive from the end of the run
-            // before it, which that thread publishes last.
+            // before it, which that thread publishes last. Their intake and
+            // kick count in their chunk's time (the wait does not): left
+            // out, they would load the later runs beyond the balance.
             for (chunk, arrays) in waiting {
                 let sources = first_sources[chunk]..chunk;
                 wait_until(|| all_published(sources.clone(), &handovers));
+                let start = Instant::now();
                 listed += receive_handovers(
                     chunk,
                     chunk_len,
@@ -1000,6 +1004,7 @@ impl DemSystem {
                 )
                 .expect("every source has published its list");
                 non_finite |= kick(chunk, arrays.forces, arrays.torques);
+                seconds[chunk - first_chunk] += start.elapsed().as_secs_f64();
             }
             (max_overlap, wall_contacts, listed, non_finite, seconds)
         });
