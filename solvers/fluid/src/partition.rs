@@ -142,11 +142,13 @@ impl Partition {
 
 /// The process grid of a flow on `size` ranks: among the splits of x (2D)
 /// or of x and y (3D) whose ranks hold at least two cells along each split
-/// axis, the one with the least area of cuts between ranks.
+/// axis, the one with the least area of cuts between ranks; among equal
+/// areas, the one with more ranks along x (a slab along x on one node
+/// solves without transposes, `poisson`).
 pub fn flow_process_grid(global: &Grid, size: usize) -> Result<[usize; 3], FluidError> {
     let line = global.line_axis();
     let mut best: Option<(f64, [usize; 3])> = None;
-    for nx in (1..=size).filter(|&n| size.is_multiple_of(n)) {
+    for nx in (1..=size).rev().filter(|&n| size.is_multiple_of(n)) {
         let ny = size / nx;
         if line == 1 && ny > 1 {
             continue;
@@ -170,4 +172,32 @@ pub fn flow_process_grid(global: &Grid, size: usize) -> Result<[usize; 3], Fluid
             if line == 2 { ", y" } else { "" }
         ))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use grainflow_core::Dimension;
+
+    #[test]
+    fn the_flow_process_grid_cuts_least_and_prefers_x_among_equals() {
+        let grid = |cells: [usize; 3]| Grid::new(Dimension::Three, cells, [0.0; 3], [1.0; 3]);
+        // A cube on 2 ranks: either cut has the same area; x is taken.
+        assert_eq!(
+            flow_process_grid(&grid([32, 32, 32]), 2).unwrap(),
+            [2, 1, 1]
+        );
+        // Longer along y: the cut across y is the smaller one.
+        assert_eq!(
+            flow_process_grid(&grid([32, 64, 32]), 2).unwrap(),
+            [1, 2, 1]
+        );
+        // 4 ranks on a cube: two cuts of area 32² beat three.
+        assert_eq!(
+            flow_process_grid(&grid([32, 32, 32]), 4).unwrap(),
+            [2, 2, 1]
+        );
+        // Thin along x: cuts across y are the smallest.
+        assert_eq!(flow_process_grid(&grid([4, 32, 32]), 4).unwrap(), [1, 4, 1]);
+    }
 }
