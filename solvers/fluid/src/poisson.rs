@@ -226,8 +226,9 @@ impl Pencils {
 /// them along x, solves the z lines of the plane's modes, transforms back
 /// and writes the rows back where they came from. Each value is read and
 /// written once per solve, and the transform and line solve work on a
-/// plane in cache; pencils copy every value out to another array and back
-/// again, and sweep it there three times more.
+/// plane in cache; through pencils every value is copied into another
+/// array and back, and the transform and the line solve each sweep that
+/// array through memory.
 struct SlabPlanes {
     /// This rank's planes, `[first, end)` in global unknown indices along y.
     planes: [usize; 2],
