@@ -19,10 +19,12 @@
 //! Unlike the pure-Rust path, which gathers each strided line into a
 //! buffer, one FFTW "guru" plan covers every line along an axis of the
 //! solver's modal array in place, strides included. FFTW's planner is not
-//! thread-safe: plans are made and destroyed under one lock. Executing a
-//! plan is: the batch is split along its outermost dimension into one plan
-//! per thread of the pool the solver is planned in, each line transformed
-//! alone, so the result does not depend on the number of threads.
+//! thread-safe: plans are made and destroyed under one lock. The batch is
+//! split along its outermost dimension into a fixed number of parts
+//! ([`PARTS`] at most), each planned once and run on whichever thread of the
+//! pool takes it. The parts do not follow the number of threads: FFTW may
+//! choose another algorithm, with other rounding, for another batch size,
+//! and a split per thread made the bits of a run depend on the threads.
 
 use std::sync::Mutex;
 
@@ -56,6 +58,11 @@ impl Drop for ChunkPlan {
     }
 }
 
+/// The parts a batch of lines is planned in when it is transformed on a
+/// pool of threads: enough for the cores of a node, the same for any
+/// number of threads.
+pub const PARTS: usize = 16;
+
 /// The forward and backward transforms of every line along one axis of a
 /// flat array of a given shape (x fastest), planned in place on that array.
 pub struct BatchTransform {
@@ -67,8 +74,16 @@ pub struct BatchTransform {
 
 impl BatchTransform {
     /// Plans the transforms of `kind` along `axis` of `data`, whose shape
-    /// is `shape`. Planning measures (FFTW_MEASURE) and overwrites `data`.
-    pub fn new(kind: TransformKind, data: &mut [f64], shape: [usize; 3], axis: usize) -> Self {
+    /// is `shape`, in `parts` parts along the outermost dimension (at most
+    /// one per outer index). Planning measures (FFTW_MEASURE) and
+    /// overwrites `data`.
+    pub fn new(
+        kind: TransformKind,
+        data: &mut [f64],
+        shape: [usize; 3],
+        axis: usize,
+        parts: usize,
+    ) -> Self {
         assert_eq!(data.len(), shape.iter().product::<usize>());
         let len = shape[axis];
         let (forward_kind, backward_kind, round_trip) = match kind {
@@ -96,7 +111,7 @@ impl BatchTransform {
         let inner: usize = shape[..axis].iter().product();
         let outer: usize = shape[axis + 1..].iter().product();
         let block = inner * len;
-        let chunks = rayon::current_num_threads().clamp(1, outer.max(1));
+        let chunks = parts.clamp(1, outer.max(1));
         let plans = |fftw_kind: ffi::fftw_r2r_kind, data: &mut [f64]| {
             (0..chunks)
                 .filter_map(|chunk| {

@@ -579,15 +579,20 @@ impl DirectSolver {
                         // Each axis is planned on the array it transforms:
                         // the ranks' own boxes where its lines are whole
                         // there, else its pencils.
+                        let mut parts = crate::fftw::PARTS;
                         let (data, shape): (&mut [f64], _) = match (&mut pencils, axis) {
                             (None, _) => (&mut modes, shape),
-                            // A slab solved in planes: x on one plane.
+                            // A slab solved in planes: x on one plane, in
+                            // one part (the planes come one after another).
                             (
                                 Some(Pencils {
                                     planes: Some(p), ..
                                 }),
                                 0,
-                            ) => (&mut p.plane, p.shape),
+                            ) => {
+                                parts = 1;
+                                (&mut p.plane, p.shape)
+                            }
                             (Some(p), 0) if p.x_pencils.boxes != p.physical.boxes => {
                                 (&mut p.x_data, p.x_pencils.shape(me))
                             }
@@ -599,7 +604,7 @@ impl DirectSolver {
                             }
                             (Some(_), _) => (&mut modes, shape),
                         };
-                        crate::fftw::BatchTransform::new(transform.kind(), data, shape, axis)
+                        crate::fftw::BatchTransform::new(transform.kind(), data, shape, axis, parts)
                     })
                     .collect(),
             ),
