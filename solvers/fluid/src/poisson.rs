@@ -79,6 +79,21 @@ enum LineTransforms {
     Fftw(Vec<crate::fftw::BatchTransform>),
 }
 
+impl LineTransforms {
+    /// Transforms every line along `axis` of `data` (of `shape`; for FFTW
+    /// the array the axis was planned on).
+    fn apply(&mut self, axis: usize, data: &mut [f64], shape: [usize; 3], direction: Direction) {
+        match self {
+            LineTransforms::Rust(t) => t[axis].apply_along(data, shape, axis, direction),
+            #[cfg(feature = "fftw")]
+            LineTransforms::Fftw(t) => {
+                let _ = shape;
+                t[axis].apply(data, direction)
+            }
+        }
+    }
+}
+
 /// A planned direct solver for one field's unknowns and end conditions.
 pub struct DirectSolver {
     /// The ends of the last active axis, solved by tridiagonal elimination.
@@ -707,10 +722,8 @@ impl DirectSolver {
         let pencils = self.pencils.as_ref().expect("several ranks");
         let (physical, x_pencils) = (&pencils.physical, &pencils.x_pencils);
         let transforms = &mut self.transforms;
-        let mut apply = |axis: usize, data: &mut [f64], shape: [usize; 3]| match transforms {
-            LineTransforms::Rust(t) => t[axis].apply_along(data, shape, axis, direction),
-            #[cfg(feature = "fftw")]
-            LineTransforms::Fftw(t) => t[axis].apply(data, direction),
+        let mut apply = |axis: usize, data: &mut [f64], shape: [usize; 3]| {
+            transforms.apply(axis, data, shape, direction)
         };
         // A slab: `own` transformed in the ranks' boxes, `along` in the
         // pencils `layout` (holding `data`), the lines solved there or back
@@ -824,12 +837,8 @@ impl DirectSolver {
         let boxes = &pencils.physical.boxes;
         let own_shape = pencils.physical.shape(communicator.rank());
         let transforms = &mut self.transforms;
-        let mut apply = |axis: usize, data: &mut [f64], shape: [usize; 3], direction: Direction| {
-            match transforms {
-                LineTransforms::Rust(t) => t[axis].apply_along(data, shape, axis, direction),
-                #[cfg(feature = "fftw")]
-                LineTransforms::Fftw(t) => t[axis].apply(data, direction),
-            }
+        let mut apply = |axis: usize, data: &mut [f64], shape: [usize; 3], direction| {
+            transforms.apply(axis, data, shape, direction)
         };
         apply(1, &mut self.modes, own_shape, Direction::Forward);
         communicator.synchronize_shared(&[&self.modes]);
