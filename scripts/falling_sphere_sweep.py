@@ -10,7 +10,10 @@ Schiller-Naumann) and the cost (wall seconds, seconds per step).
 
 Each --run is D/dx : box width / D : box height / D : dt factor, where the
 dt factor multiplies the paper's dt (g/D)^1/2 = 0.04 scaled to D/dx = 20,
-so that the CFL number stays the same across resolutions.
+so that the CFL number stays the same across resolutions. An optional fifth
+field sets coupling.forcing_step to that factor times the same scaled step
+(the forcing relaxes the transition layer as at that step, whatever dt);
+a sixth, time.cfl.
 """
 import argparse
 import csv
@@ -24,11 +27,12 @@ G = 9.81
 PAPER_DT = 0.04 * (D / G) ** 0.5  # at D/dx = 20
 
 
-def run(binary, cells_per_d, width, height, dt_factor, end, workdir):
+def run(binary, cells_per_d, width, height, dt_factor, end, workdir, forcing_factor=None,
+        cfl=None):
     n_lateral = round(width * cells_per_d)
     n_vertical = round(height * cells_per_d)
     dt = PAPER_DT * 20.0 / cells_per_d * dt_factor
-    name = f"fs_{cells_per_d}_{width}_{height}_{dt_factor}"
+    name = f"fs_{cells_per_d}_{width}_{height}_{dt_factor}_{forcing_factor}_{cfl}"
     out = os.path.join(workdir, name)
     sets = [
         f"fluid.cells=[{n_lateral},{n_lateral},{n_vertical}]",
@@ -39,6 +43,12 @@ def run(binary, cells_per_d, width, height, dt_factor, end, workdir):
         "output.interval=0.05",
         f"output.tracked_interval={dt}",
     ]
+    forcing_step = None
+    if forcing_factor is not None:
+        forcing_step = PAPER_DT * 20.0 / cells_per_d * forcing_factor
+        sets.append(f"coupling.forcing_step={forcing_step}")
+    if cfl is not None:
+        sets.append(f"time.cfl={cfl}")
     command = [binary, "run", "cases/falling_sphere.toml", "--out", out]
     for s in sets:
         command += ["--set", s]
@@ -49,6 +59,8 @@ def run(binary, cells_per_d, width, height, dt_factor, end, workdir):
         "box_height_over_d": height,
         "dt": dt,
         "dt_sqrt_g_over_d": dt / (D / G) ** 0.5,
+        "forcing_step": forcing_step or "",
+        "cfl": cfl or "",
     }
     if finished.returncode != 0:
         # A refused or unstable run: its log says why.
@@ -65,6 +77,8 @@ def run(binary, cells_per_d, width, height, dt_factor, end, workdir):
         "box_height_over_d": height,
         "dt": dt,
         "dt_sqrt_g_over_d": dt / (D / G) ** 0.5,
+        "forcing_step": forcing_step or "",
+        "cfl": cfl or "",
         "cells": summary["cells"],
         "steps": summary["steps"],
         "initial_acceleration": m.get("initial_acceleration", ""),
@@ -87,7 +101,7 @@ def run(binary, cells_per_d, width, height, dt_factor, end, workdir):
 
 FIELDS = [
     "status", "cells_per_diameter", "box_width_over_d", "box_height_over_d", "dt",
-    "dt_sqrt_g_over_d", "cells", "steps", "initial_acceleration", "initial_acceleration_error",
+    "dt_sqrt_g_over_d", "forcing_step", "cfl", "cells", "steps", "initial_acceleration", "initial_acceleration_error",
     "terminal_velocity", "terminal_reynolds", "schiller_naumann_reynolds",
     "terminal_reynolds_error", "terminal_drift", "wall_seconds", "seconds_per_step",
     "seconds_flow", "seconds_forcing", "seconds_loads", "seconds_dem", "threads", "tracked",
@@ -107,9 +121,12 @@ def main():
     with open(args.out, "a", newline="") as f:
         writer = None
         for spec in args.run:
-            cells, width, height, factor = spec.split(":")
+            fields = spec.split(":")
+            cells, width, height, factor = fields[:4]
+            forcing = float(fields[4]) if len(fields) > 4 and fields[4] else None
+            cfl = float(fields[5]) if len(fields) > 5 and fields[5] else None
             row = run(args.binary, int(cells), float(width), float(height), float(factor),
-                      args.end, args.workdir)
+                      args.end, args.workdir, forcing, cfl)
             rows.append(row)
             if writer is None:
                 writer = csv.DictWriter(f, fieldnames=FIELDS, restval="")

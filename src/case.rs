@@ -491,6 +491,13 @@ pub struct CouplingSection {
     /// (each other or a wall); 0, the paper's choice, unless set.
     #[serde(default = "default_contact_gap")]
     pub contact_gap: f64,
+    /// The step [s] at which the direct forcing relaxes each grain's
+    /// transition layer as eq. 7 does; with it, the layer is relaxed at
+    /// the same rate whatever the fluid step (`1 − (1 − α)^{Δt/forcing_step}`
+    /// per stage), so a grain's apparent size does not change when the
+    /// step does. Unset: eq. 7 at every step.
+    #[serde(default)]
+    pub forcing_step: Option<f64>,
 }
 
 impl Default for CouplingSection {
@@ -498,6 +505,7 @@ impl Default for CouplingSection {
         CouplingSection {
             formulation: default_formulation(),
             contact_gap: default_contact_gap(),
+            forcing_step: None,
         }
     }
 }
@@ -1628,6 +1636,9 @@ impl Case {
                     c.contact_gap,
                     "allowed: 0 ≤ contact_gap ≤ 3 (fluid cells)",
                 ));
+            }
+            if let Some(step) = c.forcing_step {
+                positive("coupling.forcing_step", step)?;
             }
         }
         if let Some(l) = &self.lubrication {

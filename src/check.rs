@@ -406,6 +406,18 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
             let _ = writeln!(out, "  no lubrication ([lubrication] absent)");
         }
     }
+    match system.immersed.forcing_step {
+        Some(step) => {
+            let _ = writeln!(
+                out,
+                "  direct forcing: the transition layer relaxed as eq. 7 does at a step of \
+                 {step:.4e} s, whatever the fluid step (coupling.forcing_step)"
+            );
+        }
+        None => {
+            let _ = writeln!(out, "  direct forcing: eq. 7 at every stage");
+        }
+    }
     let h = grid.spacing[..dim]
         .iter()
         .copied()
@@ -453,7 +465,8 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
                 dt / (diameter / g).sqrt(),
                 velocity * dt / h
             );
-            if let Some(w) = coupled_simulation::forcing_step_warning(velocity * dt / h) {
+            let layer_step = system.immersed.forcing_step.unwrap_or(dt);
+            if let Some(w) = coupled_simulation::forcing_step_warning(velocity * layer_step / h) {
                 let _ = writeln!(out, "{w}");
             }
         }

@@ -57,7 +57,8 @@ pub fn build_on(case: &Case, communicator: Communicator) -> Result<(CoupledSyste
         _ => Coupling::InnerFluidMomentum,
     };
     let density = case.fluid_section().density;
-    let system = CoupledSystem::new(flow, dem, density, coupling, ratio * contact_time);
+    let mut system = CoupledSystem::new(flow, dem, density, coupling, ratio * contact_time);
+    system.immersed.forcing_step = case.coupling.as_ref().and_then(|c| c.forcing_step);
     Ok((system, contact_time))
 }
 
@@ -119,16 +120,18 @@ pub fn check_dem_substep(
 /// CFL 1 and 12 % slow at 0.5 (docs/validation.md, §7).
 const FORCING_CFL_WARNING: f64 = 0.6;
 
-/// The warning for a fluid step short against the time a grain takes to
-/// cross a cell (`cfl` = U Δt / Δx: at the settling velocity in `check`,
-/// the run's mean over the steps in which grains move in `run`).
+/// The warning for a forcing step short against the time a grain takes to
+/// cross a cell (`cfl` = U Δt / Δx, with `coupling.forcing_step` for Δt
+/// where it is set: at the settling velocity in `check`, the run's mean
+/// over the steps in which grains move in `run`).
 pub fn forcing_step_warning(cfl: f64) -> Option<String> {
     (cfl < FORCING_CFL_WARNING).then(|| {
         format!(
             "warning: the grains' CFL number (speed Δt/Δx) is {cfl:.2}: the direct forcing \
              drags the transition layer along at every stage, so the shorter the step the \
              larger the grain looks (about 8 % slower settling from CFL 1 to 0.5 at D/Δx = 8); \
-             the forcing is calibrated near CFL 1 (a larger time.dt, or time.cfl ≈ 1)"
+             the forcing is calibrated near CFL 1 (a larger time.dt, time.cfl ≈ 1, or \
+             coupling.forcing_step = Δx/U)"
         )
     })
 }
@@ -295,7 +298,8 @@ pub fn run(
         steps += 1;
         let speed = system.dem.max_speed();
         if speed > 0.0 {
-            grain_cfl_sum += speed * step_dt / h;
+            let layer_step = system.immersed.forcing_step.unwrap_or(step_dt);
+            grain_cfl_sum += speed * layer_step / h;
             moving_steps += 1;
         }
         analysis.after_step(&system, step_dt, &last_report);

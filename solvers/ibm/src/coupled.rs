@@ -200,9 +200,13 @@ impl CoupledSystem {
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);
-            let forcing =
-                self.immersed
-                    .apply(&self.flow.grid, &mut self.flow.velocity, &bodies, stage_dt);
+            let forcing = self.immersed.apply(
+                &self.flow.grid,
+                &mut self.flow.velocity,
+                &bodies,
+                stage_dt,
+                dt,
+            );
             let forcing = forcing.summed_on_owners(&self.dem);
             let clock = self.lap(clock, Part::Forcing);
             max_divergence = max_divergence.max(self.flow.project(stage, dt));

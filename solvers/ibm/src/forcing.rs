@@ -142,6 +142,10 @@ pub struct Bodies {
 pub struct ImmersedBoundaries {
     /// `Δ` of eq. 8.
     pub width: f64,
+    /// The step `Δt_f` at which the forcing relaxes the transition layer
+    /// as eq. 7 does; `None`: at every step (the paper's forcing). See
+    /// [`ImmersedBoundaries::apply`].
+    pub forcing_step: Option<f64>,
     dimension: Dimension,
     /// `Σ_p α_p` on the faces of each component (zero outside the stencils
     /// between stages).
@@ -163,6 +167,7 @@ impl ImmersedBoundaries {
         );
         ImmersedBoundaries {
             width: transition_width(&grid.spacing[..dim]),
+            forcing_step: None,
             dimension: grid.dimension,
             total_fraction: (0..dim).map(|_| grid.zeros()).collect(),
             solid_velocity: (0..dim).map(|_| grid.zeros()).collect(),
@@ -206,19 +211,40 @@ impl ImmersedBoundaries {
         self.gather(bodies, &per_body)
     }
 
-    /// Applies the direct forcing of a stage of length `stage_dt` to the
-    /// predicted velocity and returns the loads on each local particle
-    /// from this rank's faces, per unit fluid density (eq. 5–7 without the
-    /// density factors).
+    /// Applies the direct forcing of a stage of length `stage_dt` of a step
+    /// `step_dt` to the predicted velocity and returns the loads on each
+    /// local particle from this rank's faces, per unit fluid density
+    /// (eq. 5–7 without the density factors).
+    ///
+    /// Eq. 7 moves a face of solid fraction `α` the fraction `α` of the
+    /// way to the rigid velocity at every stage: over a time `t` the
+    /// transition layer is relaxed by `(1 − α)^{3 t/Δt}`, faster the shorter
+    /// the step, and the grain looks larger. With a forcing step `Δt_f`
+    /// each stage uses instead
+    ///
+    /// ```text
+    /// β = 1 − (1 − α)^{Δt/Δt_f}
+    /// ```
+    ///
+    /// which is eq. 7 at `Δt = Δt_f` and relaxes the layer at the rate
+    /// `−3 ln(1 − α)/Δt_f` whatever the step; the flow's own renewal of
+    /// the layer (advection, diffusion) is also proportional to the step,
+    /// so the grain's apparent size no longer depends on it. Where `α = 1`
+    /// `β = 1`: the inside of the grain moves rigidly at every stage.
     pub fn apply(
         &mut self,
         grid: &Grid,
         velocity: &mut [Vec<f64>],
         bodies: &Bodies,
         stage_dt: f64,
+        step_dt: f64,
     ) -> Loads {
         let dim = grid.dim();
         let volume = grid.cell_volume();
+        let exponent = self
+            .forcing_step
+            .map_or(1.0, |reference| step_dt / reference);
+        let forced = |alpha: f64| forced_fraction(alpha, exponent);
 
         // 1. Fractions and rigid velocities of all bodies on the faces. The
         // planes of the slowest axis are shared among threads; each face
@@ -249,8 +275,9 @@ impl ImmersedBoundaries {
                         component,
                         layer..layer + 1,
                         |index, r, alpha| {
-                            total[index - first] += alpha;
-                            target[index - first] += alpha * body.velocity_at(&r)[component];
+                            let beta = forced(alpha);
+                            total[index - first] += beta;
+                            target[index - first] += beta * body.velocity_at(&r)[component];
                         },
                     );
                 }
@@ -281,7 +308,7 @@ impl ImmersedBoundaries {
             .map(|body| {
                 // The particle receives −f: the opposite of what it gives.
                 moments(grid, body, |component, index, r, alpha| {
-                    let weight = alpha / total[component][index].max(1.0);
+                    let weight = forced(alpha) / total[component][index].max(1.0);
                     let slip = body.velocity_at(&r)[component] - velocity[component][index];
                     -weight * slip / stage_dt * volume
                 })
@@ -407,6 +434,17 @@ impl ImmersedBoundaries {
             }
         }
         loads
+    }
+}
+
+/// The fraction `1 − (1 − α)^exponent` of the way to the rigid velocity
+/// that a stage moves a face of solid fraction `α` (eq. 7 at exponent 1).
+#[inline]
+fn forced_fraction(alpha: f64, exponent: f64) -> f64 {
+    if exponent == 1.0 || alpha >= 1.0 {
+        alpha.min(1.0)
+    } else {
+        -(exponent * (-alpha).ln_1p()).exp_m1()
     }
 }
 
