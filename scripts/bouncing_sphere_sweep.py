@@ -22,14 +22,14 @@ import sys
 FIELDS = [
     "status", "viscosity", "lubrication", "cells_per_diameter", "dt", "cfl", "stokes", "reynolds",
     "approach_velocity", "rebound_velocity", "rebound_velocity_step_end", "restitution",
-    "restitution_ratio", "wall_seconds", "steps", "roughness",
+    "restitution_ratio", "wall_seconds", "steps", "roughness", "settings",
 ]
 D = 6e-3
 G = 9.81
 RELEASE = 10.0  # diameters above the floor (sphere bottom)
 
 
-def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=None):
+def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=None, extra=()):
     width, height = 6.0, 13.0
     dx = D / cells_per_d
     # Free fall of the buoyant weight over the release height bounds the speed.
@@ -37,7 +37,8 @@ def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=Non
     fastest = (2.0 * reduced_g * RELEASE * D) ** 0.5
     dt = min(0.8 * dx / fastest, 6e-4)
     end = 2.0 * (2.0 * RELEASE * D / reduced_g) ** 0.5 + 0.15
-    name = f"bounce_{cells_per_d}_{viscosity}_{'lub' if lubrication else 'dry'}_{roughness}"
+    tag = "_".join(a.replace("/", "") for a in extra)
+    name = f"bounce_{cells_per_d}_{viscosity}_{'lub' if lubrication else 'dry'}_{roughness}{tag}"
     out = os.path.join(workdir, name)
     sets = [
         f"fluid.viscosity={viscosity}",
@@ -51,12 +52,14 @@ def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=Non
         sets.append("lubrication.range=1e-9")
     if roughness is not None:
         sets.append(f"lubrication.roughness={roughness}")
+    sets += list(extra)
     command = [binary, "run", "cases/bouncing_sphere.toml", "--out", out]
     for s in sets:
         command += ["--set", s]
     finished = subprocess.run(command, stdout=subprocess.DEVNULL)
     row = {"viscosity": viscosity, "lubrication": lubrication,
-           "cells_per_diameter": cells_per_d, "dt": dt, "cfl": cfl, "roughness": roughness or ""}
+           "cells_per_diameter": cells_per_d, "dt": dt, "cfl": cfl, "roughness": roughness or "",
+           "settings": " ".join(extra)}
     if finished.returncode != 0:
         with open(os.path.join(out, "log.txt")) as f:
             row["status"] = f.read().strip().splitlines()[-2]
@@ -83,6 +86,8 @@ def main():
     parser.add_argument("--workdir", default="/tmp/grainflow_bouncing_sphere")
     parser.add_argument("--roughness", type=float,
                         help="lubrication.roughness, eta/R (default: the case's)")
+    parser.add_argument("--set", action="append", default=[], dest="extra",
+                        help="another assignment for every run, as grainflow run --set")
     parser.add_argument("--lubrication", choices=["on", "off", "both"], default="on",
                         help="run each viscosity with the film force, without it, or both")
     args = parser.parse_args()
@@ -100,7 +105,7 @@ def main():
         for viscosity in args.viscosity:
             for lubrication in {"on": [True], "off": [False], "both": [True, False]}[args.lubrication]:
                 row = run(args.binary, viscosity, lubrication, args.cells_per_diameter,
-                          args.cfl, args.workdir, args.roughness)
+                          args.cfl, args.workdir, args.roughness, args.extra)
                 writer.writerow(row)
                 f.flush()
                 print(json.dumps(row), flush=True)

@@ -249,3 +249,41 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
     assert_eq!(refused.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&refused.stderr).contains("hard contact"));
 }
+
+/// A fluid step short against the time a grain takes to cross a cell makes
+/// the grains look larger under the forcing of eq. 7: `check` warns, and
+/// names `coupling.forcing_step`, which, set to the calibration step,
+/// removes the cause and the warning (the falling sphere at D/Δx = 4:
+/// CFL 0.08 at its settling speed, against 1.00 at the forcing step).
+#[test]
+fn check_warns_of_a_short_forcing_step_unless_it_is_held() {
+    let check = |extra: &[&str]| {
+        let mut args = vec![
+            "check".to_string(),
+            case("falling_sphere.toml"),
+            "--set".into(),
+            "fluid.cells=[32,32,96]".into(),
+            "--set".into(),
+            "time.dt=5.0e-4".into(),
+        ];
+        for assignment in extra {
+            args.push("--set".into());
+            args.push(assignment.to_string());
+        }
+        let output = grainflow().args(&args).output().unwrap();
+        assert!(output.status.success());
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    let short = check(&[]);
+    assert!(
+        short.contains("warning: the grains' CFL number (speed Δt/Δx) is 0.08"),
+        "{short}"
+    );
+    assert!(short.contains("coupling.forcing_step"), "{short}");
+    let held = check(&["coupling.forcing_step=6.4e-3"]);
+    assert!(!held.contains("warning: the grains' CFL"), "{held}");
+    assert!(
+        held.contains("relaxed as eq. 7 does at a step of 6.4000e-3 s"),
+        "{held}"
+    );
+}

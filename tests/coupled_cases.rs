@@ -15,6 +15,11 @@ fn bad_coupled_tables_are_refused_with_the_key_and_nothing_is_written() {
             "coupling.formulation",
         ),
         (
+            "falling_sphere.toml",
+            "coupling.forcing_step=0.0",
+            "coupling.forcing_step",
+        ),
+        (
             "bouncing_sphere.toml",
             "lubrication.roughness=-1.0",
             "lubrication.roughness",
