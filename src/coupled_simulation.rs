@@ -256,7 +256,8 @@ pub fn run(
     let mut max_divergence = 0.0;
     let mut last_report = None;
     // The grains' CFL number (fastest grain, smallest cell) averaged over
-    // the steps in which they move: the forcing is calibrated near 1.
+    // the distance it travels, so that a grain at rest on a wall does not
+    // weigh in: the forcing is calibrated near 1.
     let h = {
         let grid = &system.flow.grid;
         grid.spacing[..grid.dim()]
@@ -264,7 +265,7 @@ pub fn run(
             .copied()
             .fold(f64::INFINITY, f64::min)
     };
-    let (mut grain_cfl_sum, mut moving_steps) = (0.0, 0u64);
+    let (mut grain_cfl_sum, mut distance) = (0.0, 0.0);
     while system.flow.time < end * (1.0 - 1e-12) {
         let step_dt = step_size(&system, case).min(end - system.flow.time);
         match system.step_observed(step_dt, |dem| analysis.after_stage(dem)) {
@@ -299,8 +300,8 @@ pub fn run(
         let speed = system.dem.max_speed();
         if speed > 0.0 {
             let layer_step = system.immersed.forcing_step.unwrap_or(step_dt);
-            grain_cfl_sum += speed * layer_step / h;
-            moving_steps += 1;
+            grain_cfl_sum += speed * step_dt * (speed * layer_step / h);
+            distance += speed * step_dt;
         }
         analysis.after_step(&system, step_dt, &last_report);
         let at_end = system.flow.time >= end * (1.0 - 1e-12);
@@ -331,8 +332,12 @@ pub fn run(
         _ => Map::new(),
     };
     let t = system.timings;
-    let grain_cfl = grain_cfl_sum / moving_steps.max(1) as f64;
-    if moving_steps > 0 {
+    let grain_cfl = if distance > 0.0 {
+        grain_cfl_sum / distance
+    } else {
+        0.0
+    };
+    if distance > 0.0 {
         if let Some(w) = forcing_step_warning(grain_cfl) {
             outputs.particles.run.log(&w);
             if root {

@@ -83,7 +83,9 @@ pub struct DemSystem {
     /// forced layers of two grains, or of a grain and a wall, from sealing
     /// the fluid between them (the projection would answer a grain leaving
     /// a wall with an inviscid suction the real film does not produce). The
-    /// lubrication force still measures the true gap. Set it before adding
+    /// lubrication force of eq. 19 measures the gap left before contact,
+    /// so that a bounce loses to the film what it would with contact at
+    /// the true surface (the thin-film restitution). Set it before adding
     /// particles.
     pub contact_gap: f64,
     /// Gap below which pairs are listed for hard contact (its candidate
@@ -238,7 +240,7 @@ impl DemSystem {
     /// contact gap and hard-contact listing, whichever reaches farthest.
     fn listed_gap(&self, max_radius: f64) -> f64 {
         self.lubrication
-            .map_or(0.0, |law| law.reach(max_radius))
+            .map_or(0.0, |law| law.reach(max_radius) + self.contact_gap)
             .max(self.contact_gap)
             .max(self.listing_gap)
     }
@@ -776,7 +778,7 @@ impl DemSystem {
                             let distance = distance_sq.sqrt();
                             let normal = branch * (1.0 / distance);
                             let force = film.force(
-                                distance - ri - rj,
+                                distance - reach,
                                 normal,
                                 velocities.linear(i) - velocities.linear(j),
                                 ri,
@@ -820,8 +822,9 @@ impl DemSystem {
                     };
                     let mut load = law.load(&contact, &mut entry.history[e], dt);
                     if let Some(film) = &lubrication {
+                        // Eq. 19 across the gap left before contact.
                         load.force += film.force(
-                            contact_gap - overlap,
+                            -overlap,
                             normal,
                             vi - velocities.linear(j),
                             ri,
@@ -856,9 +859,10 @@ impl DemSystem {
                         let distance = wall.distance(&xi);
                         let present = wall.is_present(time);
                         if let (Some(film), true) = (&lubrication, present) {
-                            // Eq. 19 against a wall: the true gap.
+                            // Eq. 19 against a wall, across the gap left
+                            // before contact.
                             total_force += film.force(
-                                distance - ri,
+                                distance - ri - contact_gap,
                                 wall.normal,
                                 vi,
                                 ri,
