@@ -358,6 +358,7 @@ pub fn run(
         "dt": dt,
         "cfl": case.time.cfl,
         "mean_grain_cfl": grain_cfl,
+        "forcing_step": system.immersed.forcing_step,
         "dem_dt": system.dem_dt,
         "simulated_time": system.flow.time,
         "wall_seconds": wall_seconds,
