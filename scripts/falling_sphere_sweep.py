@@ -104,8 +104,31 @@ FIELDS = [
     "dt_sqrt_g_over_d", "forcing_step", "cfl", "cells", "steps", "initial_acceleration", "initial_acceleration_error",
     "terminal_velocity", "terminal_reynolds", "schiller_naumann_reynolds",
     "terminal_reynolds_error", "terminal_drift", "wall_seconds", "seconds_per_step",
-    "seconds_flow", "seconds_forcing", "seconds_loads", "seconds_dem", "threads", "tracked",
+    "seconds_flow", "seconds_forcing", "seconds_loads", "seconds_dem", "threads", "run",
 ]
+
+
+def label(cells_per_d, width, dt_factor, forcing_factor, cfl):
+    """The run's name in the CSV and in the tracks file: steps in (D/g)^1/2."""
+    scale = PAPER_DT * 20.0 / cells_per_d / (D / G) ** 0.5
+    step = f"dt<={dt_factor * scale:.4g}" if cfl is not None else f"dt={dt_factor * scale:.4g}"
+    name = f"D/dx={cells_per_d} box={width} {step}"
+    if cfl is not None:
+        name += f" cfl={cfl:g}"
+    if forcing_factor is not None:
+        name += f" forcing={forcing_factor * scale:.4g}"
+    return name
+
+
+def append_track(tracks, name, tracked):
+    """Appends the tracked sphere's (t, z, vz) to the tracks file."""
+    exists = os.path.exists(tracks)
+    with open(tracks, "a", newline="") as out:
+        writer = csv.writer(out)
+        if not exists:
+            writer.writerow(["run", "t", "z", "vz"])
+        for line in csv.DictReader(open(tracked)):
+            writer.writerow([name, line["t"], line["z"], line["vz"]])
 
 
 def main():
@@ -115,6 +138,7 @@ def main():
     parser.add_argument("--end", type=float, default=0.5)
     parser.add_argument("--binary", default="target/release/grainflow")
     parser.add_argument("--workdir", default="/tmp/grainflow_falling_sphere")
+    parser.add_argument("--tracks", help="append each run's (t, z, vz) to this CSV")
     args = parser.parse_args()
     rows = []
     exists = os.path.exists(args.out)
@@ -127,9 +151,16 @@ def main():
             cfl = float(fields[5]) if len(fields) > 5 and fields[5] else None
             row = run(args.binary, int(cells), float(width), float(height), float(factor),
                       args.end, args.workdir, forcing, cfl)
+            row["run"] = label(int(cells), float(width), float(factor), forcing, cfl)
+            tracked = row.pop("tracked", None)
+            if args.tracks and tracked:
+                append_track(args.tracks, row["run"], tracked)
             rows.append(row)
             if writer is None:
-                writer = csv.DictWriter(f, fieldnames=FIELDS, restval="")
+                # Rows appended to an earlier table keep its columns.
+                fields = next(csv.reader(open(args.out))) if exists else FIELDS
+                writer = csv.DictWriter(f, fieldnames=fields, restval="",
+                                        extrasaction="ignore")
                 if not exists:
                     writer.writeheader()
             writer.writerow(row)
