@@ -837,10 +837,7 @@ impl DirectSolver {
         let boxes = &pencils.physical.boxes;
         let own_shape = pencils.physical.shape(communicator.rank());
         let transforms = &mut self.transforms;
-        let mut apply = |axis: usize, data: &mut [f64], shape: [usize; 3], direction| {
-            transforms.apply(axis, data, shape, direction)
-        };
-        apply(1, &mut self.modes, own_shape, Direction::Forward);
+        transforms.apply(1, &mut self.modes, own_shape, Direction::Forward);
         communicator.synchronize_shared(&[&self.modes]);
         let segments = self.modes.segments_mut();
         debug_assert_eq!(segments.len(), boxes.len());
@@ -870,7 +867,7 @@ impl DirectSolver {
             rows_of(y, &mut |row, at, width| unsafe {
                 std::ptr::copy_nonoverlapping(row, plane[at..at + width].as_mut_ptr(), width)
             });
-            apply(0, plane, planes.shape, Direction::Forward);
+            transforms.apply(0, plane, planes.shape, Direction::Forward);
             let first = (y - planes.planes[0]) * length_x;
             planes.lines.solve(
                 plane,
@@ -880,13 +877,13 @@ impl DirectSolver {
                 identity,
                 laplacian,
             );
-            apply(0, plane, planes.shape, Direction::Backward);
+            transforms.apply(0, plane, planes.shape, Direction::Backward);
             rows_of(y, &mut |row, at, width| unsafe {
                 std::ptr::copy_nonoverlapping(plane[at..at + width].as_ptr(), row, width)
             });
         }
         communicator.synchronize_shared(&[&self.modes]);
-        apply(1, &mut self.modes, own_shape, Direction::Backward);
+        transforms.apply(1, &mut self.modes, own_shape, Direction::Backward);
     }
 }
 
