@@ -5,8 +5,11 @@ reference band of ../shared/reference/bouncing_e_over_emax_fit_curves.csv
 (fit curves through the experiments of Gondret et al. and Joseph et al.,
 not data points: Legendre's exp(-35/St) and the thin-film 1 - 10/St).
 
-Filled markers: the rebound's peak read after every stage; crosses: the
-same runs read at the ends of fluid steps only. Dash-dotted: the answer of
+Filled markers joined by lines: the rebound read through the film (its
+peak after the stages less the loss the film of eq. 19 would still take on
+the way out, src/coupled_analysis.rs); open markers: the peak itself, read
+after every stage; crosses: the same runs read at the ends of fluid steps
+only. Dash-dotted: the answer of
 the lubrication film alone (eq. 19 from gap R/2 in to contact and out
 again, the contact returning e_n), 1 - (1 + 1/e_n) ln(1 + R/(2 eta)) / St,
 with e_n and eta of cases/bouncing_sphere.toml.
@@ -59,10 +62,20 @@ for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
             continue
         stokes = [float(r["stokes"]) for r in group]
         label = "with lubrication" if lubricated == "True" else "without lubrication"
-        line, = ax.plot(stokes, [float(r["restitution_ratio"]) for r in group],
-                        markers.get(resolution, "x"), ls=style,
-                        mfc="none" if lubricated == "False" else None,
-                        label=f"grainflow, D/Δx = {resolution}, {label}")
+        marker = markers.get(resolution, "x")
+        through_film = lubricated == "True" and all(
+            r.get("restitution_ratio_through_film") for r in group)
+        if through_film:
+            line, = ax.plot(stokes, [float(r["restitution_ratio_through_film"]) for r in group],
+                            marker, ls=style,
+                            label=f"grainflow, D/Δx = {resolution}, {label}, through the film")
+            ax.plot(stokes, [float(r["restitution_ratio"]) for r in group], marker, ls="none",
+                    mfc="none", color=line.get_color(), label="  same, peak after the stages")
+        else:
+            line, = ax.plot(stokes, [float(r["restitution_ratio"]) for r in group],
+                            marker, ls=style,
+                            mfc="none" if lubricated == "False" else None,
+                            label=f"grainflow, D/Δx = {resolution}, {label}, peak")
         # The same runs read at the ends of steps only (phase-dependent).
         if lubricated == "True" and all(r.get("rebound_velocity_step_end") for r in group):
             step_ends = [float(r["restitution_ratio"]) * float(r["rebound_velocity_step_end"])

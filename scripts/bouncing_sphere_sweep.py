@@ -23,6 +23,7 @@ FIELDS = [
     "status", "viscosity", "lubrication", "cells_per_diameter", "dt", "cfl", "stokes", "reynolds",
     "approach_velocity", "rebound_velocity", "rebound_velocity_step_end", "restitution",
     "restitution_ratio", "wall_seconds", "steps", "roughness", "settings",
+    "rebound_velocity_through_film", "restitution_ratio_through_film",
 ]
 D = 6e-3
 G = 9.81
@@ -70,7 +71,8 @@ def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=Non
     row.update({"status": "ok", "wall_seconds": summary["wall_seconds"],
                 "steps": summary["steps"]})
     for key in ("stokes", "reynolds", "approach_velocity", "rebound_velocity",
-                "rebound_velocity_step_end", "restitution", "restitution_ratio"):
+                "rebound_velocity_step_end", "restitution", "restitution_ratio",
+                "rebound_velocity_through_film", "restitution_ratio_through_film"):
         row[key] = m.get(key, "")
     return row
 

@@ -166,45 +166,89 @@ fn bouncing_sphere_reduced_does_not_rebound_below_the_critical_stokes_number() {
     assert!(ratio < 0.01, "{summary}");
 }
 
+/// One bouncing sphere of `cases/bouncing_sphere.toml` at D/Δx = 8 (the
+/// sweep's box, 6 D wide and 13 D tall) released with its centre at
+/// `height` in a liquid of `viscosity`: (St, e/e_n read after every stage,
+/// at step ends, through the film).
+fn bounce_at_d_over_dx_8(height: &str, viscosity: &str) -> (f64, f64, f64, f64) {
+    let position = format!("particles.block[0].positions=[[0.018, 0.018, {height}]]");
+    let viscosity = format!("fluid.viscosity={viscosity}");
+    let (summary, _dir) = run(
+        "bouncing_sphere.toml",
+        &[
+            "fluid.cells=[48, 48, 104]",
+            &position,
+            &viscosity,
+            "time.end=0.2",
+            "output.interval=0.1",
+        ],
+    );
+    let ratio = metric(&summary, "restitution_ratio");
+    let step_end_share =
+        metric(&summary, "rebound_velocity_step_end") / metric(&summary, "rebound_velocity");
+    (
+        metric(&summary, "stokes"),
+        ratio,
+        ratio * step_end_share,
+        metric(&summary, "restitution_ratio_through_film"),
+    )
+}
+
 /// `cases/bouncing_sphere.toml` at D/Δx = 8 in a thin liquid (St ≈ 320):
 /// the rebound lies within the scatter of the experiments of Gondret et
 /// al. and Joseph et al. (±0.1 of their fit exp(−35/St); measured 0.858
-/// and 0.881 against 0.896), and its peak does not depend on where in its
-/// fluid step the contact falls. Released 0.1 mm apart, one run's step
-/// ends catch the peak right after the contact, the other's only the speed
-/// after the fluid's answer has taken a third of it (0.68 and 0.88 of
-/// e_n); read after every stage the two agree within 0.05, a quarter of
-/// that spread (measured 0.023). Before the film force stopped at contact
-/// it took a quarter of this rebound.
+/// and 0.881 against 0.896 read after the stages, 0.842 and 0.856 through
+/// the film), and its peak does not depend on where in its fluid step the
+/// contact falls. Released 0.1 mm apart, one run's step ends catch the
+/// peak right after the contact, the other's only the speed after the
+/// fluid's answer has taken a third of it (0.68 and 0.88 of e_n); read
+/// after every stage the two agree within 0.05, a quarter of that spread
+/// (measured 0.023). Before the film force stopped at contact it took a
+/// quarter of this rebound.
 #[test]
 fn bouncing_sphere_rebound_is_in_the_band_whatever_the_contact_phase() {
-    let runs: Vec<(f64, f64, f64)> = ["0.0632", "0.0633"]
+    let runs: Vec<_> = ["0.0632", "0.0633"]
         .iter()
-        .map(|z| {
-            let position = format!("particles.block[0].positions=[[0.018, 0.018, {z}]]");
-            let (summary, _dir) = run(
-                "bouncing_sphere.toml",
-                &[
-                    "fluid.cells=[48, 48, 104]",
-                    &position,
-                    "fluid.viscosity=0.01",
-                    "time.end=0.2",
-                    "output.interval=0.1",
-                ],
-            );
-            let ratio = metric(&summary, "restitution_ratio");
-            let step_end_share = metric(&summary, "rebound_velocity_step_end")
-                / metric(&summary, "rebound_velocity");
-            (metric(&summary, "stokes"), ratio, ratio * step_end_share)
-        })
+        .map(|z| bounce_at_d_over_dx_8(z, "0.01"))
         .collect();
-    eprintln!("bouncing sphere, (St, e/e_n read after stages, at step ends): {runs:?}");
-    for &(stokes, ratio, _) in &runs {
+    eprintln!(
+        "bouncing sphere, (St, e/e_n read after stages, at step ends, through the film): {runs:?}"
+    );
+    for &(stokes, ratio, _, through_film) in &runs {
         assert!(stokes > 250.0 && stokes < 400.0, "{runs:?}");
-        assert!((ratio - (-35.0 / stokes).exp()).abs() < 0.1, "{runs:?}");
+        let fit = (-35.0 / stokes).exp();
+        assert!((ratio - fit).abs() < 0.1, "{runs:?}");
+        assert!((through_film - fit).abs() < 0.1, "{runs:?}");
     }
     assert!((runs[0].2 - runs[1].2).abs() > 0.1, "{runs:?}");
     assert!((runs[0].1 - runs[1].1).abs() < 0.05, "{runs:?}");
+}
+
+/// The same at St ≈ 40, where the film of eq. 19 takes most of the
+/// rebound. The stage that holds the contact ends with the sphere a few
+/// microns off the wall, having crossed only part of the film on its way
+/// out, and how far depends on where in the stage the contact falls; the
+/// peak read there was 0.2 above the fit exp(−35/St) of the experiments.
+/// Read through the film (the peak less the film's loss still to come,
+/// `coupled_analysis`), the rebound lies within their scatter, ±0.1 of
+/// the fit (measured 0.495 and 0.462 at St = 39.7 against 0.414; the
+/// peaks 0.613 and 0.568), from two releases 0.1 mm apart that agree
+/// within 0.05 (measured 0.033).
+#[test]
+fn bouncing_sphere_through_the_film_is_in_the_band_at_moderate_stokes() {
+    let runs: Vec<_> = ["0.0630", "0.0631"]
+        .iter()
+        .map(|z| bounce_at_d_over_dx_8(z, "0.066"))
+        .collect();
+    eprintln!(
+        "bouncing sphere, (St, e/e_n read after stages, at step ends, through the film): {runs:?}"
+    );
+    for &(stokes, _, _, through_film) in &runs {
+        assert!(stokes > 30.0 && stokes < 50.0, "{runs:?}");
+        let fit = (-35.0 / stokes).exp();
+        assert!((through_film - fit).abs() < 0.1, "{runs:?}");
+    }
+    assert!((runs[0].3 - runs[1].3).abs() < 0.05, "{runs:?}");
 }
 
 /// Gravity along a periodic axis drives the fluid: no periodic pressure can
