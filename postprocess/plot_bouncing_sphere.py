@@ -33,7 +33,7 @@ target = sys.argv[2] if len(sys.argv) > 2 else os.path.join(root, "docs/validati
 reference = sys.argv[3] if len(sys.argv) > 3 else os.path.join(
     root, "../shared/reference/bouncing_e_over_emax_fit_curves.csv")
 
-fig, ax = plt.subplots(figsize=(6.5, 4.3))
+fig, ax = plt.subplots(figsize=(10, 4.5))
 if os.path.exists(reference):
     lines = [l for l in open(reference) if not l.startswith("#")]
     rows = list(csv.DictReader(lines))
@@ -101,7 +101,7 @@ ax.set_xlabel("St = (ρp + ρ/2) V_T D / (9 μ)")
 ax.set_ylabel("e / e_n")
 ax.set_ylim(-0.05, 1.1)
 ax.set_title("sphere bouncing on a wall, ρp/ρ = 8")
-ax.legend(fontsize=7)
+ax.legend(fontsize=6.5, loc="center left", bbox_to_anchor=(1.01, 0.5))
 fig.tight_layout()
 fig.savefig(target, dpi=120)
 print(f"wrote {target}")

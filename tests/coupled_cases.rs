@@ -166,20 +166,28 @@ fn bouncing_sphere_reduced_does_not_rebound_below_the_critical_stokes_number() {
     assert!(ratio < 0.01, "{summary}");
 }
 
-/// One bouncing sphere of `cases/bouncing_sphere.toml` at D/Δx = 8 (the
-/// sweep's box, 6 D wide and 13 D tall) released with its centre at
-/// `height` in a liquid of `viscosity`: (St, e/e_n read after every stage,
-/// at step ends, through the film).
-fn bounce_at_d_over_dx_8(height: &str, viscosity: &str) -> (f64, f64, f64, f64) {
-    let position = format!("particles.block[0].positions=[[0.018, 0.018, {height}]]");
-    let viscosity = format!("fluid.viscosity={viscosity}");
+/// One bouncing sphere of `cases/bouncing_sphere.toml` at D/Δx = 8
+/// (0.75 mm cells) released with its centre at `height` in a liquid of
+/// `viscosity`, in a box 6 D wide and `cells_high` cells tall, up to
+/// `end`: (St, e/e_n read after every stage, at step ends, through the
+/// film).
+fn bounce_at_d_over_dx_8(
+    height: f64,
+    viscosity: f64,
+    cells_high: usize,
+    end: f64,
+) -> (f64, f64, f64, f64) {
     let (summary, _dir) = run(
         "bouncing_sphere.toml",
         &[
-            "fluid.cells=[48, 48, 104]",
-            &position,
-            &viscosity,
-            "time.end=0.2",
+            &format!("fluid.cells=[48, 48, {cells_high}]"),
+            &format!(
+                "domain.upper=[0.036, 0.036, {}]",
+                0.75e-3 * cells_high as f64
+            ),
+            &format!("particles.block[0].positions=[[0.018, 0.018, {height}]]"),
+            &format!("fluid.viscosity={viscosity}"),
+            &format!("time.end={end}"),
             "output.interval=0.1",
         ],
     );
@@ -207,9 +215,9 @@ fn bounce_at_d_over_dx_8(height: &str, viscosity: &str) -> (f64, f64, f64, f64) 
 /// quarter of this rebound.
 #[test]
 fn bouncing_sphere_rebound_is_in_the_band_whatever_the_contact_phase() {
-    let runs: Vec<_> = ["0.0632", "0.0633"]
+    let runs: Vec<_> = [0.0632, 0.0633]
         .iter()
-        .map(|z| bounce_at_d_over_dx_8(z, "0.01"))
+        .map(|&z| bounce_at_d_over_dx_8(z, 0.01, 104, 0.2))
         .collect();
     eprintln!(
         "bouncing sphere, (St, e/e_n read after stages, at step ends, through the film): {runs:?}"
@@ -224,27 +232,29 @@ fn bouncing_sphere_rebound_is_in_the_band_whatever_the_contact_phase() {
     assert!((runs[0].1 - runs[1].1).abs() < 0.05, "{runs:?}");
 }
 
-/// The same at St ≈ 40, where the film of eq. 19 takes most of the
+/// The same at St ≈ 35, where the film of eq. 19 takes most of the
 /// rebound. The stage that holds the contact ends with the sphere a few
 /// microns off the wall, having crossed only part of the film on its way
-/// out, and how far depends on where in the stage the contact falls; the
-/// peak read there was 0.2 above the fit exp(−35/St) of the experiments.
-/// Read through the film (the peak less the film's loss still to come,
-/// `coupled_analysis`), the rebound lies within their scatter, ±0.1 of
-/// the fit (measured 0.495 and 0.462 at St = 39.7 against 0.414; the
-/// peaks 0.613 and 0.568), from two releases 0.1 mm apart that agree
-/// within 0.05 (measured 0.033).
+/// out, and how far depends on where in the stage the contact falls: the
+/// peaks read there from two releases 0.1 mm apart are 0.662 and 0.546,
+/// 0.30 and 0.19 above the fit exp(−35/St) of the experiments. Read
+/// through the film (the peak less the film's loss still to come,
+/// `coupled_analysis`), the rebound lies within their scatter, ±0.1 of the
+/// fit (measured 0.443 and 0.449 against 0.358), and the two releases
+/// agree within 0.05 (measured 0.006). Released 5 D above the floor of a
+/// box 9 D tall, the sphere reaches 86 % of the speed it settles at from
+/// 10 D (St = 34.1 against 39.7), which halves the cost of the runs.
 #[test]
 fn bouncing_sphere_through_the_film_is_in_the_band_at_moderate_stokes() {
-    let runs: Vec<_> = ["0.0630", "0.0631"]
+    let runs: Vec<_> = [0.033, 0.0331]
         .iter()
-        .map(|z| bounce_at_d_over_dx_8(z, "0.066"))
+        .map(|&z| bounce_at_d_over_dx_8(z, 0.066, 72, 0.15))
         .collect();
     eprintln!(
         "bouncing sphere, (St, e/e_n read after stages, at step ends, through the film): {runs:?}"
     );
     for &(stokes, _, _, through_film) in &runs {
-        assert!(stokes > 30.0 && stokes < 50.0, "{runs:?}");
+        assert!(stokes > 30.0 && stokes < 45.0, "{runs:?}");
         let fit = (-35.0 / stokes).exp();
         assert!((through_film - fit).abs() < 0.1, "{runs:?}");
     }
