@@ -121,11 +121,8 @@ impl SphereInFluid {
     }
 
     /// The speed the film of eq. 19 would still take from particle 0 as
-    /// it leaves the nearest wall, wherever it is owned (collective). Over
-    /// the film alone, `m dv = −6π μ R² dδ / (δ + η)`: from the gap δ to
-    /// the film's range `δ_f` it loses `(6π μ R²/m) ln((δ_f + η)/(δ + η))`
-    /// (m the DEM's inertia, with the virtual mass), whatever the time it
-    /// takes. Zero beyond the range or without a film.
+    /// it leaves the nearest wall, wherever it is owned (collective): zero
+    /// beyond the film's range or without a film.
     fn film_loss_to_come(&self, dem: &DemSystem) -> f64 {
         let local = match (dem.index_of(0), dem.lubrication) {
             (Some(k), Some(film)) => {
@@ -138,18 +135,7 @@ impl SphereInFluid {
                     .map(|w| w.distance(&p.position[k]) - radius)
                     .fold(f64::INFINITY, f64::min)
                     - dem.contact_gap;
-                let (range, roughness) = (film.range * radius, film.roughness * radius);
-                if gap >= range || p.inverse_mass[k] == 0.0 {
-                    0.0
-                } else {
-                    let per_mass = 6.0
-                        * std::f64::consts::PI
-                        * film.viscosity
-                        * radius
-                        * radius
-                        * p.inverse_mass[k];
-                    per_mass * ((range + roughness) / (gap.max(0.0) + roughness)).ln()
-                }
+                film.speed_lost_leaving_wall(gap, radius, p.inverse_mass[k])
             }
             _ => 0.0,
         };

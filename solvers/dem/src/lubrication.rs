@@ -79,6 +79,21 @@ impl Lubrication {
     pub fn reach(&self, radius: f64) -> f64 {
         self.range * radius
     }
+
+    /// Speed the film alone takes from a grain of radius `radius` and
+    /// inverse inertia `inverse_mass` leaving a wall from surface gap `gap`
+    /// (negative while touching) out to the film's range. Over the film
+    /// alone `m dv = −6π μ R² dδ / (δ + η)`, so the loss is
+    /// `(6π μ R²/m) ln((δ_f + η)/(δ + η))` whatever the time the crossing
+    /// takes; zero at or beyond the range.
+    pub fn speed_lost_leaving_wall(&self, gap: f64, radius: f64, inverse_mass: f64) -> f64 {
+        let (range, roughness) = (self.range * radius, self.roughness * radius);
+        if gap >= range {
+            return 0.0;
+        }
+        let per_mass = 6.0 * PI * self.viscosity * radius * radius * inverse_mass;
+        per_mass * ((range + roughness) / (gap.max(0.0) + roughness)).ln()
+    }
 }
 
 #[cfg(test)]
@@ -107,6 +122,36 @@ mod tests {
         // Separating pairs are held together by the same law.
         let g = law().force(gap, n, -approach * n, r1, r2, 1.0, 0.0);
         assert_relative_eq!(g.z, -expected, max_relative = 1e-14);
+    }
+
+    #[test]
+    fn the_speed_lost_leaving_a_wall_is_the_film_integrated_over_the_gap() {
+        let (radius, inverse_mass) = (1e-3, 250.0);
+        let film = law();
+        let per_mass = 6.0 * PI * 1e-3 * radius * radius * inverse_mass;
+        let eta = 1e-3 * radius;
+        let whole = film.speed_lost_leaving_wall(0.0, radius, inverse_mass);
+        assert_relative_eq!(
+            whole,
+            per_mass * (1.0 + 0.5 / 1e-3f64).ln(),
+            max_relative = 1e-14
+        );
+        // Touching counts as contact; from a gap, what is left of the range.
+        assert_eq!(
+            film.speed_lost_leaving_wall(-1e-6, radius, inverse_mass),
+            whole
+        );
+        let gap = 1e-5;
+        let crossed = whole - film.speed_lost_leaving_wall(gap, radius, inverse_mass);
+        assert_relative_eq!(
+            crossed,
+            per_mass * ((gap + eta) / eta).ln(),
+            max_relative = 1e-12
+        );
+        assert_eq!(
+            film.speed_lost_leaving_wall(0.5e-3, radius, inverse_mass),
+            0.0
+        );
     }
 
     #[test]
