@@ -5,6 +5,10 @@ reference band of ../shared/reference/bouncing_e_over_emax_fit_curves.csv
 (fit curves through the experiments of Gondret et al. and Joseph et al.,
 not data points: Legendre's exp(-35/St) and the thin-film 1 - 10/St).
 
+Where a viscosity was run from several release heights (the contact at
+other phases of its fluid step), each marker is the median of the runs and
+a bar spans their through-film readings.
+
 Filled markers joined by lines: the rebound read through the film (its
 peak after the stages less the loss the film of eq. 19 would still take on
 the way out, src/coupled_analysis.rs); open markers: the peak itself, read
@@ -51,7 +55,34 @@ film_critical = (1.0 + 1.0 / e_n) * math.log(1.0 + 0.5 / eta)
 st = [10 ** (k / 20) for k in range(0, 81)]
 ax.plot(st, [max(0.0, 1.0 - film_critical / s) for s in st], "-.", color="tab:red", lw=1,
         label=f"film alone (eq. 19, η/R = {eta:g}): 1 − {film_critical:.1f}/St")
-runs = [r for r in csv.DictReader(open(source)) if r["status"] == "ok" and r["stokes"]]
+def median(values):
+    values = sorted(values)
+    middle = len(values) // 2
+    return values[middle] if len(values) % 2 else 0.5 * (values[middle - 1] + values[middle])
+
+
+def releases_merged(rows):
+    """One row per (resolution, lubrication, viscosity): the median over the
+    releases of each reading, with the through-film reading's range."""
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["cells_per_diameter"], r["lubrication"], r["viscosity"]), []).append(r)
+    merged = []
+    for group in groups.values():
+        row = dict(group[0])
+        for key in ("stokes", "restitution_ratio", "restitution_ratio_through_film",
+                    "rebound_velocity", "rebound_velocity_step_end"):
+            if all(r.get(key) for r in group):
+                row[key] = str(median(float(r[key]) for r in group))
+        film = [float(r["restitution_ratio_through_film"]) for r in group
+                if r.get("restitution_ratio_through_film")]
+        row["film_range"] = (min(film), max(film)) if len(film) > 1 else None
+        merged.append(row)
+    return merged
+
+
+runs = releases_merged(
+    [r for r in csv.DictReader(open(source)) if r["status"] == "ok" and r["stokes"]])
 markers = {"8": "o", "12": "s", "16": "D", "24": "^"}
 for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
     for lubricated, style in [("True", "-"), ("False", "--")]:
@@ -69,6 +100,12 @@ for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
             line, = ax.plot(stokes, [float(r["restitution_ratio_through_film"]) for r in group],
                             marker, ls=style,
                             label=f"grainflow, D/Δx = {resolution}, {label}, through the film")
+            # The spread over releases (the contact's phase in its step).
+            for r, stokes_number in zip(group, stokes):
+                if r["film_range"]:
+                    ax.plot([stokes_number, stokes_number], r["film_range"], "-",
+                            color=line.get_color(), lw=2.5,
+                            alpha=0.5)
             ax.plot(stokes, [float(r["restitution_ratio"]) for r in group], marker, ls="none",
                     mfc="none", color=line.get_color(), label="  same, peak after the stages")
         else:
@@ -83,6 +120,17 @@ for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
                          for r in group]
             ax.plot(stokes, step_ends, "x", color=line.get_color(), alpha=0.6,
                     label="  same, read at step ends only")
+# The paper's forcing of the first cells at the wall (coupling.wall_layer =
+# "forced"), the case's default until 2026-12-01, at D/Δx = 8.
+forced = os.path.join(os.path.dirname(source), "bouncing_sphere_forced_wall_layer.csv")
+if os.path.exists(forced):
+    rows = sorted((r for r in releases_merged(
+        [r for r in csv.DictReader(open(forced)) if r["status"] == "ok" and r["stokes"]])
+        if r["cells_per_diameter"] == "8" and r["lubrication"] == "True"
+        and r.get("restitution_ratio_through_film")), key=lambda r: float(r["stokes"]))
+    ax.plot([float(r["stokes"]) for r in rows],
+            [float(r["restitution_ratio_through_film"]) for r in rows], "o:", color="0.45",
+            mfc="none", lw=0.8, label="grainflow, D/Δx = 8, first cells at the wall forced")
 # The roughness study (scripts/bouncing_sphere_sweep.py --roughness), if run.
 study = os.path.join(os.path.dirname(source), "bouncing_sphere_roughness.csv")
 if os.path.exists(study):

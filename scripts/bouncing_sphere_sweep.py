@@ -7,6 +7,12 @@ approach and rebound velocities, restitution over e_n, cost).
     scripts/bouncing_sphere_sweep.py --out docs/validation/bouncing_sphere.csv \
         --viscosity 0.6 --viscosity 0.066 ... [--cells-per-diameter 12]
 
+With --release-offsets each viscosity is run from several heights a
+fraction of a millimetre apart: the contact then falls at other points of
+its fluid step, and the rebound read after the stages spreads with that
+phase (by up to 0.1 of e_n at St ~ 5000, docs/validation.md, section 7);
+the chart takes the median of the releases.
+
 Without lubrication the film force is switched off by a vanishing range.
 The fluid step is at most 0.8 Δx over the largest approach speed the
 sphere can reach from its release height, and time.cfl (--cfl, default 1)
@@ -23,14 +29,15 @@ FIELDS = [
     "status", "viscosity", "lubrication", "cells_per_diameter", "dt", "cfl", "stokes", "reynolds",
     "approach_velocity", "rebound_velocity", "rebound_velocity_step_end", "restitution",
     "restitution_ratio", "wall_seconds", "steps", "roughness", "settings",
-    "rebound_velocity_through_film", "restitution_ratio_through_film",
+    "rebound_velocity_through_film", "restitution_ratio_through_film", "release_offset_mm",
 ]
 D = 6e-3
 G = 9.81
 RELEASE = 10.0  # diameters above the floor (sphere bottom)
 
 
-def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=None, extra=()):
+def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=None, extra=(),
+        offset_mm=0.0):
     width, height = 6.0, 13.0
     dx = D / cells_per_d
     # Free fall of the buoyant weight over the release height bounds the speed.
@@ -39,7 +46,8 @@ def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=Non
     dt = min(0.8 * dx / fastest, 6e-4)
     end = 2.0 * (2.0 * RELEASE * D / reduced_g) ** 0.5 + 0.15
     tag = "_".join(a.replace("/", "") for a in extra)
-    name = f"bounce_{cells_per_d}_{viscosity}_{'lub' if lubrication else 'dry'}_{roughness}{tag}"
+    name = (f"bounce_{cells_per_d}_{viscosity}_{'lub' if lubrication else 'dry'}_{roughness}{tag}"
+            f"_{offset_mm}mm")
     out = os.path.join(workdir, name)
     sets = [
         f"fluid.viscosity={viscosity}",
@@ -49,6 +57,10 @@ def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=Non
         f"time.end={end}",
         f"output.tracked_interval={dt}",
     ]
+    if offset_mm:
+        # The case's sphere: centre 10 D above the floor plus its radius.
+        height = RELEASE * D + 0.5 * D + offset_mm * 1e-3
+        sets.append(f"particles.block[0].positions=[[0.018,0.018,{height}]]")
     if not lubrication:
         sets.append("lubrication.range=1e-9")
     if roughness is not None:
@@ -60,7 +72,7 @@ def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=Non
     finished = subprocess.run(command, stdout=subprocess.DEVNULL)
     row = {"viscosity": viscosity, "lubrication": lubrication,
            "cells_per_diameter": cells_per_d, "dt": dt, "cfl": cfl, "roughness": roughness or "",
-           "settings": " ".join(extra)}
+           "settings": " ".join(extra), "release_offset_mm": offset_mm}
     if finished.returncode != 0:
         with open(os.path.join(out, "log.txt")) as f:
             row["status"] = f.read().strip().splitlines()[-2]
@@ -92,6 +104,8 @@ def main():
                         help="another assignment for every run, as grainflow run --set")
     parser.add_argument("--lubrication", choices=["on", "off", "both"], default="on",
                         help="run each viscosity with the film force, without it, or both")
+    parser.add_argument("--release-offsets", default="0",
+                        help="comma-separated heights [mm] added to the release, one run each")
     args = parser.parse_args()
     exists = os.path.exists(args.out)
     fields = FIELDS
@@ -104,13 +118,15 @@ def main():
         writer = csv.DictWriter(f, fieldnames=fields, restval="", extrasaction="ignore")
         if not exists:
             writer.writeheader()
+        offsets = [float(o) for o in args.release_offsets.split(",")]
         for viscosity in args.viscosity:
             for lubrication in {"on": [True], "off": [False], "both": [True, False]}[args.lubrication]:
-                row = run(args.binary, viscosity, lubrication, args.cells_per_diameter,
-                          args.cfl, args.workdir, args.roughness, args.extra)
-                writer.writerow(row)
-                f.flush()
-                print(json.dumps(row), flush=True)
+                for offset in offsets:
+                    row = run(args.binary, viscosity, lubrication, args.cells_per_diameter,
+                              args.cfl, args.workdir, args.roughness, args.extra, offset)
+                    writer.writerow(row)
+                    f.flush()
+                    print(json.dumps(row), flush=True)
     return 0
 
 

@@ -498,6 +498,13 @@ pub struct CouplingSection {
     /// step does. Unset: eq. 7 at every step.
     #[serde(default)]
     pub forcing_step: Option<f64>,
+    /// The first layer of fluid cells along the domain's walls: "free"
+    /// (default: the moving grains do not force it; it holds the film of
+    /// eq. 19, which the flow does not resolve; glued grains still do) or
+    /// "forced" (the paper's forcing, which reaches the walls and seals
+    /// them under a grain at contact).
+    #[serde(default = "default_wall_layer")]
+    pub wall_layer: String,
 }
 
 impl Default for CouplingSection {
@@ -506,8 +513,13 @@ impl Default for CouplingSection {
             formulation: default_formulation(),
             contact_gap: default_contact_gap(),
             forcing_step: None,
+            wall_layer: default_wall_layer(),
         }
     }
+}
+
+fn default_wall_layer() -> String {
+    "free".into()
 }
 
 fn default_contact_gap() -> f64 {
@@ -1639,6 +1651,14 @@ impl Case {
             }
             if let Some(step) = c.forcing_step {
                 positive("coupling.forcing_step", step)?;
+            }
+            if !matches!(c.wall_layer.as_str(), "free" | "forced") {
+                return Err(invalid(
+                    "coupling.wall_layer",
+                    &c.wall_layer,
+                    "allowed: \"free\" (the grains leave the first cells along a wall to the \
+                     fluid) or \"forced\" (the paper's forcing)",
+                ));
             }
         }
         if let Some(l) = &self.lubrication {

@@ -14,6 +14,7 @@ use crate::simulation::{peak_memory_bytes, shortest_contact_time, Progress, Summ
 use crate::stability::TimeStepVerdict;
 use crate::{fluid_scene, scene, sharing, stability, RunError};
 use grainflow_core::Communicator;
+use grainflow_ibm::forcing::WallLayer;
 use grainflow_ibm::{
     CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
 };
@@ -58,7 +59,16 @@ pub fn build_on(case: &Case, communicator: Communicator) -> Result<(CoupledSyste
     };
     let density = case.fluid_section().density;
     let mut system = CoupledSystem::new(flow, dem, density, coupling, ratio * contact_time);
-    system.immersed.forcing_step = case.coupling.as_ref().and_then(|c| c.forcing_step);
+    let coupling_section = case.coupling.clone().unwrap_or_default();
+    system.immersed.forcing_step = coupling_section.forcing_step;
+    if coupling_section.wall_layer == "free" {
+        system.immersed.free_wall_layers = WallLayer::along_walls(
+            &system.flow.grid,
+            &system.flow.boundaries,
+            system.dem.domain.lower.into(),
+            system.dem.domain.upper.into(),
+        );
+    }
     Ok((system, contact_time))
 }
 

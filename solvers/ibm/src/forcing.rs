@@ -26,6 +26,17 @@
 //! momentum inside each particle, `∫ α_p u dV` and `∫ r × α_p u dV`, is
 //! measured on the same faces for the coupling that accounts for it.
 //!
+//! At a wall of the flow domain the moving grains do not force the first
+//! layer of cells ([`WallLayer`], unless a case asks for the paper's
+//! forcing there; glued grains, the wall's roughness, still do): that
+//! cell holds the film between a grain and the wall, which
+//! the flow cannot resolve and eq. 19 models. Forced, the layer of a grain
+//! at contact moves every face of the cells beneath it with the grain, so
+//! no fluid can enter them as the grain lifts off, and the projection
+//! answers with a suction: it took 0.1 of the rebound of a sphere at
+//! St ≈ 320 (`docs/validation.md`, section 7). Left free, those cells
+//! hold a slot of fluid that the flow resolves.
+//!
 //! Every particle whose support reaches this rank's cells acts on them:
 //! its owned particles and the ghosts the DEM keeps within
 //! [`ghost_reach`] of the subdomain, periodic images included. So a
@@ -38,7 +49,7 @@ use std::ops::Range;
 
 use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::{DemSystem, Particles};
-use grainflow_fluid::{Block, Grid, Location};
+use grainflow_fluid::{Block, Boundaries, BoundaryCondition, Grid, Location};
 use rayon::prelude::*;
 
 use crate::solid_fraction::{solid_fraction, support, transition_width};
@@ -96,6 +107,64 @@ pub fn vectors_on_owners(dem: &DemSystem, local: &[Vec3], width: usize) -> Vec<V
         .collect()
 }
 
+/// The first layer of cells along a wall of the flow domain, whose faces
+/// the grains do not force: the tangential components at the cells'
+/// centres, half a cell off the wall, and the normal component on their
+/// far face, a cell off (the normal component on the wall is not an
+/// unknown).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallLayer {
+    /// The axis normal to the wall.
+    pub axis: usize,
+    /// The wall's coordinate along `axis` (m).
+    pub wall: f64,
+    /// +1 for a lower wall (the fluid on its upper side), −1 for an upper one.
+    pub inward: f64,
+    /// The layer's depth: one cell along `axis` (m).
+    pub depth: f64,
+}
+
+impl WallLayer {
+    /// The first layer of cells along every wall of the domain
+    /// `lower`–`upper` (no-slip, free-slip or moving: every face but the
+    /// periodic and open ones), on `grid`, a rank's share of it.
+    pub fn along_walls(
+        grid: &Grid,
+        boundaries: &Boundaries,
+        lower: [f64; 3],
+        upper: [f64; 3],
+    ) -> Vec<WallLayer> {
+        let mut layers = Vec::new();
+        for axis in 0..grid.dim() {
+            for (side, wall, inward) in [(0, lower[axis], 1.0), (1, upper[axis], -1.0)] {
+                let is_wall = matches!(
+                    boundaries.faces[axis][side],
+                    BoundaryCondition::NoSlip
+                        | BoundaryCondition::FreeSlip
+                        | BoundaryCondition::MovingWall(_)
+                );
+                if is_wall {
+                    layers.push(WallLayer {
+                        axis,
+                        wall,
+                        inward,
+                        depth: grid.spacing[axis],
+                    });
+                }
+            }
+        }
+        layers
+    }
+
+    /// Whether `point` lies in the layer (its far face included, to
+    /// round-off).
+    #[inline]
+    fn holds(&self, point: &[f64; 3]) -> bool {
+        let distance = self.inward * (point[self.axis] - self.wall);
+        distance > 0.0 && distance <= self.depth * (1.0 + 1e-9)
+    }
+}
+
 /// One particle (owned or a ghost) as the grid sees it.
 #[derive(Clone, Debug)]
 struct Body {
@@ -146,6 +215,10 @@ pub struct ImmersedBoundaries {
     /// as eq. 7 does; `None`: at every step (the paper's forcing). See
     /// [`ImmersedBoundaries::apply`].
     pub forcing_step: Option<f64>,
+    /// The layers of cells along the walls that the moving grains leave to
+    /// the fluid ([`WallLayer::along_walls`]); empty, the paper's forcing, which
+    /// reaches the walls.
+    pub free_wall_layers: Vec<WallLayer>,
     dimension: Dimension,
     /// `Σ_p α_p` on the faces of each component (zero outside the stencils
     /// between stages).
@@ -168,6 +241,7 @@ impl ImmersedBoundaries {
         ImmersedBoundaries {
             width: transition_width(&grid.spacing[..dim]),
             forcing_step: None,
+            free_wall_layers: Vec::new(),
             dimension: grid.dimension,
             total_fraction: (0..dim).map(|_| grid.zeros()).collect(),
             solid_velocity: (0..dim).map(|_| grid.zeros()).collect(),
@@ -370,7 +444,14 @@ impl ImmersedBoundaries {
     pub fn bodies(&self, particles: &Particles, grid: &Grid, unknowns: &[Block]) -> Bodies {
         let mut bodies = self.local_bodies(particles, grid);
         let width = self.width;
+        let free_wall_layers = &self.free_wall_layers;
         bodies.list.par_iter_mut().for_each(|body| {
+            // Glued grains are the wall's roughness: they keep forcing it.
+            let layers: &[WallLayer] = if particles.inverse_mass[body.particle] > 0.0 {
+                free_wall_layers
+            } else {
+                &[]
+            };
             body.fractions = (0..grid.dim())
                 .map(|component| {
                     face_fractions(
@@ -380,6 +461,7 @@ impl ImmersedBoundaries {
                         component,
                         body.centre,
                         body.radius,
+                        layers,
                     )
                 })
                 .collect();
@@ -512,7 +594,8 @@ fn visit_faces(
 }
 
 /// The solid fraction of a body at `centre` of `radius` on the faces of
-/// `component` in `block` within its support.
+/// `component` in `block` within its support, zero on the faces of
+/// `free_layers`.
 fn face_fractions(
     width: f64,
     grid: &Grid,
@@ -520,6 +603,7 @@ fn face_fractions(
     component: usize,
     centre: Vec3,
     radius: f64,
+    free_layers: &[WallLayer],
 ) -> FaceFractions {
     let reach = support(radius, width);
     let mut stencil = *block;
@@ -541,9 +625,17 @@ fn face_fractions(
     let location = Location::Face(component);
     let mut alpha = Vec::with_capacity((0..3).map(|a| stencil.end[a] - stencil.start[a]).product());
     grid.for_each(&stencil, |_, point| {
+        let mut x = [0.0; 3];
+        for axis in 0..grid.dim() {
+            x[axis] = grid.coordinate(location, axis, point[axis]);
+        }
+        if free_layers.iter().any(|layer| layer.holds(&x)) {
+            alpha.push(0.0);
+            return;
+        }
         let mut r = [0.0; 3];
         for axis in 0..grid.dim() {
-            r[axis] = grid.coordinate(location, axis, point[axis]) - centre[axis];
+            r[axis] = x[axis] - centre[axis];
         }
         alpha.push(solid_fraction(r, radius, width));
     });
