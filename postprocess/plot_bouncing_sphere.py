@@ -141,7 +141,8 @@ if os.path.exists(study):
         critical = (1.0 + 1.0 / e_n) * math.log(1.0 + 0.5 / float(roughness))
         line, = ax.plot([float(r["stokes"]) for r in group],
                         [float(r["restitution_ratio"]) for r in group], "v-", lw=0.8,
-                        label=f"grainflow, D/Δx = {group[0]['cells_per_diameter']}, η/R = {roughness}")
+                        label=f"grainflow, D/Δx = {group[0]['cells_per_diameter']}, "
+                              f"η/R = {roughness}, first cells forced")
         ax.plot(st, [max(0.0, 1.0 - critical / s) for s in st], "-.", lw=0.8,
                 color=line.get_color(), label=f"film alone, η/R = {roughness}: 1 − {critical:.1f}/St")
 ax.set_xscale("log")
