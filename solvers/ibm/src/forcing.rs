@@ -161,7 +161,14 @@ impl WallLayer {
     #[inline]
     fn holds(&self, point: &[f64; 3]) -> bool {
         let distance = self.inward * (point[self.axis] - self.wall);
-        distance > 0.0 && distance <= self.depth * (1.0 + 1e-9)
+        distance > 0.0 && self.within(point[self.axis], 0.0)
+    }
+
+    /// Whether the coordinate `x` along the axis lies within `reach` of
+    /// the layer or in it (its far face included, to round-off).
+    #[inline]
+    fn within(&self, x: f64, reach: f64) -> bool {
+        self.inward * (x - self.wall) - reach <= self.depth * (1.0 + 1e-9)
     }
 }
 
@@ -622,6 +629,12 @@ fn face_fractions(
         };
         stencil.end[axis] = stencil.end[axis].max(stencil.start[axis]);
     }
+    // Only the layers the support reaches are tested face by face: none,
+    // for a grain away from the walls.
+    let free_layers: Vec<&WallLayer> = free_layers
+        .iter()
+        .filter(|layer| layer.within(centre[layer.axis], reach))
+        .collect();
     let location = Location::Face(component);
     let mut alpha = Vec::with_capacity((0..3).map(|a| stencil.end[a] - stencil.start[a]).product());
     grid.for_each(&stencil, |_, point| {
