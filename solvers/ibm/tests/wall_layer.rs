@@ -54,6 +54,11 @@ fn a_layer_lies_along_every_wall_and_no_open_or_periodic_face() {
 /// the velocity after one stage of forcing on a fluid at rest, with the
 /// floor's layer free or not.
 fn forced_once(fixed: bool, free: bool) -> (Vec3, Vec<Vec<f64>>) {
+    forced_once_at(centre(), fixed, free)
+}
+
+/// [`forced_once`] for a sphere centred at `at`.
+fn forced_once_at(at: Vec3, fixed: bool, free: bool) -> (Vec3, Vec<Vec<f64>>) {
     let grid = Grid::new(Dimension::Three, [CELLS; 3], [0.0; 3], EXTENT);
     let domain = Domain {
         dimension: Dimension::Three,
@@ -71,7 +76,7 @@ fn forced_once(fixed: bool, free: bool) -> (Vec3, Vec<Vec<f64>>) {
     let mut dem = DemSystem::new(domain, law, Vec::new(), 0.05);
     dem.ghost_reach = ghost_reach(&grid, RADIUS);
     dem.add_particles(&[NewParticle {
-        position: centre(),
+        position: at,
         velocity: Vec3::new(0.3, -0.2, 0.5),
         angular_velocity: Vec3::new(1.0, 0.5, -2.0),
         radius: RADIUS,
@@ -158,4 +163,56 @@ fn a_sphere_on_the_floor_leaves_the_first_cells_to_the_fluid() {
     let glued = forced_once(true, false).0;
     assert_eq!(forced_once(true, true).0, glued);
     assert_eq!(glued, forced_volume);
+}
+
+/// A moving sphere touching either free-slip side wall (y = 0 and y = 4):
+/// the faces of the first cells along that wall (u and w half a cell in,
+/// v a cell in) keep the fluid's velocity, the grid volume loses exactly
+/// the solid fraction there, and every other face is forced as without
+/// the layer. The layer is cut across each axis of the stencil, not only
+/// the vertical.
+#[test]
+fn a_sphere_against_a_side_wall_leaves_the_first_cells_to_the_fluid() {
+    let grid = Grid::new(Dimension::Three, [CELLS; 3], [0.0; 3], EXTENT);
+    let h = EXTENT[1] / CELLS as f64;
+    let width = transition_width(&grid.spacing);
+    let flow = FlowSolver::new(grid.clone(), boundaries(), 0.01, Communicator::serial()).unwrap();
+    for (wall, inward) in [(0.0, 1.0), (EXTENT[1], -1.0)] {
+        let at = Vec3::new(2.0, wall + inward * RADIUS, 2.0);
+        let (forced_volume, forced_velocity) = forced_once_at(at, false, false);
+        let (free_volume, free_velocity) = forced_once_at(at, false, true);
+        let in_layer = |x: f64| {
+            let distance = inward * (x - wall);
+            distance > 0.0 && distance <= h * (1.0 + 1e-9)
+        };
+        let mut moved_in_layer = 0;
+        for component in 0..3 {
+            let location = grainflow_fluid::Location::Face(component);
+            let mut layer_volume = 0.0;
+            grid.for_each(flow.velocity_unknowns(component), |index, point| {
+                let x = [0, 1, 2].map(|axis| grid.coordinate(location, axis, point[axis]));
+                if in_layer(x[1]) {
+                    let r = [x[0] - at.x, x[1] - at.y, x[2] - at.z];
+                    layer_volume += solid_fraction(r, RADIUS, width) * h * h * h;
+                    assert_eq!(free_velocity[component][index], 0.0);
+                    moved_in_layer += (forced_velocity[component][index] != 0.0) as usize;
+                } else {
+                    assert_eq!(
+                        free_velocity[component][index], forced_velocity[component][index],
+                        "wall {wall}, component {component} at {point:?}"
+                    );
+                }
+            });
+            assert!(
+                layer_volume > 0.05 * forced_volume[component],
+                "{layer_volume}"
+            );
+            let lost = forced_volume[component] - free_volume[component];
+            assert!(
+                (lost - layer_volume).abs() < 1e-12 * forced_volume[component],
+                "wall {wall}, component {component}: lost {lost}, in the layer {layer_volume}"
+            );
+        }
+        assert!(moved_in_layer > 100, "wall {wall}: {moved_in_layer}");
+    }
 }
