@@ -171,17 +171,18 @@ impl WallLayer {
         let extent = [0, 1, 2].map(|a| stencil.end[a] - stencil.start[a]);
         // Strides of the stencil's points in the order of `Grid::for_each`.
         let stride = [1, extent[0], extent[0] * extent[1]];
+        // The two axes along the plane.
+        let (a, b) = match self.axis {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
         let location = Location::Face(component);
         for plane in 0..extent[self.axis] {
             let index = stencil.start[self.axis] + plane;
             if !self.holds(grid.coordinate(location, self.axis, index)) {
                 continue;
             }
-            let (a, b) = match self.axis {
-                0 => (1, 2),
-                1 => (0, 2),
-                _ => (0, 1),
-            };
             for p in 0..extent[a] {
                 for q in 0..extent[b] {
                     fractions.alpha[plane * stride[self.axis] + p * stride[a] + q * stride[b]] =
