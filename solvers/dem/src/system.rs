@@ -16,7 +16,7 @@ use crate::contact_law::{ContactLaw, ContactPoint};
 use crate::ghosts::Ghosts;
 use crate::lubrication::Lubrication;
 use crate::neighbours::{CellGrid, NeighbourList, PreviousList, LUBRICATED, TOUCHING};
-use crate::particles::{NewParticle, Particles, PACKED_STATE};
+use crate::particles::{permuted, NewParticle, Particles, PACKED_STATE};
 use crate::thread_share::{wait_until, LazyTeam, ThreadShare};
 use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
@@ -280,22 +280,31 @@ impl DemSystem {
         // Sort owned particles by cell, cells in Z order, so that
         // neighbours sit close in memory and most pairs fall in one chunk of
         // the force loop (stable: a particle's rank within its cell is kept).
-        let mut order: Vec<usize> = (0..self.particles.n_owned).collect();
-        let keys: Vec<u64> = self.particles.position[..self.particles.n_owned]
-            .iter()
-            .map(|x| grid.z_order(x))
+        // Keyed by (cell, old index): an unstable sort of the keys is the
+        // stable sort of the cells, the same on any number of threads.
+        let mut keyed: Vec<(u64, usize)> = self.particles.position[..self.particles.n_owned]
+            .par_iter()
+            .with_min_len(PARTICLES_PER_TASK)
+            .enumerate()
+            .map(|(k, x)| (grid.z_order(x), k))
             .collect();
-        order.sort_by_key(|&k| keys[k]);
+        keyed.par_sort_unstable();
+        let order: Vec<usize> = keyed.into_iter().map(|(_, k)| k).collect();
         if order.iter().enumerate().any(|(k, &o)| k != o) {
             previous.reorder(&order);
             self.particles.permute_owned(&order);
             let stride = self.wall_stride();
-            self.wall_touching = order.iter().map(|&o| self.wall_touching[o]).collect();
-            let old = std::mem::take(&mut self.wall_history);
-            self.wall_history = order
-                .iter()
-                .flat_map(|&o| old[o * stride..(o + 1) * stride].iter().copied())
-                .collect();
+            self.wall_touching = permuted(&self.wall_touching, &order);
+            let mut history = vec![Vec3::zeros(); self.wall_history.len()];
+            if stride > 0 {
+                let old = &self.wall_history;
+                history
+                    .par_chunks_mut(stride)
+                    .zip(order.par_iter())
+                    .with_min_len(PARTICLES_PER_TASK)
+                    .for_each(|(row, &o)| row.copy_from_slice(&old[o * stride..(o + 1) * stride]));
+            }
+            self.wall_history = history;
         }
 
         let range = self.interaction_range().max(self.ghost_reach);
