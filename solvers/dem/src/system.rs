@@ -122,9 +122,9 @@ pub struct DemSystem {
     /// Largest radius over all ranks at the last neighbour build.
     max_radius: f64,
     /// For the pair list of build `.0`: per chunk of the force loop, the
-    /// first chunk that owns a lower partner of one of its particles (the
-    /// chunks it receives hand-overs from start there).
-    handover_sources: (u64, Vec<usize>),
+    /// chunks that own a lower partner of one of its particles, the only
+    /// ones it receives hand-overs from.
+    handover_sources: (u64, HandoverSources),
     /// The run of force-loop chunks each thread works on in every pass.
     share: ThreadShare,
     /// The threads that run those passes.
@@ -157,7 +157,7 @@ impl DemSystem {
             ghosts: Ghosts::default(),
             contacts: Vec::new(),
             max_radius: 0.0,
-            handover_sources: (u64::MAX, Vec::new()),
+            handover_sources: (u64::MAX, HandoverSources::default()),
             share: ThreadShare::default(),
             team: LazyTeam::default(),
             time: 0.0,
@@ -628,13 +628,13 @@ impl DemSystem {
     ///    whose upper particle is owned by a later chunk is handed over in
     ///    a list the chunk publishes when done;
     /// 2. a chunk adds what earlier chunks handed to its particles, in
-    ///    increasing chunk and particle order, as soon as they have all
-    ///    published their lists: at once within a thread's run, while the
-    ///    chunk is still in cache; the first chunks of a run, whose sources
-    ///    end the run before it, when that thread has published them. The
-    ///    sums are the same either way, so
-    ///    the result does not depend on the number of threads, and Newton's
-    ///    third law holds bitwise.
+    ///    increasing chunk and particle order, as soon as those chunks
+    ///    ([`HandoverSources`]) have all published their lists: at once
+    ///    when they are in the thread's own run, while the chunk is still
+    ///    in cache; otherwise between the run's later chunks, once the
+    ///    thread that owns them has got that far, or at the end of the run.
+    ///    The sums are the same either way, so the result does not depend
+    ///    on the number of threads, and Newton's third law holds bitwise.
     pub fn compute_forces(&mut self, dt: f64) -> StepDiagnostics {
         self.evaluate_forces(dt, dt)
     }
@@ -690,20 +690,31 @@ impl DemSystem {
     fn refresh_handover_sources(&mut self, n: usize, chunk_len: usize) {
         let list = &self.neighbours;
         let chunks = n.div_ceil(chunk_len);
-        if self.handover_sources.0 == list.builds && self.handover_sources.1.len() == chunks {
+        if self.handover_sources.0 == list.builds && self.handover_sources.1.chunks() == chunks {
             return;
         }
-        let sources = (0..chunks)
+        let per_chunk: Vec<Vec<u32>> = (0..chunks)
+            .into_par_iter()
             .map(|chunk| {
-                let particles = chunk * chunk_len..((chunk + 1) * chunk_len).min(n);
-                particles
-                    .filter(|&i| list.offsets[i] < list.upper_start[i])
-                    // Partners in increasing index: the first is the lowest.
-                    .map(|i| list.partner[list.offsets[i] as usize] as usize / chunk_len)
-                    .min()
-                    .unwrap_or(chunk)
+                let first = chunk * chunk_len;
+                let mut sources: Vec<u32> = (first..(first + chunk_len).min(n))
+                    .flat_map(|i| {
+                        &list.partner[list.offsets[i] as usize..list.upper_start[i] as usize]
+                    })
+                    // Lower partners are owned grains (ghosts come after them).
+                    .map(|&j| j / chunk_len as u32)
+                    .filter(|&source| (source as usize) < chunk)
+                    .collect();
+                sources.sort_unstable();
+                sources.dedup();
+                sources
             })
             .collect();
+        let mut sources = HandoverSources::default();
+        for chunk_sources in per_chunk {
+            sources.chunks.extend_from_slice(&chunk_sources);
+            sources.offsets.push(sources.chunks.len());
+        }
         self.handover_sources = (list.builds, sources);
     }
 
@@ -731,7 +742,7 @@ impl DemSystem {
         let gravity = self.domain.gravity;
         let external_loads = self.external_loads;
         let chunks = n.div_ceil(chunk_len);
-        let first_sources = &self.handover_sources.1;
+        let sources_of = &self.handover_sources.1;
         let list = &mut self.neighbours;
         let (offsets, upper_start, partner) = (&list.offsets, &list.upper_start, &list.partner);
         let entry_chunks =
@@ -926,7 +937,7 @@ impl DemSystem {
             let listed = receive_handovers(
                 chunk,
                 chunk_len,
-                first_sources[chunk]..chunk,
+                sources_of.of(chunk),
                 &handovers,
                 forces,
                 torques,
@@ -982,8 +993,29 @@ impl DemSystem {
             let mut listed = 0;
             let mut non_finite = false;
             let mut seconds = Vec::with_capacity(run.len());
-            let mut waiting = Vec::new();
+            let mut waiting: Vec<(usize, ChunkArrays)> = Vec::new();
             let first_chunk = share.chunks_of(thread).start;
+            // A chunk waiting for hand-overs from another run takes them in
+            // and is kicked as soon as its sources have published, between
+            // this run's chunks; its intake and kick count in its chunk's
+            // time (the wait does not): left out, they would load the later
+            // runs beyond the balance.
+            let take_in = |chunk: usize, arrays: ChunkArrays, seconds: &mut [f64]| {
+                let start = Instant::now();
+                let count = receive_handovers(
+                    chunk,
+                    chunk_len,
+                    sources_of.of(chunk),
+                    &handovers,
+                    arrays.forces,
+                    arrays.torques,
+                    arrays.counts,
+                )
+                .expect("every source has published its list");
+                let kicked_non_finite = kick(chunk, arrays.forces, arrays.torques);
+                seconds[chunk - first_chunk] += start.elapsed().as_secs_f64();
+                (count, kicked_non_finite)
+            };
             for (chunk, mut arrays) in share.chunks_of(thread).zip(run) {
                 let start = Instant::now();
                 let (overlap, walls, chunk_listed) = evaluate(chunk, &mut arrays);
@@ -997,27 +1029,25 @@ impl DemSystem {
                     None => waiting.push((chunk, arrays)),
                 }
                 seconds.push(start.elapsed().as_secs_f64());
+                let mut k = 0;
+                while k < waiting.len() {
+                    if all_published(sources_of.of(waiting[k].0), &handovers) {
+                        let (ready, arrays) = waiting.remove(k);
+                        let (count, bad) = take_in(ready, arrays, &mut seconds);
+                        listed += count;
+                        non_finite |= bad;
+                    } else {
+                        k += 1;
+                    }
+                }
             }
-            // The first chunks of a run receive from the end of the run
-            // before it, which that thread publishes last. Their intake and
-            // kick count in their chunk's time (the wait does not): left
-            // out, they would load the later runs beyond the balance.
+            // What is still waiting receives from the end of the run
+            // before, which that thread publishes last.
             for (chunk, arrays) in waiting {
-                let sources = first_sources[chunk]..chunk;
-                wait_until(|| all_published(sources.clone(), &handovers));
-                let start = Instant::now();
-                listed += receive_handovers(
-                    chunk,
-                    chunk_len,
-                    sources,
-                    &handovers,
-                    arrays.forces,
-                    arrays.torques,
-                    arrays.counts,
-                )
-                .expect("every source has published its list");
-                non_finite |= kick(chunk, arrays.forces, arrays.torques);
-                seconds[chunk - first_chunk] += start.elapsed().as_secs_f64();
+                wait_until(|| all_published(sources_of.of(chunk), &handovers));
+                let (count, bad) = take_in(chunk, arrays, &mut seconds);
+                listed += count;
+                non_finite |= bad;
             }
             (max_overlap, wall_contacts, listed, non_finite, seconds)
         });
@@ -1246,11 +1276,39 @@ impl HandedOver {
 }
 
 /// Whether every chunk of `sources` has published its hand-over list.
-fn all_published(
-    mut sources: std::ops::Range<usize>,
-    handovers: &[OnceLock<Vec<Handover>>],
-) -> bool {
-    sources.all(|source| handovers[source].get().is_some())
+fn all_published(sources: &[u32], handovers: &[OnceLock<Vec<Handover>>]) -> bool {
+    sources
+        .iter()
+        .all(|&source| handovers[source as usize].get().is_some())
+}
+
+/// Per chunk of the force loop, the earlier chunks that hand over to it, in
+/// increasing order (compressed rows).
+#[derive(Clone, Debug)]
+struct HandoverSources {
+    offsets: Vec<usize>,
+    chunks: Vec<u32>,
+}
+
+impl Default for HandoverSources {
+    fn default() -> Self {
+        HandoverSources {
+            offsets: vec![0],
+            chunks: Vec::new(),
+        }
+    }
+}
+
+impl HandoverSources {
+    /// Number of chunks described.
+    fn chunks(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// The chunks that hand over to `chunk`.
+    fn of(&self, chunk: usize) -> &[u32] {
+        &self.chunks[self.offsets[chunk]..self.offsets[chunk + 1]]
+    }
 }
 
 /// Adds to the particles of `chunk` what the chunks `sources` handed them,
@@ -1261,18 +1319,18 @@ fn all_published(
 fn receive_handovers(
     chunk: usize,
     chunk_len: usize,
-    sources: std::ops::Range<usize>,
+    sources: &[u32],
     handovers: &[OnceLock<Vec<Handover>>],
     forces: &mut [Vec3],
     torques: &mut [Vec3],
     counts: &mut [u32],
 ) -> Option<usize> {
-    if !all_published(sources.clone(), handovers) {
+    if !all_published(sources, handovers) {
         return None;
     }
     let first = chunk * chunk_len;
-    for source in sources {
-        let list = handovers[source].get().expect("checked above");
+    for &source in sources {
+        let list = handovers[source as usize].get().expect("checked above");
         let start = list.partition_point(|h| (h.target as usize) < first);
         let stop = list.partition_point(|h| (h.target as usize) < first + forces.len());
         for h in &list[start..stop] {
