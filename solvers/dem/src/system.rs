@@ -17,11 +17,11 @@ use crate::ghosts::Ghosts;
 use crate::lubrication::Lubrication;
 use crate::neighbours::{CellGrid, NeighbourList, PreviousList, LUBRICATED, TOUCHING};
 use crate::particles::{permuted, NewParticle, Particles, PACKED_STATE};
-use crate::thread_share::{wait_until, LazyTeam, ThreadShare};
+use crate::thread_share::{wait_until, LazyTeam, RunClaims, ThreadShare};
 use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
 use rayon::prelude::*;
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
 /// Smallest amount of work handed to one thread: below it the loops run on
@@ -620,7 +620,9 @@ impl DemSystem {
     ///
     /// Two passes over fixed chunks of particles ([`force_chunk`]), each
     /// thread over its run of chunks in increasing order
-    /// ([`ThreadShare`]), in a fixed order of sums whatever the threads:
+    /// ([`ThreadShare`]), then over what is left of the other runs from
+    /// their ends ([`RunClaims`]), in a fixed order of sums whatever the
+    /// threads:
     /// 1. each particle evaluates its upper entries (each pair of owned
     ///    particles once, pairs with ghosts from both sides), its walls and
     ///    gravity; a pair whose upper particle is in the same chunk hands it
@@ -946,7 +948,7 @@ impl DemSystem {
             (max_overlap, wall_contacts, listed)
         };
         let share = &self.share;
-        let mut arrays = forces
+        let arrays = forces
             .chunks_mut(chunk_len)
             .zip(torques.chunks_mut(chunk_len))
             .zip(self.wall_history.chunks_mut(chunk_len * wall_stride))
@@ -970,10 +972,13 @@ impl DemSystem {
                     }
                 },
             );
-        let parts: Vec<Vec<ChunkArrays>> = (0..share.threads())
-            .map(|t| arrays.by_ref().take(share.chunks_of(t).len()).collect())
+        let slots: Vec<Mutex<Option<ChunkArrays>>> =
+            arrays.map(|chunk| Mutex::new(Some(chunk))).collect();
+        let threads = share.threads();
+        let claims: Vec<RunClaims> = (0..threads)
+            .map(|t| RunClaims::new(share.chunks_of(t)))
             .collect();
-        let team = self.team.of(share.threads());
+        let team = self.team.of(threads);
         // The closing half kick of a complete chunk: every pair that reads
         // its grains' velocities has been evaluated by then (its own pairs
         // in this chunk, those with lower partners in the chunks it
@@ -984,23 +989,23 @@ impl DemSystem {
             };
             let first = chunk * chunk_len;
             // SAFETY: as above, no pair of this pass reads these grains
-            // any more, and only this thread owns the chunk.
+            // any more, and only this thread holds the chunk.
             unsafe { velocities.kick(first, forces, torques, half_dt, p) }
         };
-        let thread_results = team.run_parts(parts, |thread, run| {
+        let thread_results = team.run_parts((0..threads).collect(), |thread, _| {
             let mut max_overlap: f64 = 0.0;
             let mut wall_contacts = 0;
             let mut listed = 0;
             let mut non_finite = false;
-            let mut seconds = Vec::with_capacity(run.len());
+            // (chunk, seconds of its evaluation, intake and kick).
+            let mut seconds: Vec<(usize, f64)> = Vec::new();
             let mut waiting: Vec<(usize, ChunkArrays)> = Vec::new();
-            let first_chunk = share.chunks_of(thread).start;
-            // A chunk waiting for hand-overs from another run takes them in
-            // and is kicked as soon as its sources have published, between
-            // this run's chunks; its intake and kick count in its chunk's
-            // time (the wait does not): left out, they would load the later
-            // runs beyond the balance.
-            let take_in = |chunk: usize, arrays: ChunkArrays, seconds: &mut [f64]| {
+            // A chunk waiting for hand-overs from chunks another thread
+            // holds takes them in and is kicked as soon as they have
+            // published, between this thread's chunks; its intake and kick
+            // count in its chunk's time (the wait does not): left out, they
+            // would load the later runs beyond the balance.
+            let take_in = |chunk: usize, arrays: ChunkArrays, seconds: &mut Vec<(usize, f64)>| {
                 let start = Instant::now();
                 let count = receive_handovers(
                     chunk,
@@ -1013,10 +1018,26 @@ impl DemSystem {
                 )
                 .expect("every source has published its list");
                 let kicked_non_finite = kick(chunk, arrays.forces, arrays.torques);
-                seconds[chunk - first_chunk] += start.elapsed().as_secs_f64();
+                seconds.push((chunk, start.elapsed().as_secs_f64()));
                 (count, kicked_non_finite)
             };
-            for (chunk, mut arrays) in share.chunks_of(thread).zip(run) {
+            // The thread's own run from its front, then what is left of the
+            // other runs from their backs (the next run's first): a thread
+            // that a busy host has slowed down in this step hands its last
+            // chunks to one that is done, and a run keeps its grains in its
+            // thread's cache in every step where the threads keep pace.
+            let victims = (1..threads).map(|k| (thread + k) % threads);
+            let claimed =
+                std::iter::from_fn(|| claims[thread].front()).chain(victims.flat_map(|victim| {
+                    let claims = &claims[victim];
+                    std::iter::from_fn(move || claims.back())
+                }));
+            for chunk in claimed {
+                let mut arrays = slots[chunk]
+                    .lock()
+                    .expect("chunk")
+                    .take()
+                    .expect("each chunk is claimed once");
                 let start = Instant::now();
                 let (overlap, walls, chunk_listed) = evaluate(chunk, &mut arrays);
                 max_overlap = max_overlap.max(overlap);
@@ -1028,7 +1049,7 @@ impl DemSystem {
                     }
                     None => waiting.push((chunk, arrays)),
                 }
-                seconds.push(start.elapsed().as_secs_f64());
+                seconds.push((chunk, start.elapsed().as_secs_f64()));
                 let mut k = 0;
                 while k < waiting.len() {
                     if all_published(sources_of.of(waiting[k].0), &handovers) {
@@ -1041,8 +1062,8 @@ impl DemSystem {
                     }
                 }
             }
-            // What is still waiting receives from the end of the run
-            // before, which that thread publishes last.
+            // Every chunk is claimed: what still waits receives from chunks
+            // that other threads are finishing.
             for (chunk, arrays) in waiting {
                 wait_until(|| all_published(sources_of.of(chunk), &handovers));
                 let (count, bad) = take_in(chunk, arrays, &mut seconds);
@@ -1052,14 +1073,12 @@ impl DemSystem {
             (max_overlap, wall_contacts, listed, non_finite, seconds)
         });
         let mut totals = PassTotals::default();
-        for (thread, (overlap, walls, count, non_finite, seconds)) in
-            thread_results.into_iter().enumerate()
-        {
+        for (overlap, walls, count, non_finite, seconds) in thread_results {
             totals.max_overlap_ratio = totals.max_overlap_ratio.max(overlap);
             totals.wall_contacts += walls;
             totals.listed_contacts += count;
             totals.non_finite |= non_finite;
-            for (chunk, s) in self.share.chunks_of(thread).zip(seconds) {
+            for (chunk, s) in seconds {
                 self.share.record(chunk, s);
             }
         }

@@ -17,9 +17,16 @@
 //!   column's dense base costs ten times its loose top) and move only at a
 //!   neighbour build, when the grains are reordered anyway.
 //!
+//! A balance made once per build cannot follow a host that slows one of
+//! its CPUs for a step or two, which a shared machine does all the time.
+//! So a thread that has finished its own run claims what is left of the
+//! others' from their ends ([`RunClaims`]): the chunks change threads only
+//! in the steps where the threads fall out of step.
+//!
 //! What two threads still share every step are the grains at the boundary
 //! between their runs; where two cores do not share a last-level cache
-//! that costs about a sixth of the step (docs/performance.md).
+//! that has cost between a twentieth and a sixth of the step
+//! (docs/performance.md).
 //!
 //! Which thread runs a chunk never changes what the chunk computes, nor the
 //! order of any sum, so the results do not depend on the threads.
@@ -99,6 +106,52 @@ impl ThreadShare {
     /// Adds the time a chunk's force evaluation took.
     pub(crate) fn record(&mut self, chunk: usize, seconds: f64) {
         self.chunk_seconds[chunk] += seconds;
+    }
+}
+
+/// The chunks of one run not yet claimed in a pass: its thread claims them
+/// from the front, a thread done with its own run from the back.
+#[repr(align(64))]
+pub(crate) struct RunClaims(AtomicU64);
+
+impl RunClaims {
+    pub(crate) fn new(run: Range<usize>) -> Self {
+        RunClaims(AtomicU64::new(Self::pack(run.start, run.end)))
+    }
+
+    fn pack(front: usize, back: usize) -> u64 {
+        let (front, back) = (u32::try_from(front), u32::try_from(back));
+        (u64::from(front.expect("chunk index")) << 32) | u64::from(back.expect("chunk index"))
+    }
+
+    /// Claims the first unclaimed chunk, if any.
+    pub(crate) fn front(&self) -> Option<usize> {
+        self.claim(|front, back| (front + 1, back, front))
+    }
+
+    /// Claims the last unclaimed chunk, if any.
+    pub(crate) fn back(&self) -> Option<usize> {
+        self.claim(|front, back| (front, back - 1, back - 1))
+    }
+
+    fn claim(&self, take: impl Fn(usize, usize) -> (usize, usize, usize)) -> Option<usize> {
+        let mut state = self.0.load(Ordering::Acquire);
+        loop {
+            let (front, back) = ((state >> 32) as usize, (state & 0xffff_ffff) as usize);
+            if front >= back {
+                return None;
+            }
+            let (front, back, chunk) = take(front, back);
+            match self.0.compare_exchange_weak(
+                state,
+                Self::pack(front, back),
+                Ordering::AcqRel,
+                Ordering::Acquire,
+            ) {
+                Ok(_) => return Some(chunk),
+                Err(current) => state = current,
+            }
+        }
     }
 }
 
@@ -403,6 +456,35 @@ mod tests {
         // Fewer chunks than threads: one thread per chunk.
         share.update(300, 256, 4, 3);
         assert_eq!(share.threads(), 2);
+    }
+
+    #[test]
+    fn a_run_is_claimed_from_both_ends_until_they_meet() {
+        let claims = RunClaims::new(3..7);
+        assert_eq!(claims.front(), Some(3));
+        assert_eq!(claims.back(), Some(6));
+        assert_eq!(claims.back(), Some(5));
+        assert_eq!(claims.front(), Some(4));
+        assert_eq!(claims.front(), None);
+        assert_eq!(claims.back(), None);
+        assert_eq!(RunClaims::new(2..2).front(), None);
+    }
+
+    #[test]
+    fn threads_claiming_from_both_ends_take_each_chunk_once() {
+        let claims = RunClaims::new(0..100_000);
+        let (front, back) = std::thread::scope(|scope| {
+            let front = scope.spawn(|| std::iter::from_fn(|| claims.front()).collect::<Vec<_>>());
+            let back = scope.spawn(|| std::iter::from_fn(|| claims.back()).collect::<Vec<_>>());
+            (front.join().unwrap(), back.join().unwrap())
+        });
+        // The front takes an increasing prefix, the back a decreasing
+        // suffix, and together they hold every chunk exactly once.
+        assert!(front.windows(2).all(|w| w[1] == w[0] + 1));
+        assert!(back.windows(2).all(|w| w[1] + 1 == w[0]));
+        let mut all: Vec<usize> = front.iter().chain(&back).copied().collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..100_000).collect::<Vec<_>>());
     }
 
     #[test]
