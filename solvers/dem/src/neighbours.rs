@@ -313,8 +313,9 @@ impl NeighbourList {
                 self.offsets.push(last + c);
             }
         }
-        // The chunks' entries copied into place on rayon's threads: on one
-        // thread this concatenation costs a tenth of a build.
+        // The chunks' entries and their contact states are copied into
+        // place on rayon's threads; the copy is bound by memory, so a second
+        // thread shortens it only a little (docs/performance.md).
         let entries = *self.offsets.last().unwrap() as usize;
         self.partner.resize(entries, 0);
         self.history.resize(entries, Vec3::zeros());
