@@ -753,7 +753,7 @@ impl DemSystem {
             (0..chunks).map(|_| OnceLock::new()).collect();
         let p = &self.particles;
         // One chunk's pass 1, and its pass 2 when its sources are done.
-        let evaluate = |chunk: usize, arrays: &mut ChunkArrays| -> (f64, usize, Option<usize>) {
+        let evaluate = |chunk: usize, arrays: &mut ChunkArrays| -> (f64, usize) {
             let ChunkArrays {
                 forces,
                 torques,
@@ -936,16 +936,7 @@ impl DemSystem {
             handovers[chunk]
                 .set(outgoing)
                 .unwrap_or_else(|_| unreachable!("each chunk publishes once"));
-            let listed = receive_handovers(
-                chunk,
-                chunk_len,
-                sources_of.of(chunk),
-                &handovers,
-                forces,
-                torques,
-                counts,
-            );
-            (max_overlap, wall_contacts, listed)
+            (max_overlap, wall_contacts)
         };
         let share = &self.share;
         let arrays = forces
@@ -1000,11 +991,13 @@ impl DemSystem {
             // (chunk, seconds of its evaluation, intake and kick).
             let mut seconds: Vec<(usize, f64)> = Vec::new();
             let mut waiting: Vec<(usize, ChunkArrays)> = Vec::new();
-            // A chunk waiting for hand-overs from chunks another thread
-            // holds takes them in and is kicked as soon as they have
-            // published, between this thread's chunks; its intake and kick
-            // count in its chunk's time (the wait does not): left out, they
-            // would load the later runs beyond the balance.
+            // An evaluated chunk takes in its hand-overs and is kicked as
+            // soon as its sources have published: at once when this thread
+            // evaluated them, while the chunk is still in cache; between
+            // this thread's later chunks when another thread holds them.
+            // Its intake and kick count in its chunk's time (the wait does
+            // not): left out, they would load the later runs beyond the
+            // balance.
             let take_in = |chunk: usize, arrays: ChunkArrays, seconds: &mut Vec<(usize, f64)>| {
                 let start = Instant::now();
                 let count = receive_handovers(
@@ -1015,8 +1008,7 @@ impl DemSystem {
                     arrays.forces,
                     arrays.torques,
                     arrays.counts,
-                )
-                .expect("every source has published its list");
+                );
                 let kicked_non_finite = kick(chunk, arrays.forces, arrays.torques);
                 seconds.push((chunk, start.elapsed().as_secs_f64()));
                 (count, kicked_non_finite)
@@ -1039,17 +1031,11 @@ impl DemSystem {
                     .take()
                     .expect("each chunk is claimed once");
                 let start = Instant::now();
-                let (overlap, walls, chunk_listed) = evaluate(chunk, &mut arrays);
+                let (overlap, walls) = evaluate(chunk, &mut arrays);
                 max_overlap = max_overlap.max(overlap);
                 wall_contacts += walls;
-                match chunk_listed {
-                    Some(count) => {
-                        listed += count;
-                        non_finite |= kick(chunk, arrays.forces, arrays.torques);
-                    }
-                    None => waiting.push((chunk, arrays)),
-                }
                 seconds.push((chunk, start.elapsed().as_secs_f64()));
+                waiting.push((chunk, arrays));
                 let mut k = 0;
                 while k < waiting.len() {
                     if all_published(sources_of.of(waiting[k].0), &handovers) {
@@ -1332,9 +1318,8 @@ impl HandoverSources {
 
 /// Adds to the particles of `chunk` what the chunks `sources` handed them,
 /// in increasing chunk order and, within a chunk, in the order it made
-/// them (increasing lower particle); returns the chunk's (particle,
-/// contact) entries, or None, changing nothing, when a source has not
-/// published its list yet.
+/// them (increasing lower particle), once every source has published its
+/// list; returns the chunk's (particle, contact) entries.
 fn receive_handovers(
     chunk: usize,
     chunk_len: usize,
@@ -1343,13 +1328,12 @@ fn receive_handovers(
     forces: &mut [Vec3],
     torques: &mut [Vec3],
     counts: &mut [u32],
-) -> Option<usize> {
-    if !all_published(sources, handovers) {
-        return None;
-    }
+) -> usize {
     let first = chunk * chunk_len;
     for &source in sources {
-        let list = handovers[source as usize].get().expect("checked above");
+        let list = handovers[source as usize]
+            .get()
+            .expect("every source has published its list");
         let start = list.partition_point(|h| (h.target as usize) < first);
         let stop = list.partition_point(|h| (h.target as usize) < first + forces.len());
         for h in &list[start..stop] {
@@ -1361,7 +1345,7 @@ fn receive_handovers(
     }
     // The chunk's counts are final now: summed here rather than in a pass
     // of their own.
-    Some(counts.iter().map(|&c| c as usize).sum())
+    counts.iter().map(|&c| c as usize).sum()
 }
 
 /// What the passes of the force loop add up over the threads.
