@@ -303,11 +303,14 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
         );
     }
     let _ = writeln!(out, "time:");
+    // The first step sees the walls, inflows and unbalanced forces beside
+    // the initial flow: from rest, a lid sets the pace.
     let convective = solver.time_step_for_cfl(CFL_LIMIT);
     let viscous = EXPLICIT_VISCOUS_LIMIT / solver.viscous_number(1.0);
     let _ = writeln!(
         out,
-        "  convective limit (CFL sqrt(3), RK3): dt <= {convective:.4e} s on the initial flow"
+        "  convective limit (CFL sqrt(3), RK3): dt <= {convective:.4e} s in the first step \
+         (initial flow, moving walls and inflows, unbalanced body force)"
     );
     let _ = writeln!(
         out,
@@ -323,9 +326,9 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
         (Some(dt), _) => {
             let _ = writeln!(
                 out,
-                "  dt = {dt:.4e} s: initial CFL {:.3}{}",
-                solver.max_cfl(dt),
-                if solver.max_cfl(dt) > CFL_LIMIT {
+                "  dt = {dt:.4e} s: CFL of the first step at most {:.3}{}",
+                solver.cfl_bound(dt),
+                if solver.cfl_bound(dt) > CFL_LIMIT {
                     " -- beyond the RK3 limit: the run will refuse it"
                 } else {
                     ""
@@ -351,7 +354,11 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
             );
         }
         (None, Some(cfl)) => {
-            let _ = writeln!(out, "  dt adapted to CFL {cfl}");
+            let _ = writeln!(
+                out,
+                "  dt adapted to CFL {cfl}: first step {:.4e} s",
+                solver.time_step_for_cfl(cfl).min(case.time.end)
+            );
         }
         (None, None) => {}
     }

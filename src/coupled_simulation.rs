@@ -8,12 +8,13 @@
 use crate::bed_analysis::InclinedBed;
 use crate::case::{AnalysisSection, Case};
 use crate::coupled_analysis::SphereInFluid;
-use crate::fluid_simulation::FieldFiles;
+use crate::fluid_simulation::{cfl_overrun, FieldFiles};
 use crate::output::Outputs;
 use crate::simulation::{peak_memory_bytes, shortest_contact_time, Progress, Summary};
 use crate::stability::TimeStepVerdict;
 use crate::{fluid_scene, scene, sharing, stability, RunError};
 use grainflow_core::Communicator;
+use grainflow_fluid::time_step_for_cfl_rates;
 use grainflow_ibm::forcing::WallLayer;
 use grainflow_ibm::{
     CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
@@ -73,8 +74,10 @@ pub fn build_on(case: &Case, communicator: Communicator) -> Result<(CoupledSyste
 }
 
 /// The next fluid step: `time.dt`, or with `time.cfl` the step at which the
-/// flow and the grains (each grain's speed over the smallest cell size)
-/// reach that CFL number, at most `time.dt`.
+/// flow (with its walls and unbalanced body force,
+/// [`grainflow_fluid::FlowSolver::cfl_bound`]) and the grains (each grain's
+/// speed over the smallest cell size) reach that CFL number, at most
+/// `time.dt`.
 fn step_size(system: &CoupledSystem, case: &Case) -> f64 {
     let largest = case
         .time
@@ -88,12 +91,9 @@ fn step_size(system: &CoupledSystem, case: &Case) -> f64 {
         .iter()
         .copied()
         .fold(f64::INFINITY, f64::min);
-    let rate = system.flow.max_cfl(1.0) + system.dem.max_speed() / h;
-    if rate > 0.0 {
-        largest.min(cfl / rate)
-    } else {
-        largest
-    }
+    let (flow_rate, acceleration_rate) = system.flow.cfl_rates();
+    let speed_rate = flow_rate + system.dem.max_speed() / h;
+    largest.min(time_step_for_cfl_rates(cfl, speed_rate, acceleration_rate))
 }
 
 /// Refuses a DEM sub-step past the stability limit of the contacts
@@ -286,6 +286,11 @@ pub fn run(
                 if !report.flow.kinetic_energy.is_finite() || report.dem.non_finite {
                     failure = Some(format!(
                         "unstable at t = {:.6e} s (step {steps}): the flow or a grain is not finite",
+                        system.flow.time
+                    ));
+                } else if let Some(why) = cfl_overrun(report.flow.max_cfl, step_dt, case) {
+                    failure = Some(format!(
+                        "unstable at t = {:.6e} s (step {steps}): {why}",
                         system.flow.time
                     ));
                 } else if report.dem.max_overlap_ratio > case.time.overlap_limit {

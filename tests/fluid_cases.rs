@@ -6,7 +6,9 @@
 mod common;
 
 use common::{last_row, load, metric, run, run_cli};
-use grainflow::simulation;
+use grainflow::case::Case;
+use grainflow::{fluid_simulation, simulation};
+use grainflow_fluid::CFL_LIMIT;
 
 /// Relative L2 error of the Taylor–Green vortex (carried by a stream) at
 /// t = 1 s on n² cells with Δt ∝ Δx (CFL 0.36 at n = 64).
@@ -357,5 +359,78 @@ fn a_channel_at_constant_flow_rate_reaches_the_parabola_and_its_pressure_gradien
             ((held - expected) / expected).abs() <= 1e-10,
             "{held} vs {expected}"
         );
+    }
+}
+
+/// A lid sliding at 1 m/s over a cavity of 16 × 16 cells at rest, the step
+/// adapted to CFL 0.8 (the case of a reported defect: the step was taken
+/// from the fluid at rest alone, so the first one spanned the whole run,
+/// reached CFL 3.7e4 and was reported "ok").
+const LID_FROM_REST: &str = r#"
+[domain]
+dimension = 2
+lower = [0.0, 0.0]
+upper = [1.0, 1.0]
+
+[fluid]
+cells = [16, 16]
+density = 1.0
+viscosity = 0.01
+
+[fluid.boundary]
+x = ["no_slip", "no_slip"]
+y = ["no_slip", "moving"]
+y_upper_velocity = [1.0, 0.0]
+
+[time]
+end = 0.1
+cfl = 0.8
+
+[output]
+interval = 0.01
+"#;
+
+#[test]
+fn an_adapted_step_from_rest_keeps_the_cfl_number_a_sliding_lid_sets() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lid.toml");
+    std::fs::write(&path, LID_FROM_REST).unwrap();
+    let case = Case::load(&path, &[]).unwrap();
+    let out = dir.path().join("out");
+    let summary = simulation::run(&case, &out, false).unwrap().json;
+    assert_eq!(summary["status"], "ok");
+    let series = std::fs::read_to_string(out.join("series.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = series
+        .lines()
+        .skip(1)
+        .map(|line| line.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    // t, dt, step, kinetic_energy, max_cfl, ...: every step within CFL 0.8
+    // at the lid's speed (h = 1/16), so at least 0.1 / (0.8/16) = 2 steps.
+    for row in &rows {
+        assert!(row[1] <= 0.8 / 16.0 * (1.0 + 1e-12), "dt {}", row[1]);
+        assert!(row[4] <= 0.8, "CFL {}", row[4]);
+        // The fluid never outruns its lid: ½ ∫|u|² ≤ ½ U² on the unit square.
+        assert!(row[3] <= 0.5, "kinetic energy {}", row[3]);
+    }
+    assert!(summary["steps"].as_u64().unwrap() >= 2);
+}
+
+#[test]
+fn a_step_that_ends_past_the_rk3_limit_is_a_failure_in_either_mode() {
+    let fixed = load("channel_poiseuille.toml", &[]);
+    let mut adapted = fixed.clone();
+    (adapted.time.dt, adapted.time.cfl) = (None, Some(0.5));
+    for case in [&fixed, &adapted] {
+        assert!(fluid_simulation::cfl_overrun(CFL_LIMIT, 1e-3, case).is_none());
+        for beyond in [1.0001 * CFL_LIMIT, 3.7e4, f64::NAN] {
+            let why = fluid_simulation::cfl_overrun(beyond, 1e-3, case).expect("a failure");
+            let advice = if case.time.cfl.is_some() {
+                "lower time.cfl"
+            } else {
+                "reduce time.dt"
+            };
+            assert!(why.contains(advice), "{why}");
+        }
     }
 }

@@ -62,8 +62,8 @@ pub use boundary::{Boundaries, BoundaryCondition};
 pub use error::FluidError;
 pub use grid::{clustered_faces, Block, Clustering, Grid, Location};
 pub use navier_stokes::{
-    stage_fraction, FlowSolver, StepReport, ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT,
-    STAGES,
+    stage_fraction, time_step_for_cfl_rates, FlowSolver, StepReport, ViscousScheme, CFL_LIMIT,
+    EXPLICIT_VISCOUS_LIMIT, STAGES,
 };
 pub use partition::{flow_process_grid, Partition};
 pub use poisson::{DirectSolver, TransformBackend};

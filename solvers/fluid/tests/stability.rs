@@ -283,3 +283,63 @@ fn the_explicit_viscous_step_breaks_where_its_amplification_leaves_the_unit_disc
     ));
     assert!(solver.step(0.99 * dt / 1.01).is_ok());
 }
+
+/// A 2D cavity of 16 × 16 cells on the unit square, at rest, closed by
+/// walls at rest but for a lid sliding at `lid` m/s along x.
+fn cavity(lid: f64) -> FlowSolver {
+    let grid = Grid::new(Dimension::Two, [16, 16, 1], [0.0; 3], [1.0, 1.0, 1.0]);
+    let boundaries = Boundaries::periodic()
+        .with(0, BoundaryCondition::NoSlip, BoundaryCondition::NoSlip)
+        .with(
+            1,
+            BoundaryCondition::NoSlip,
+            BoundaryCondition::MovingWall([lid, 0.0, 0.0]),
+        );
+    FlowSolver::new(grid, boundaries, 1e-2, Communicator::serial()).unwrap()
+}
+
+#[test]
+fn the_adapted_step_from_rest_sees_the_sliding_lid() {
+    // At rest the velocity alone would allow any step: the lid sets the
+    // pace, CFL = U Δt / h with h = 1/16.
+    let mut solver = cavity(1.0);
+    assert_eq!(solver.max_cfl(1.0), 0.0);
+    let dt = solver.time_step_for_cfl(0.8);
+    assert_relative_eq!(dt, 0.8 / 16.0, max_relative = 1e-14);
+    assert_relative_eq!(solver.cfl_bound(dt), 0.8, max_relative = 1e-14);
+    // The fluid never outruns its lid: the step ends below the target.
+    let report = solver.step(dt).unwrap();
+    assert!(
+        report.max_cfl <= 0.8,
+        "CFL after the step {}",
+        report.max_cfl
+    );
+    // A lid at rest leaves the cavity at rest and the step unbounded.
+    assert_eq!(cavity(0.0).time_step_for_cfl(0.8), f64::INFINITY);
+}
+
+#[test]
+fn the_adapted_step_from_rest_sees_a_body_force_only_where_pressure_cannot_balance_it() {
+    let grid = Grid::new(Dimension::Two, [16, 16, 1], [0.0; 3], [1.0, 1.0, 1.0]);
+    let channel =
+        Boundaries::periodic().with(1, BoundaryCondition::NoSlip, BoundaryCondition::NoSlip);
+    let mut solver = FlowSolver::new(grid, channel, 1e-2, Communicator::serial()).unwrap();
+    // Along the periodic x a force f moves the fluid by f Δt within the
+    // step: f Δt² / h = CFL. Across the walls it is a hydrostatic pressure.
+    solver.body_force = [2.0, -9.81, 0.0];
+    let dt = solver.time_step_for_cfl(0.5);
+    assert_relative_eq!(dt, (0.5 / 16.0 / 2.0_f64).sqrt(), max_relative = 1e-14);
+    solver.step(dt).unwrap();
+    // From rest the channel's core gains f Δt (the implicit viscous solve
+    // reaches it from the walls at 1e-8); the wall layer less.
+    let reached = solver.max_cfl(dt);
+    assert!(reached <= 0.5, "CFL after the step {reached}");
+    assert_relative_eq!(reached, 0.5, max_relative = 1e-6);
+    // A pressure gradient along x counts with the force.
+    solver.mean_pressure_gradient = [2.0, 0.0, 0.0];
+    assert_eq!(solver.unbalanced_acceleration(), [0.0; 3]);
+    // A held bulk velocity sets its speed instead.
+    solver.bulk_velocity = [Some(-0.25), None, None];
+    assert_eq!(solver.boundary_speeds(), [0.25, 0.0, 0.0]);
+    assert_eq!(solver.unbalanced_acceleration(), [0.0; 3]);
+}
