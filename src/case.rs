@@ -323,6 +323,25 @@ fn default_seed() -> u64 {
     1
 }
 
+/// The solid fraction at which random sequential addition of equal discs
+/// (2D) and spheres (3D) jams: no further grain finds room (Hinrichsen,
+/// Feder & Jøssang 1986, 0.547; Torquato, Uche & Stillinger 2006, 0.384).
+const RANDOM_PLACEMENT_JAMMING: [f64; 2] = [0.547, 0.384];
+
+/// How many grains of the smallest radius random placement can put in the
+/// box `[lower, upper]` before it jams: an upper bound of what a `random`
+/// block can place (larger grains fill it sooner).
+fn random_placement_room(dim: usize, lower: &[f64], upper: &[f64], p: &ParticlesSection) -> f64 {
+    let region: f64 = (0..dim).map(|a| (upper[a] - lower[a]).max(0.0)).product();
+    let radius = p.radius * (1.0 - p.radius_spread);
+    let grain = if dim == 2 {
+        std::f64::consts::PI * radius * radius
+    } else {
+        4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)
+    };
+    (RANDOM_PLACEMENT_JAMMING[dim - 2] * region / grain).floor()
+}
+
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum BlockSection {
@@ -903,6 +922,20 @@ impl Case {
                     check_len(&key("upper"), upper, dim, &need)?;
                     if *count == 0 {
                         return Err(invalid(&key("count"), count, "allowed: at least 1"));
+                    }
+                    let room = random_placement_room(dim, lower, upper, p);
+                    if *count as f64 > room {
+                        return Err(invalid(
+                            &key("count"),
+                            count,
+                            &format!(
+                                "random placement (random sequential addition) jams at a solid \
+                                 fraction of {}: this region holds at most {room:.0} grains of \
+                                 the smallest radius; allowed: count ≤ {room:.0}, or a larger \
+                                 region, or a lattice block",
+                                RANDOM_PLACEMENT_JAMMING[dim - 2]
+                            ),
+                        ));
                     }
                     if !velocity.is_empty() {
                         check_len(&key("velocity"), velocity, dim, &need)?;

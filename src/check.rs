@@ -3,6 +3,7 @@
 
 use crate::case::Case;
 use crate::coupled_simulation;
+use crate::footprint::{human_bytes, machine_memory, Footprint};
 use crate::simulation::{check_time_step, time_step};
 use crate::{fluid_scene, scene, sharing, stability, RunError};
 use grainflow_contact::Method;
@@ -10,22 +11,13 @@ use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
 use grainflow_ibm::settling::schiller_naumann_reynolds;
 use std::fmt::Write;
 
-/// Bytes of the DEM state per particle: seven vectors (with the external
-/// force and torque) and five scalars, the reference position, the
-/// coordination, the wall marks and the cell bins (~290 B), 24 B of
-/// tangential history per wall, and per listed partner 81 B: index and
-/// mirror (8 B), history (24 B), a state byte, and the
-/// pair's force and partner torque handed between the two passes of the
-/// force loop (48 B). A dense 3D packing lists about 13 partners.
-fn bytes_per_particle(dimension: usize, walls: usize) -> usize {
-    let partners = if dimension == 3 { 13 } else { 6 };
-    290 + 24 * walls.max(1) + partners * 81
-}
-
 /// [`report`], and with `ranks` above one how the scene would be shared
 /// among that many MPI ranks ([`sharing::report`]).
 pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
     crate::simulation::check_ranks(case, ranks)?;
+    // Before anything is built: a scene too large for the machine is
+    // refused by its keys, not by a failed allocation.
+    Footprint::of(case).check_fits(ranks, machine_memory())?;
     let mut text = report(case)?;
     if ranks > 1 {
         let grid = sharing::flow_grid(case);
@@ -190,20 +182,8 @@ pub fn report(case: &Case) -> Result<String, RunError> {
             let _ = writeln!(out, "{w}");
         }
     }
-    let _ = writeln!(
-        out,
-        "memory estimate: {:.1} MiB",
-        ((n + pouring.remaining()) * bytes_per_particle(dim, system.walls.len())) as f64
-            / (1 << 20) as f64
-    );
+    let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)
-}
-
-/// Bytes of the flow state per cell: velocity, its two RK3 tendencies and
-/// its increment (4 vectors), pressure, correction and divergence, plus the
-/// transform work arrays of the direct solvers (about two fields).
-fn bytes_per_cell(dimension: usize) -> usize {
-    8 * (4 * dimension + 3 + 2)
 }
 
 /// Largest ratio of neighbouring widths along a stretched axis that
@@ -362,11 +342,7 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
         }
         (None, None) => {}
     }
-    let _ = writeln!(
-        out,
-        "memory estimate: {:.1} MiB",
-        (cells * bytes_per_cell(dim)) as f64 / (1 << 20) as f64
-    );
+    let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)
 }
 
@@ -496,12 +472,17 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
     for w in warning.iter().chain(&density_warning) {
         let _ = writeln!(out, "{w}");
     }
-    let _ = writeln!(
-        out,
-        "memory estimate: {:.1} MiB",
-        ((cells * (bytes_per_cell(dim) + 16 * dim))
-            + n * bytes_per_particle(dim, system.dem.walls.len())) as f64
-            / (1 << 20) as f64
-    );
+    let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)
+}
+
+/// The scene's memory estimate beside this machine's memory.
+fn memory_line(case: &Case) -> String {
+    let machine = machine_memory()
+        .map(|m| format!(" (this machine: {})", human_bytes(m)))
+        .unwrap_or_default();
+    format!(
+        "memory estimate: {}{machine}",
+        human_bytes(Footprint::of(case).bytes)
+    )
 }

@@ -17,6 +17,7 @@ pub mod coupled_simulation;
 pub mod dry_stepping;
 pub mod fluid_scene;
 pub mod fluid_simulation;
+pub mod footprint;
 pub mod output;
 pub mod pouring;
 pub mod scene;

@@ -88,6 +88,8 @@ pub fn run_on(
     show_progress: bool,
     communicator: Communicator,
 ) -> Result<Summary, RunError> {
+    crate::footprint::Footprint::of(case)
+        .check_fits(communicator.size(), crate::footprint::machine_memory())?;
     if rayon::current_thread_index().is_some() {
         return run_here(case, out, show_progress, communicator);
     }

@@ -287,3 +287,50 @@ fn check_warns_of_a_short_forcing_step_unless_it_is_held() {
         "{held}"
     );
 }
+
+/// `check` and `run` of `case` with `overrides`: (exit code, stderr) of
+/// each, and whether `run` wrote its output directory.
+fn check_and_run(case_name: &str, overrides: &[&str]) -> [(i32, String); 2] {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let results = ["check", "run"].map(|verb| {
+        let mut command = grainflow();
+        command.args([verb, &case(case_name)]);
+        if verb == "run" {
+            command.args(["--out", out.to_str().unwrap()]);
+        }
+        for o in overrides {
+            command.args(["--set", o]);
+        }
+        let result = command.output().unwrap();
+        (
+            result.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&result.stderr).into_owned(),
+        )
+    });
+    assert!(!out.exists(), "{overrides:?}: run wrote {out:?}");
+    results
+}
+
+#[test]
+fn a_scene_too_large_to_hold_is_refused_by_its_keys_before_any_allocation() {
+    for (case_name, assignment, key) in [
+        // 10¹² cells: more than any machine holds.
+        (
+            "taylor_green_2d.toml",
+            "fluid.cells=[1000000, 1000000]",
+            "fluid.cells",
+        ),
+        // 10¹² random grains in a box that jams after about two thousand.
+        (
+            "column_collapse_2d.toml",
+            "particles.block[0].count=1000000000000",
+            "particles.block[0].count",
+        ),
+    ] {
+        for (code, stderr) in check_and_run(case_name, &[assignment]) {
+            assert_eq!(code, 2, "{assignment}: {stderr}");
+            assert!(stderr.contains(key), "{assignment}: {stderr}");
+        }
+    }
+}

@@ -1,0 +1,195 @@
+//! The memory a scene needs, estimated from its case alone: no grain is
+//! placed and no field allocated, so that `check` and `run` can refuse a
+//! scene larger than the machine with the keys that make it large, instead
+//! of dying in an allocation.
+
+use crate::case::{BlockSection, Case};
+use crate::RunError;
+
+/// Bytes of the DEM state per particle: seven vectors (with the external
+/// force and torque) and five scalars, the reference position, the
+/// coordination, the wall marks and the cell bins (~290 B), 24 B of
+/// tangential history per wall, and per listed partner 81 B: index and
+/// mirror (8 B), history (24 B), a state byte, and the
+/// pair's force and partner torque handed between the two passes of the
+/// force loop (48 B). A dense 3D packing lists about 13 partners.
+pub fn bytes_per_particle(dimension: usize, walls: usize) -> usize {
+    let partners = if dimension == 3 { 13 } else { 6 };
+    290 + 24 * walls.max(1) + partners * 81
+}
+
+/// Bytes of the flow state per cell: velocity, its two RK3 tendencies and
+/// its increment (4 vectors), pressure, correction and divergence, plus the
+/// transform work arrays of the direct solves (about two fields).
+pub fn bytes_per_cell(dimension: usize) -> usize {
+    8 * (4 * dimension + 3 + 2)
+}
+
+/// Bytes per cell that immersed grains add: the solid fraction's weights
+/// and the forcing's field, a vector per cell.
+pub fn immersed_bytes_per_cell(dimension: usize) -> usize {
+    16 * dimension
+}
+
+/// What a scene holds at its largest, counted from the case.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Footprint {
+    /// Grains of every block and pour, `(key, count)`, in the case's order.
+    pub grains: Vec<(String, f64)>,
+    /// Cells of the fluid grid (zero in a dry scene).
+    pub cells: f64,
+    /// Estimated bytes of the whole scene, every rank together.
+    pub bytes: f64,
+}
+
+impl Footprint {
+    /// Counts the grains and cells of `case` without creating them.
+    pub fn of(case: &Case) -> Footprint {
+        let dim = case.domain.dimension as usize;
+        let grains: Vec<(String, f64)> =
+            case.particles
+                .iter()
+                .flat_map(|p| {
+                    let blocks = p.block.iter().enumerate().map(move |(k, block)| {
+                        let key = match block {
+                            BlockSection::Lattice { .. } => "spacing",
+                            BlockSection::Random { .. } | BlockSection::CollisionPairs { .. } => {
+                                "count"
+                            }
+                            BlockSection::Explicit { .. } => "positions",
+                            BlockSection::File { .. } => "path",
+                        };
+                        (
+                            format!("particles.block[{k}].{key}"),
+                            block_grains(block, dim),
+                        )
+                    });
+                    let pours =
+                        p.pour.iter().enumerate().map(|(k, pour)| {
+                            (format!("particles.pour[{k}].count"), pour.count as f64)
+                        });
+                    blocks.chain(pours)
+                })
+                .collect();
+        let cells = case
+            .fluid
+            .as_ref()
+            .map_or(0.0, |f| f.cells[..dim].iter().map(|&n| n as f64).product());
+        let per_cell = bytes_per_cell(dim)
+            + if case.particles.is_some() {
+                immersed_bytes_per_cell(dim)
+            } else {
+                0
+            };
+        let total_grains: f64 = grains.iter().map(|(_, n)| n).sum();
+        let bytes = total_grains * bytes_per_particle(dim, case.walls.len()) as f64
+            + cells * per_cell as f64;
+        Footprint {
+            grains,
+            cells,
+            bytes,
+        }
+    }
+
+    /// Refuses a scene whose share on each of `ranks` ranks needs more
+    /// memory than `available` bytes (this machine's, [`machine_memory`]),
+    /// naming the keys that make it large.
+    pub fn check_fits(&self, ranks: usize, available: Option<f64>) -> Result<(), RunError> {
+        let Some(available) = available else {
+            return Ok(());
+        };
+        let share = self.bytes / ranks as f64;
+        if share <= available {
+            return Ok(());
+        }
+        let mut causes = Vec::new();
+        if self.cells > 0.0 {
+            causes.push(format!("fluid.cells = {:.3e} cells", self.cells));
+        }
+        let mut largest = self.grains.clone();
+        largest.sort_by(|a, b| b.1.total_cmp(&a.1));
+        for (key, count) in largest.iter().filter(|(_, n)| *n > 0.0).take(2) {
+            causes.push(format!("{key}: {count:.3e} grains"));
+        }
+        Err(RunError::Case(format!(
+            "the scene needs about {} per rank on {ranks} rank{} ({}), more than this \
+             machine's {}: reduce them, or share the scene among more ranks (mpirun)",
+            human_bytes(share),
+            if ranks == 1 { "" } else { "s" },
+            causes.join(", "),
+            human_bytes(available)
+        )))
+    }
+}
+
+/// How many grains `block` creates, from its parameters alone.
+fn block_grains(block: &BlockSection, dim: usize) -> f64 {
+    match block {
+        BlockSection::Lattice {
+            lower,
+            upper,
+            spacing,
+            layer_spacing,
+            ..
+        } => (0..dim)
+            .map(|a| {
+                let step = if a == dim - 1 {
+                    layer_spacing.unwrap_or(*spacing)
+                } else {
+                    *spacing
+                };
+                ((upper[a] - lower[a]) / step + 1e-9).floor().max(0.0)
+            })
+            .product(),
+        BlockSection::Random { count, .. } => *count as f64,
+        BlockSection::Explicit { positions, .. } => positions.len() as f64,
+        // One grain per line after the header; an unreadable file is
+        // reported when the scene is built.
+        BlockSection::File { path, .. } => {
+            std::fs::read_to_string(path).map_or(0.0, |text| text.lines().skip(1).count() as f64)
+        }
+        BlockSection::CollisionPairs { count, .. } => 2.0 * *count as f64,
+    }
+}
+
+/// The physical memory of this machine (Linux: `MemTotal` of
+/// `/proc/meminfo`), if known.
+pub fn machine_memory() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024.0)
+}
+
+/// `bytes` in MiB, GiB or TiB.
+pub fn human_bytes(bytes: f64) -> String {
+    let mib = bytes / (1u64 << 20) as f64;
+    if mib < 1024.0 {
+        format!("{mib:.1} MiB")
+    } else if mib < 1024.0 * 1024.0 {
+        format!("{:.1} GiB", mib / 1024.0)
+    } else {
+        format!("{:.1} TiB", mib / (1024.0 * 1024.0))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_scene_larger_than_the_machine_is_refused_naming_its_keys() {
+        let footprint = Footprint {
+            grains: vec![("particles.block[0].count".into(), 1e12)],
+            cells: 1e12,
+            bytes: 1e12 * 1000.0,
+        };
+        let error = footprint.check_fits(1, Some(24e9)).unwrap_err().to_string();
+        assert!(error.contains("fluid.cells"), "{error}");
+        assert!(error.contains("particles.block[0].count"), "{error}");
+        // Shared among enough ranks, each share fits.
+        assert!(footprint.check_fits(100_000, Some(24e9)).is_ok());
+        // Where the machine's memory is unknown nothing is refused.
+        assert!(footprint.check_fits(1, None).is_ok());
+    }
+}
