@@ -182,6 +182,9 @@ pub fn report(case: &Case) -> Result<String, RunError> {
             let _ = writeln!(out, "{w}");
         }
     }
+    if let Some(w) = scene::glued_overlap_warning(case).map_err(RunError::Case)? {
+        let _ = writeln!(out, "{w}");
+    }
     let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)
 }
@@ -469,7 +472,12 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
         case.time.end,
         steps * cells as f64
     );
-    for w in warning.iter().chain(&density_warning) {
+    let overlap_warning = scene::glued_overlap_warning(case).map_err(RunError::Case)?;
+    for w in warning
+        .iter()
+        .chain(&density_warning)
+        .chain(&overlap_warning)
+    {
         let _ = writeln!(out, "{w}");
     }
     let _ = writeln!(out, "{}", memory_line(case));

@@ -18,6 +18,7 @@ pub mod dry_stepping;
 pub mod fluid_scene;
 pub mod fluid_simulation;
 pub mod footprint;
+pub mod initial_overlaps;
 pub mod output;
 pub mod pouring;
 pub mod scene;

@@ -1,6 +1,7 @@
 //! Scene assembly: turns a validated [`Case`] into a [`DemSystem`].
 
 use crate::case::{BlockSection, Case};
+use crate::initial_overlaps;
 use grainflow_contact::{ConicSolver, HardContact, Method};
 use grainflow_core::{fits, process_grid, Communicator, Dimension, Domain, Vec3};
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
@@ -9,6 +10,7 @@ use grainflow_dem::Lubrication;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness, PlaneWall};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
+use std::ops::Range;
 
 /// A 2- or 3-component list as a vector (z = 0 in 2D; empty = zero).
 pub fn vector(values: &[f64]) -> Vec3 {
@@ -89,8 +91,24 @@ pub fn walls(case: &Case) -> Vec<PlaneWall> {
         .collect()
 }
 
-/// The particles of every generator block, in order.
+/// The particles of every generator block, in order, refused where a
+/// moving grain starts inside another ([`initial_overlaps`]).
 pub fn particles(case: &Case) -> Result<Vec<NewParticle>, String> {
+    let (placed, blocks) = particles_by_block(case)?;
+    initial_overlaps::check(&domain(case), &placed, &blocks)?;
+    Ok(placed)
+}
+
+/// The warning for glued grains placed overlapping each other, if any (a
+/// moving grain placed inside another is an error, [`particles`]).
+pub fn glued_overlap_warning(case: &Case) -> Result<Option<String>, String> {
+    let (placed, blocks) = particles_by_block(case)?;
+    initial_overlaps::check(&domain(case), &placed, &blocks)
+}
+
+/// The particles of every generator block, in order, and the range each
+/// block made.
+fn particles_by_block(case: &Case) -> Result<(Vec<NewParticle>, Vec<Range<usize>>), String> {
     let p = case.particles_section();
     let dimension = domain(case).dimension;
     let mut rng = Pcg64::seed_from_u64(p.seed);
@@ -99,6 +117,7 @@ pub fn particles(case: &Case) -> Result<Vec<NewParticle>, String> {
         spread: p.radius_spread,
     };
     let mut all: Vec<NewParticle> = Vec::new();
+    let mut blocks = Vec::with_capacity(p.block.len());
     for (k, block) in p.block.iter().enumerate() {
         let made = match block {
             BlockSection::Lattice {
@@ -201,9 +220,10 @@ pub fn particles(case: &Case) -> Result<Vec<NewParticle>, String> {
                 "particles.block[{k}] creates no particle: enlarge its region"
             ));
         }
+        blocks.push(all.len()..all.len() + made.len());
         all.extend(made);
     }
-    Ok(all)
+    Ok((all, blocks))
 }
 
 /// Reads `x,y[,z],radius[,vx,vy[,vz]]` rows after a header line.

@@ -313,13 +313,19 @@ fn check_and_run(case_name: &str, overrides: &[&str]) -> [(i32, String); 2] {
 }
 
 #[test]
-fn a_scene_too_large_to_hold_is_refused_by_its_keys_before_any_allocation() {
+fn scenes_that_cannot_start_are_refused_by_check_and_run_naming_their_keys() {
     for (case_name, assignment, key) in [
         // 10¹² cells: more than any machine holds.
         (
             "taylor_green_2d.toml",
             "fluid.cells=[1000000, 1000000]",
             "fluid.cells",
+        ),
+        // Two moving grains placed a tenth of a millimetre apart.
+        (
+            "bouncing_dry.toml",
+            "particles.block[0].positions=[[0.0, 0.0, 0.05], [0.0001, 0.0, 0.05]]",
+            "particles.block[0] grain 1",
         ),
         // 10¹² random grains in a box that jams after about two thousand.
         (
