@@ -147,6 +147,29 @@ fn couette_2d_under_a_moving_wall() {
     assert!(error / speed <= ROUND_OFF);
 }
 
+/// Couette flow across x, an axis solved by a transform: a wall at rest
+/// facing one sliding along y. Both prescribe the velocity (the same kind
+/// of end), so they may face each other on any axis: `v = V x`, to
+/// round-off.
+#[test]
+fn couette_2d_across_a_transformed_axis() {
+    let speed = 1.5;
+    let grid = Grid::new(Dimension::Two, [16, 4, 1], [0.0; 3], [2.0, 1.0, 1.0]);
+    let boundaries = Boundaries::periodic().with(
+        0,
+        BoundaryCondition::NoSlip,
+        BoundaryCondition::MovingWall([0.0, speed, 0.0]),
+    );
+    let mut solver = solver_with(grid, boundaries);
+    advance(&mut solver, 0.2, 300, speed);
+    let error = max_velocity_error(
+        &solver,
+        |c, x| if c == 1 { speed * x[0] / 2.0 } else { 0.0 },
+    );
+    println!("Couette 2D across x: relative error {:.3e}", error / speed);
+    assert!(error / speed <= ROUND_OFF);
+}
+
 /// Couette flow in 3D between walls normal to y (a transformed axis), the
 /// upper one sliding along z and the lower one along x: `w = W y`,
 /// `u = U (1 − y)`.
