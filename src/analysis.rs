@@ -2,6 +2,7 @@
 //! and as CSV tables beside it.
 
 use crate::case::AnalysisSection;
+use crate::deposit;
 use grainflow_core::Vec3;
 use grainflow_dem::stress::particle_moments;
 use grainflow_dem::DemSystem;
@@ -658,7 +659,7 @@ impl ColumnCollapse {
 
     fn after_step(&mut self, system: &DemSystem) {
         if self.initial_height.is_none() && system.time >= self.release_time {
-            self.initial_height = Some(Self::height(system));
+            self.initial_height = Some(self.column_top(system));
         }
         while let Some(&t) = self.profile_times.last() {
             if system.time < self.release_time + t {
@@ -671,50 +672,59 @@ impl ColumnCollapse {
         }
     }
 
-    /// Front of the deposit on each side: bins two mean diameters wide along
-    /// x are scanned outward from the centre, and the front is the outer
-    /// edge of the farthest grain before the first bin covered by less than
-    /// half a monolayer (in 2D, fewer than one grain in the bin; in 3D,
-    /// fewer than the spanwise length over a diameter). A chain of single grains
-    /// still counts; grains that rolled or bounced away alone do not.
-    /// Returns the mean over the sides.
-    fn front(&self, system: &DemSystem) -> f64 {
+    /// The mobile grains' centres and radii, and their mean diameter.
+    fn mobile_grains(system: &DemSystem) -> (Vec<Vec3>, Vec<f64>, f64) {
         let p = &system.particles;
-        let mobile: Vec<usize> = (0..p.n_owned)
-            .filter(|&k| p.inverse_mass[k] > 0.0)
-            .collect();
-        let diameter =
-            2.0 * mobile.iter().map(|&k| p.radius[k]).sum::<f64>() / mobile.len().max(1) as f64;
+        let mobile = (0..p.n_owned).filter(|&k| p.inverse_mass[k] > 0.0);
+        let centres: Vec<Vec3> = mobile.clone().map(|k| p.position[k]).collect();
+        let radii: Vec<f64> = mobile.map(|k| p.radius[k]).collect();
+        let diameter = 2.0 * radii.iter().sum::<f64>() / radii.len().max(1) as f64;
+        (centres, radii, diameter)
+    }
+
+    /// H0: the mean top of the column between its gates
+    /// ([`deposit::mean_top`] over cells two mean diameters wide), not the
+    /// highest grain, which sits above it by a grain or so.
+    fn column_top(&self, system: &DemSystem) -> f64 {
+        let (centres, radii, diameter) = Self::mobile_grains(system);
         let vertical = Self::vertical(system);
-        let monolayer = match system.domain.dimension {
-            grainflow_core::Dimension::Two => 1.0,
-            grainflow_core::Dimension::Three => {
-                let spanwise = (0..3).find(|&a| a != 0 && a != vertical).unwrap();
-                system.domain.extent()[spanwise] / diameter
-            }
+        let from = if self.sides.contains(&-1.0) {
+            self.centre - self.half_width
+        } else {
+            self.centre
         };
-        let width = 2.0 * diameter;
-        let bins = ((system.domain.extent().x / width).ceil() as usize).max(1);
-        let mut fronts = Vec::new();
-        for &side in &self.sides {
-            let mut count = vec![0usize; bins];
-            for &k in &mobile {
-                let d = side * (p.position[k].x - self.centre);
-                if d >= 0.0 {
-                    count[((d / width) as usize).min(bins - 1)] += 1;
-                }
-            }
-            // Half a monolayer of a bin two diameters wide; the front is the
-            // outer edge of the farthest grain in the covered bins.
-            let covered = count.iter().take_while(|&&c| c as f64 >= monolayer).count();
-            let front = mobile
-                .iter()
-                .map(|&k| (side * (p.position[k].x - self.centre), p.radius[k]))
-                .filter(|&(d, _)| d >= 0.0 && d < covered as f64 * width)
-                .map(|(d, r)| d + r)
-                .fold(0.0, f64::max);
-            fronts.push(front);
-        }
+        let spanwise = (system.domain.dimension == grainflow_core::Dimension::Three).then(|| {
+            let axis = (0..3).find(|&a| a != 0 && a != vertical).unwrap();
+            (
+                axis,
+                system.domain.lower[axis],
+                system.domain.extent()[axis],
+            )
+        });
+        deposit::mean_top(
+            &centres,
+            &radii,
+            [from, self.centre + self.half_width],
+            2.0 * diameter,
+            vertical,
+            system.domain.lower[vertical],
+            spanwise,
+        )
+    }
+
+    /// Front of the deposit on each side of the column's centre: the
+    /// farthest grain surface of the main mass, the grains linked to one
+    /// another through gaps smaller than a mean diameter
+    /// ([`deposit::main_mass`]); grains that came to rest alone ahead of it
+    /// do not count. Returns the mean over the sides.
+    fn front(&self, system: &DemSystem) -> f64 {
+        let (centres, radii, diameter) = Self::mobile_grains(system);
+        let mass = deposit::main_mass(&system.domain, &centres, &radii, diameter);
+        let fronts: Vec<f64> = self
+            .sides
+            .iter()
+            .map(|&side| deposit::front(&centres, &radii, &mass, self.centre, side))
+            .collect();
         fronts.iter().sum::<f64>() / fronts.len() as f64
     }
 

@@ -10,9 +10,9 @@
 //! exert no force on each other, so overlaps between two of them are
 //! only worth a warning (a rough bed built of interpenetrating grains).
 
+use crate::grain_pairs::near_pairs;
 use grainflow_core::Domain;
 use grainflow_dem::particles::NewParticle;
-use std::collections::HashMap;
 use std::ops::Range;
 
 /// Largest overlap, as a fraction of the smaller radius, of two grains one
@@ -82,82 +82,17 @@ pub fn check(
     }))
 }
 
-/// Every overlapping pair of `placed`, through bins of the largest
-/// diameter; periodic axes are searched through their images.
+/// Every overlapping pair of `placed` ([`near_pairs`] within no gap).
 fn overlaps(domain: &Domain, placed: &[NewParticle]) -> Vec<Overlap> {
-    let dim = domain.dimension.count();
-    let r_max = placed.iter().map(|p| p.radius).fold(0.0, f64::max);
-    if placed.len() < 2 || r_max <= 0.0 {
-        return Vec::new();
-    }
-    let extent = domain.extent();
-    let bin = 2.0 * r_max;
-    let bins = [0, 1, 2].map(|a| {
-        if a < dim {
-            ((extent[a] / bin).floor() as i64).max(1)
-        } else {
-            1
-        }
-    });
-    let bin_of = |p: &NewParticle| {
-        [0, 1, 2].map(|a| {
-            if a < dim {
-                (((p.position[a] - domain.lower[a]) / bin).floor() as i64).clamp(0, bins[a] - 1)
-            } else {
-                0
-            }
+    let centres: Vec<_> = placed.iter().map(|p| p.position).collect();
+    let radii: Vec<f64> = placed.iter().map(|p| p.radius).collect();
+    near_pairs(domain, &centres, &radii, 0.0)
+        .into_iter()
+        .map(|near| Overlap {
+            pair: near.pair,
+            depth: -near.gap / radii[near.pair[0]].min(radii[near.pair[1]]),
         })
-    };
-    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-    for (k, p) in placed.iter().enumerate() {
-        grid.entry(bin_of(p)).or_default().push(k);
-    }
-    let reach = |a: usize| if a < dim { -1..=1 } else { 0..=0 };
-    let mut found = Vec::new();
-    for (k, p) in placed.iter().enumerate() {
-        let home = bin_of(p);
-        let mut seen = Vec::new();
-        for dz in reach(2) {
-            for dy in reach(1) {
-                for dx in reach(0) {
-                    let mut cell = [home[0] + dx, home[1] + dy, home[2] + dz];
-                    let mut outside = false;
-                    for a in 0..dim {
-                        if domain.periodic[a] {
-                            cell[a] = cell[a].rem_euclid(bins[a]);
-                        } else {
-                            outside |= cell[a] < 0 || cell[a] >= bins[a];
-                        }
-                    }
-                    // A short periodic axis wraps onto the same bin twice.
-                    if outside || seen.contains(&cell) {
-                        continue;
-                    }
-                    seen.push(cell);
-                    for &other in grid.get(&cell).into_iter().flatten() {
-                        if other <= k {
-                            continue;
-                        }
-                        let q = &placed[other];
-                        let mut gap = q.position - p.position;
-                        for a in 0..dim {
-                            if domain.periodic[a] {
-                                gap[a] -= extent[a] * (gap[a] / extent[a]).round();
-                            }
-                        }
-                        let overlap = p.radius + q.radius - gap.norm();
-                        if overlap > 0.0 {
-                            found.push(Overlap {
-                                pair: [k, other],
-                                depth: overlap / p.radius.min(q.radius),
-                            });
-                        }
-                    }
-                }
-            }
-        }
-    }
-    found
+        .collect()
 }
 
 #[cfg(test)]
