@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// Numbers per particle in a [`Particles::pack_state`] message.
-pub const PACKED_STATE: usize = 29;
+pub const PACKED_STATE: usize = 35;
 /// Numbers per particle in a [`Particles::pack_motion`] message.
 pub const PACKED_MOTION: usize = 15;
 
@@ -37,6 +37,13 @@ pub struct Particles {
     /// coupled step: the change since is the impulse the fluid answers one
     /// stage late (`grainflow_ibm::coupled`). Travels with the particle.
     pub dem_start_velocity: Vec<Vec3>,
+    /// The fluid momentum and angular momentum inside the particle per unit
+    /// density, `∫ α_p u dV` and `∫ α_p r × u dV`, measured at the end of
+    /// the last stage of a coupled step: the next stage's load takes the
+    /// change since, a derivative over the volume moving with the particle
+    /// (`grainflow_ibm::coupled`). Travels with the particle.
+    pub inner_fluid_momentum: Vec<Vec3>,
+    pub inner_fluid_angular_momentum: Vec<Vec3>,
 }
 
 /// Mass and moment of inertia of a sphere (3D) or of a disc per unit
@@ -110,6 +117,8 @@ impl Particles {
         self.external_torque.push(Vec3::zeros());
         let start = self.velocity[self.velocity.len() - 1];
         self.dem_start_velocity.push(start);
+        self.inner_fluid_momentum.push(Vec3::zeros());
+        self.inner_fluid_angular_momentum.push(Vec3::zeros());
         self.n_owned += 1;
     }
 
@@ -129,6 +138,8 @@ impl Particles {
         self.external_force.truncate(n);
         self.external_torque.truncate(n);
         self.dem_start_velocity.truncate(n);
+        self.inner_fluid_momentum.truncate(n);
+        self.inner_fluid_angular_momentum.truncate(n);
     }
 
     /// Appends a ghost copy of particle `source` displaced by `shift`.
@@ -147,6 +158,10 @@ impl Particles {
         self.external_torque.push(self.external_torque[source]);
         self.dem_start_velocity
             .push(self.dem_start_velocity[source]);
+        self.inner_fluid_momentum
+            .push(self.inner_fluid_momentum[source]);
+        self.inner_fluid_angular_momentum
+            .push(self.inner_fluid_angular_momentum[source]);
     }
 
     /// Reorders the owned particles by `order` (new index k holds old
@@ -169,6 +184,8 @@ impl Particles {
         apply(&mut self.external_force, order);
         apply(&mut self.external_torque, order);
         apply(&mut self.dem_start_velocity, order);
+        apply(&mut self.inner_fluid_momentum, order);
+        apply(&mut self.inner_fluid_angular_momentum, order);
     }
 
     /// Keeps the owned particles `kept` (in that order), dropping the others;
@@ -197,6 +214,8 @@ impl Particles {
             &self.external_force[k],
             &self.external_torque[k],
             &self.dem_start_velocity[k],
+            &self.inner_fluid_momentum[k],
+            &self.inner_fluid_angular_momentum[k],
         ] {
             message.extend(v.iter());
         }
@@ -223,6 +242,8 @@ impl Particles {
         self.external_force.push(vector(20));
         self.external_torque.push(vector(23));
         self.dem_start_velocity.push(vector(26));
+        self.inner_fluid_momentum.push(vector(29));
+        self.inner_fluid_angular_momentum.push(vector(32));
         if owned {
             self.n_owned += 1;
         }

@@ -4,13 +4,13 @@
 //! Each of the three Runge–Kutta stages of the flow, of length
 //! `h = α_k Δt`, runs in order:
 //!
-//! 1. the fluid momentum inside each particle, `I⁻ = ∫ α_p u dV`;
-//! 2. the flow's prediction (convection, viscous term);
-//! 3. the direct forcing towards the particles' rigid velocities, which
+//! 1. the flow's prediction (convection, viscous term);
+//! 2. the direct forcing towards the particles' rigid velocities, which
 //!    gives each particle its hydrodynamic load (eq. 5–7);
-//! 4. the projection;
-//! 5. `I⁺ = ∫ α_p u dV` again, on the same faces;
-//! 6. the DEM over `h` in sub-steps no longer than `dem_dt`, with the
+//! 3. the projection;
+//! 4. the fluid momentum inside each particle, `I = ∫ α_p u dV`, on the
+//!    faces of the particle where it stands;
+//! 5. the DEM over `h` in sub-steps no longer than `dem_dt`, with the
 //!    hydrodynamic load held fixed, contacts and lubrication (section 4).
 //!
 //! Advancing the particles within each stage (rather than once per step)
@@ -24,12 +24,23 @@
 //! fluid momentum inside the particle as measured on the grid,
 //!
 //! ```text
-//! m_p du_p/dt = −ρ ∫ f dϑ + ρ d/dt ∫ α u dV + (m_p − ρ V_p) g + F_c,
+//! m_p du_p/dt = −ρ ∫ f dϑ + ρ d/dt ∫_{V_p(t)} u dV + (m_p − ρ V_p) g + F_c,
 //! ```
 //!
-//! (likewise for the torque), which holds for any density ratio: it is
-//! the same balance without the rigid-motion assumption, so the two agree
-//! when the inner fluid does move rigidly.
+//! (likewise for the torque), which holds further down in density ratio:
+//! it is the same balance without the rigid-motion assumption, so the two
+//! agree when the inner fluid does move rigidly. The derivative is over
+//! the volume that moves with the particle (Kempe & Fröhlich 2012; Breugem
+//! 2012), in two parts: the change of `I` over the stage on the faces where
+//! the particle stands, `(I⁺ − I⁻)/h`, and the change that moving the
+//! particle made, at the rate measured over the previous stage, `(I⁻ −
+//! I⁺_prev)/h_prev`, where `I⁺_prev` is the previous stage's `I⁺` on the
+//! faces where the particle stood then (kept per particle). A derivative
+//! over a volume held fixed, `∫ α ∂u/∂t` alone, misses that flux through
+//! the moving surface, about `ρ V_p ω × u_p` for a spinning grain: a lift
+//! that depends on the frame of reference. Before the first stage the
+//! particle is taken to have moved over one stage at its velocity, so that
+//! the transport starts with the motion.
 //!
 //! The fluid answers a change of a particle's velocity one stage later
 //! (the next forcing sees it). A contact lasts far less than a stage, so a
@@ -45,7 +56,7 @@
 
 use grainflow_core::Vec3;
 use grainflow_dem::{DemSystem, StepDiagnostics};
-use grainflow_fluid::{stage_fraction, FlowSolver, FluidError, StepReport, STAGES};
+use grainflow_fluid::{stage_fraction, Block, FlowSolver, FluidError, StepReport, STAGES};
 use std::f64::consts::PI;
 use std::time::Instant;
 
@@ -110,6 +121,10 @@ pub struct CoupledSystem {
     /// inner-fluid-momentum load; 0 with the rigid inner fluid).
     pub virtual_mass: f64,
     pub timings: Timings,
+    /// Length of the last stage (s), over which the particles moved from
+    /// where their `inner_fluid_momentum` was measured; none before the
+    /// first stage.
+    previous_stage_dt: Option<f64>,
 }
 
 impl CoupledSystem {
@@ -157,6 +172,7 @@ impl CoupledSystem {
             dem_dt,
             virtual_mass,
             timings: Timings::default(),
+            previous_stage_dt: None,
         }
     }
 
@@ -197,6 +213,7 @@ impl CoupledSystem {
                 .immersed
                 .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies)
                 .summed_on_owners(&self.dem);
+            let (moved_from, moved_over) = self.inner_momentum_moved_from(&unknowns, stage_dt);
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);
@@ -223,18 +240,33 @@ impl CoupledSystem {
                 let local = self.immersed.grid_volumes(&self.flow.grid, &bodies);
                 vectors_on_owners(&self.dem, &local, 1)
             });
-            let loads = self.hydrodynamic_loads(
-                &forcing,
-                &before,
-                &after,
-                grid_volumes.as_deref(),
-                stage_dt,
-            );
+            // d/dt ∫_{V_p(t)} u: over the stage where the particle stands,
+            // and the transport of its last move.
+            let inner_rate = Loads {
+                force: (0..before.force.len())
+                    .map(|k| {
+                        (after.force[k] - before.force[k]) / stage_dt
+                            + (before.force[k] - moved_from.force[k]) / moved_over
+                    })
+                    .collect(),
+                torque: (0..before.torque.len())
+                    .map(|k| {
+                        (after.torque[k] - before.torque[k]) / stage_dt
+                            + (before.torque[k] - moved_from.torque[k]) / moved_over
+                    })
+                    .collect(),
+            };
+            let loads =
+                self.hydrodynamic_loads(&forcing, &inner_rate, grid_volumes.as_deref(), stage_dt);
             self.dem.set_external_loads(&loads.force, &loads.torque);
-            // Velocities before the DEM (they travel with the particles).
+            // Velocities before the DEM and the inner momentum the next
+            // stage starts from (they travel with the particles).
             let p = &mut self.dem.particles;
             let n = p.n_owned;
             p.dem_start_velocity[..n].copy_from_slice(&p.velocity[..n]);
+            p.inner_fluid_momentum[..n].copy_from_slice(&after.force);
+            p.inner_fluid_angular_momentum[..n].copy_from_slice(&after.torque);
+            self.previous_stage_dt = Some(stage_dt);
             let clock = self.lap(clock, Part::Loads);
             let count = (stage_dt / self.dem_dt).ceil().max(1.0) as usize;
             for _ in 0..count {
@@ -267,17 +299,44 @@ impl CoupledSystem {
         now
     }
 
+    /// The inner momentum each owned particle's last move started from,
+    /// and the time that move took: the previous stage's `I⁺`, kept per
+    /// particle, and its length; before the first stage, `I` on the faces
+    /// the particle would have stood on one stage of `stage_dt` earlier at
+    /// its present velocity. Collective.
+    fn inner_momentum_moved_from(&self, unknowns: &[Block], stage_dt: f64) -> (Loads, f64) {
+        if let Some(previous) = self.previous_stage_dt {
+            let p = &self.dem.particles;
+            let n = p.n_owned;
+            let kept = Loads {
+                force: p.inner_fluid_momentum[..n].to_vec(),
+                torque: p.inner_fluid_angular_momentum[..n].to_vec(),
+            };
+            return (kept, previous);
+        }
+        let mut earlier = self.dem.particles.clone();
+        for k in 0..earlier.len() {
+            earlier.position[k] -= earlier.velocity[k] * stage_dt;
+        }
+        let bodies = self.immersed.bodies(&earlier, &self.flow.grid, unknowns);
+        let measured = self
+            .immersed
+            .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies)
+            .summed_on_owners(&self.dem);
+        (measured, stage_dt)
+    }
+
     /// The load (N, N m) the DEM holds fixed over a stage of length
-    /// `stage_dt`, from the forcing's loads and the inner momentum before
-    /// and after the stage (per unit density), plus the buoyancy in the
-    /// form that needs it; the DEM adds gravity `m_p g`. With a body force
-    /// b on the fluid (gravity along periodic axes), `grid_volumes` holds
-    /// each owned grain's volume on the faces of each component.
+    /// `stage_dt`, from the forcing's loads and the rate of change of the
+    /// inner momentum over the volume moving with each particle (per unit
+    /// density), plus the buoyancy in the form that needs it; the DEM adds
+    /// gravity `m_p g`. With a body force b on the fluid (gravity along
+    /// periodic axes), `grid_volumes` holds each owned grain's volume on
+    /// the faces of each component.
     fn hydrodynamic_loads(
         &self,
         forcing: &Loads,
-        before: &Loads,
-        after: &Loads,
+        inner_rate: &Loads,
         grid_volumes: Option<&[Vec3]>,
         stage_dt: f64,
     ) -> Loads {
@@ -312,12 +371,10 @@ impl CoupledSystem {
                         }
                         None => -rho * volume * gravity,
                     };
-                    loads.force[k] = rho
-                        * (forcing.force[k] + (after.force[k] - before.force[k]) / stage_dt)
+                    loads.force[k] = rho * (forcing.force[k] + inner_rate.force[k])
                         + buoyancy
                         + carried * lagged / stage_dt;
-                    loads.torque[k] =
-                        rho * (forcing.torque[k] + (after.torque[k] - before.torque[k]) / stage_dt);
+                    loads.torque[k] = rho * (forcing.torque[k] + inner_rate.torque[k]);
                 }
                 Coupling::RigidInnerFluid => {
                     // Eq. 5–6: ρ ρ_p/(ρ_p − ρ) with ρ_p = m_p / V_p.
