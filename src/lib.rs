@@ -23,6 +23,7 @@ pub mod grain_pairs;
 pub mod initial_overlaps;
 pub mod output;
 pub mod pouring;
+pub mod progress;
 pub mod scene;
 pub mod sharing;
 pub mod simulation;
