@@ -386,6 +386,10 @@ impl FieldFiles {
         }
         .write(&self.dir.join(&name))
         .map_err(|e| std::io::Error::new(e.kind(), format!("{name}: {e}")))?;
+        // Every rank's piece is whole before the root's index lists it.
+        if ranks > 1 {
+            solver.communicator().barrier();
+        }
         if let Some(index) = &mut self.index {
             if ranks == 1 {
                 index.add(solver.time, &name)?;

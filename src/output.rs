@@ -8,13 +8,20 @@
 //! tracked particles, summary, indices) from global reductions and gathers;
 //! each rank writes its own piece of every particle output
 //! (`particles/particles_NNNNNN_RRRR.vtp`), which the root's
-//! `particles_NNNNNN.pvtp` assembles for ParaView.
+//! `particles_NNNNNN.pvtp` assembles for ParaView, once every rank has
+//! written its piece.
+//!
+//! Files written in one go go through `grainflow_io::write_whole` (a
+//! temporary sibling renamed over the file), series and the log are
+//! appended a whole line per write: a killed run leaves outputs that open.
 
 use crate::case::Case;
 use crate::RunError;
 use grainflow_core::Communicator;
 use grainflow_dem::DemSystem;
-use grainflow_io::{write_particle_pieces_index, CsvSeries, ParticleFrame, PvdIndex};
+use grainflow_io::{
+    write_particle_pieces_index, write_whole, write_whole_bytes, CsvSeries, ParticleFrame, PvdIndex,
+};
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -41,7 +48,7 @@ impl RunDirectory {
     pub fn create_on(dir: &Path, case: &Case, root: bool) -> std::io::Result<Self> {
         std::fs::create_dir_all(dir)?;
         let (log, tracked) = if root {
-            std::fs::write(dir.join("case.toml"), case.to_toml())?;
+            write_whole_bytes(&dir.join("case.toml"), case.to_toml())?;
             let log = File::create(dir.join("log.txt"))?;
             let tracked = CsvSeries::create(
                 &dir.join("tracked.csv"),
@@ -64,11 +71,11 @@ impl RunDirectory {
         self.log.is_some()
     }
 
-    /// A line in `log.txt`.
+    /// A line in `log.txt`, written with its newline in one write, so that
+    /// a kill leaves whole lines.
     pub fn log(&mut self, line: &str) {
         if let Some(log) = &mut self.log {
-            let _ = writeln!(log, "{line}");
-            let _ = log.flush();
+            let _ = log.write_all(format!("{line}\n").as_bytes());
         }
     }
 
@@ -77,7 +84,7 @@ impl RunDirectory {
             return Ok(());
         }
         let text = serde_json::to_string_pretty(summary).expect("json");
-        std::fs::write(self.dir.join("summary.json"), text + "\n")
+        write_whole_bytes(&self.dir.join("summary.json"), text + "\n")
     }
 
     /// The end of every run: the summary, then either the diagnosis of a
@@ -203,6 +210,10 @@ impl Outputs {
             }
             .write(&self.run.dir.join(&name))
             .map_err(|e| std::io::Error::new(e.kind(), format!("{name}: {e}")))?;
+            // Every rank's piece is whole before the root's index lists it.
+            if ranks > 1 {
+                self.communicator.barrier();
+            }
             if let Some(index) = &mut self.particles {
                 if ranks == 1 {
                     index.add(system.time, &name)?;
@@ -239,22 +250,22 @@ impl Outputs {
         };
         let mut grains: Vec<&[f64]> = pieces.iter().flat_map(|m| m.chunks_exact(8)).collect();
         grains.sort_by_key(|g| g[0].to_bits());
-        let mut file = std::io::BufWriter::new(std::fs::File::create(
-            self.run.dir.join("final_particles.csv"),
-        )?);
         let header = if dim == 2 {
             "x,y,radius,vx,vy"
         } else {
             "x,y,z,radius,vx,vy,vz"
         };
-        writeln!(file, "{header}")?;
-        for grain in grains {
-            let mut row: Vec<String> = (0..dim).map(|a| format!("{:.17e}", grain[1 + a])).collect();
-            row.push(format!("{:.17e}", grain[4]));
-            row.extend((0..dim).map(|a| format!("{:.17e}", grain[5 + a])));
-            writeln!(file, "{}", row.join(","))?;
-        }
-        Ok(())
+        write_whole(&self.run.dir.join("final_particles.csv"), |file| {
+            writeln!(file, "{header}")?;
+            for grain in grains {
+                let mut row: Vec<String> =
+                    (0..dim).map(|a| format!("{:.17e}", grain[1 + a])).collect();
+                row.push(format!("{:.17e}", grain[4]));
+                row.extend((0..dim).map(|a| format!("{:.17e}", grain[5 + a])));
+                writeln!(file, "{}", row.join(","))?;
+            }
+            Ok(())
+        })
     }
 
     /// Rows of `tracked.csv` for the tracked ids, in the order of `ids`
