@@ -67,7 +67,7 @@ pub fn run(
         }
     }
 
-    let mut outputs = FluidOutputs::create(out, case, root).map_err(RunError::Io)?;
+    let mut outputs = FluidOutputs::create(out, case, &communicator).map_err(RunError::Io)?;
     let grid = &solver.grid;
     let partition = solver.partition();
     let global_cells = partition.global_cells;
@@ -433,8 +433,9 @@ struct FluidOutputs {
 
 impl FluidOutputs {
     /// `tracked.csv` stays empty: a fluid-only scene tracks no particle.
-    fn create(dir: &Path, case: &Case, root: bool) -> std::io::Result<Self> {
-        let run = RunDirectory::create_on(dir, case, root)?;
+    fn create(dir: &Path, case: &Case, communicator: &Communicator) -> std::io::Result<Self> {
+        let root = communicator.is_root();
+        let run = RunDirectory::create_on(dir, case, communicator)?;
         let fields = FieldFiles::create(dir, case, root)?;
         let series = CsvSeries::create_on(
             root,

@@ -20,11 +20,102 @@ use crate::RunError;
 use grainflow_core::Communicator;
 use grainflow_dem::DemSystem;
 use grainflow_io::{
-    write_particle_pieces_index, write_whole, write_whole_bytes, CsvSeries, ParticleFrame, PvdIndex,
+    temporary_path, write_particle_pieces_index, write_whole, write_whole_bytes, CsvSeries,
+    ParticleFrame, PvdIndex, TEMPORARY_SUFFIX,
 };
 use std::fs::File;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+
+/// The files a run owns at the top of its output folder: every name any
+/// scene writes there. A run removes those an earlier run left (with their
+/// temporary `NAME.tmp`) before it writes anything, and no other file.
+pub const OWNED_FILES: &[&str] = &[
+    "case.toml",
+    "log.txt",
+    "series.csv",
+    "flow_series.csv",
+    "tracked.csv",
+    "summary.json",
+    "final_particles.csv",
+    "fields.pvd",
+    "particles.pvd",
+    "collisions.csv",
+    "silo_profile.csv",
+    "kinetic_to_potential.csv",
+    "profiles.csv",
+    "bed_profiles.csv",
+    "grain_profiles.csv",
+    "bed_series.csv",
+];
+
+/// The folders of a run's frames, and the files a run owns in each: the
+/// prefix and the extensions of the frames, their per-rank pieces and
+/// piece indexes (e.g. `fields/fields_000012.vti`,
+/// `particles/particles_000003_0001.vtp`, `fields/fields_000004.pvti`).
+const OWNED_FRAMES: &[(&str, &str, &[&str])] = &[
+    ("fields", "fields_", &["vti", "vtr", "pvti", "pvtr"]),
+    ("particles", "particles_", &["vtp", "pvtp"]),
+];
+
+/// Whether `name` (in the frame folder of `prefix`) is a frame a run
+/// writes: `PREFIX` + digits and underscores + `.EXT`, or its temporary.
+fn is_owned_frame(name: &str, prefix: &str, extensions: &[&str]) -> bool {
+    let name = name.strip_suffix(TEMPORARY_SUFFIX).unwrap_or(name);
+    let Some((stem, extension)) = name.rsplit_once('.') else {
+        return false;
+    };
+    let Some(number) = stem.strip_prefix(prefix) else {
+        return false;
+    };
+    !number.is_empty()
+        && number.chars().all(|c| c.is_ascii_digit() || c == '_')
+        && extensions.contains(&extension)
+}
+
+/// Removes from `dir` the outputs an earlier run left there: the
+/// [`OWNED_FILES`], the frames of the `fields/` and `particles/` folders
+/// (the folders too, once empty), and the temporary files of a killed run.
+/// Every other file stays. Returns how many files were removed.
+pub fn clear_earlier_run(dir: &Path) -> std::io::Result<usize> {
+    let mut removed = 0;
+    let mut remove = |path: &Path| match std::fs::remove_file(path) {
+        Ok(()) => {
+            removed += 1;
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(std::io::Error::new(
+            e.kind(),
+            format!("removing {} of an earlier run: {e}", path.display()),
+        )),
+    };
+    for name in OWNED_FILES {
+        let path = dir.join(name);
+        remove(&path)?;
+        remove(&temporary_path(&path))?;
+    }
+    for (folder, prefix, extensions) in OWNED_FRAMES {
+        let folder = dir.join(folder);
+        let Ok(entries) = std::fs::read_dir(&folder) else {
+            continue;
+        };
+        for entry in entries {
+            let entry = entry?;
+            let owned = entry.file_type()?.is_file()
+                && entry
+                    .file_name()
+                    .to_str()
+                    .is_some_and(|name| is_owned_frame(name, prefix, extensions));
+            if owned {
+                remove(&entry.path())?;
+            }
+        }
+        // Kept if the user put something there.
+        let _ = std::fs::remove_dir(&folder);
+    }
+    Ok(removed)
+}
 
 /// The files of the output contract every scene writes: the resolved case,
 /// the log, the (possibly empty) `tracked.csv` and the summary.
@@ -40,13 +131,25 @@ pub struct RunDirectory {
 
 impl RunDirectory {
     pub fn create(dir: &Path, case: &Case) -> std::io::Result<Self> {
-        Self::create_on(dir, case, true)
+        Self::create_on(dir, case, &Communicator::serial())
     }
 
-    /// The run directory seen from one rank: the root creates the shared
-    /// files, the others only make sure the directory exists.
-    pub fn create_on(dir: &Path, case: &Case, root: bool) -> std::io::Result<Self> {
+    /// The run directory seen from one rank of `communicator` (every rank
+    /// calls it): the root removes what an earlier run left in `dir`
+    /// ([`clear_earlier_run`]: only the names a run owns) and creates the
+    /// shared files; the others wait for that, then only make sure the
+    /// directory exists. Called once the case is validated and the scene
+    /// built, so that a refused case leaves the folder as it was.
+    pub fn create_on(
+        dir: &Path,
+        case: &Case,
+        communicator: &Communicator,
+    ) -> std::io::Result<Self> {
+        let root = communicator.is_root();
         std::fs::create_dir_all(dir)?;
+        let cleared = if root { clear_earlier_run(dir)? } else { 0 };
+        // No rank writes into the folder before it is cleared.
+        communicator.barrier();
         let (log, tracked) = if root {
             write_whole_bytes(&dir.join("case.toml"), case.to_toml())?;
             let log = File::create(dir.join("log.txt"))?;
@@ -58,12 +161,19 @@ impl RunDirectory {
         } else {
             (None, None)
         };
-        Ok(RunDirectory {
+        let mut run = RunDirectory {
             dir: dir.to_path_buf(),
             started: std::time::Instant::now(),
             log,
             tracked,
-        })
+        };
+        if cleared > 0 {
+            run.log(&format!(
+                "removed {cleared} files an earlier run left in {}",
+                dir.display()
+            ));
+        }
+        Ok(run)
     }
 
     /// Whether this rank writes the shared files.
@@ -127,7 +237,7 @@ impl Outputs {
     /// The outputs of a run seen from one rank of `communicator`.
     pub fn create_on(dir: &Path, case: &Case, communicator: Communicator) -> std::io::Result<Self> {
         let root = communicator.is_root();
-        let run = RunDirectory::create_on(dir, case, root)?;
+        let run = RunDirectory::create_on(dir, case, &communicator)?;
         if case.output.particles {
             std::fs::create_dir_all(dir.join("particles"))?;
         }
@@ -306,5 +416,33 @@ impl Outputs {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::is_owned_frame;
+
+    #[test]
+    fn only_the_frames_a_run_writes_are_its_own() {
+        let fields = ["vti", "vtr", "pvti", "pvtr"];
+        for name in [
+            "fields_000012.vti",
+            "fields_000012_0003.vtr",
+            "fields_000004.pvti",
+            "fields_000012.vti.tmp",
+        ] {
+            assert!(is_owned_frame(name, "fields_", &fields), "{name}");
+        }
+        for name in [
+            "fields_final.vti",
+            "my_fields_000001.vti",
+            "fields_000001.png",
+            "fields_.vti",
+            "view.pvsm",
+            "fields_000001.vti.bak",
+        ] {
+            assert!(!is_owned_frame(name, "fields_", &fields), "{name}");
+        }
     }
 }

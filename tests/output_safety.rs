@@ -161,3 +161,107 @@ fn a_killed_run_leaves_indexes_that_list_only_whole_files() {
         damaged.join("\n")
     );
 }
+/// The file names under `dir` (relative), sorted.
+fn files_under(dir: &Path) -> Vec<String> {
+    let mut names = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                let relative = path.strip_prefix(dir).unwrap();
+                names.push(relative.to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+    names.sort();
+    names
+}
+
+/// A second run into the folder of a first, longer one: the folder holds
+/// the second run's outputs, none of the first run's later field and
+/// particle files or the analysis tables only the first wrote (nor a
+/// temporary file a killed run left), and every file the user put there.
+#[test]
+fn a_rerun_into_the_same_folder_leaves_no_file_of_the_earlier_run_but_the_users() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("disc");
+    let base = [
+        "output.interval=0.002",
+        "output.fields=true",
+        "output.particles=true",
+        "fluid.cells=[32,96]",
+    ];
+    let with_end = |end: &str| {
+        let mut o: Vec<String> = base.iter().map(|s| s.to_string()).collect();
+        o.push(format!("time.end={end}"));
+        o
+    };
+    let first = with_end("0.02");
+    let first: Vec<&str> = first.iter().map(|s| s.as_str()).collect();
+    assert!(grainflow("falling_disc.toml", &out, &first)
+        .status()
+        .unwrap()
+        .success());
+    assert!(out.join("fields/fields_000010.vti").is_file());
+    assert!(out.join("particles/particles_000010.vtp").is_file());
+    // What a user adds, what another kind of case of an earlier run wrote,
+    // and what a killed run left.
+    std::fs::write(out.join("notes.txt"), "mine\n").unwrap();
+    std::fs::write(out.join("fields/view.pvsm"), "mine\n").unwrap();
+    std::fs::write(out.join("collisions.csv"), "psi1\n").unwrap();
+    std::fs::write(out.join("fields/fields_000011.vti.tmp"), "<?xml").unwrap();
+    let before = files_under(&out);
+
+    // A bad case touches nothing.
+    let refused = grainflow("falling_disc.toml", &out, &["time.end=-1.0"])
+        .status()
+        .unwrap();
+    assert!(!refused.success());
+    assert_eq!(
+        files_under(&out),
+        before,
+        "a refused case changed the folder"
+    );
+
+    let second = with_end("0.01");
+    let second: Vec<&str> = second.iter().map(|s| s.as_str()).collect();
+    assert!(grainflow("falling_disc.toml", &out, &second)
+        .status()
+        .unwrap()
+        .success());
+    let after = files_under(&out);
+    // Exactly the files the second run indexes, and the user's.
+    for (index, folder) in [("fields.pvd", "fields/"), ("particles.pvd", "particles/")] {
+        let listed = index_entries(&std::fs::read_to_string(out.join(index)).unwrap());
+        assert_eq!(listed.len(), 6, "{index}: frames at t = 0, 0.002, …, 0.01");
+        let present: Vec<&String> = after
+            .iter()
+            .filter(|f| f.starts_with(folder) && !f.ends_with("view.pvsm"))
+            .collect();
+        assert_eq!(
+            present,
+            listed.iter().collect::<Vec<_>>(),
+            "{folder} holds files the index does not list"
+        );
+    }
+    for gone in ["collisions.csv", "fields/fields_000011.vti.tmp"] {
+        assert!(!after.contains(&gone.to_string()), "{gone} survived");
+    }
+    for mine in ["notes.txt", "fields/view.pvsm"] {
+        assert_eq!(
+            std::fs::read_to_string(out.join(mine)).unwrap(),
+            "mine\n",
+            "the user's {mine}"
+        );
+    }
+    assert!(
+        after.iter().all(|f| !f.ends_with(".tmp")),
+        "temporary files left: {after:?}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!((summary["simulated_time"].as_f64().unwrap() - 0.01).abs() < 1e-3);
+}
