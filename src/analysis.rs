@@ -6,6 +6,7 @@ use crate::deposit;
 use grainflow_core::Vec3;
 use grainflow_dem::stress::particle_moments;
 use grainflow_dem::DemSystem;
+use grainflow_io::{write_whole, write_whole_bytes};
 use serde_json::{json, Map, Value};
 use std::io::Write;
 use std::path::Path;
@@ -131,12 +132,13 @@ impl StaticBox {
     }
 
     fn finish(&self, out: &Path) -> std::io::Result<Map<String, Value>> {
-        let mut file =
-            std::io::BufWriter::new(std::fs::File::create(out.join("kinetic_to_potential.csv"))?);
-        writeln!(file, "time,kinetic_to_potential")?;
-        for (t, ratio) in &self.history {
-            writeln!(file, "{t:.6e},{ratio:.6e}")?;
-        }
+        write_whole(&out.join("kinetic_to_potential.csv"), |file| {
+            writeln!(file, "time,kinetic_to_potential")?;
+            for (t, ratio) in &self.history {
+                writeln!(file, "{t:.6e},{ratio:.6e}")?;
+            }
+            Ok(())
+        })?;
         let largest = self.history.iter().map(|h| h.1).fold(0.0, f64::max);
         let mut metrics = Map::new();
         metrics.insert("max_kinetic_to_potential".into(), json!(largest));
@@ -221,8 +223,8 @@ impl BinaryCollision {
 
     fn finish(&self, system: &DemSystem, out: &Path) -> std::io::Result<Map<String, Value>> {
         let friction = system.law.friction;
-        let mut file = std::fs::File::create(out.join("collisions.csv"))?;
-        writeln!(file, "psi1,psi2,restitution,sliding,psi2_sliding_theory")?;
+        let path = out.join("collisions.csv");
+        let mut table = String::from("psi1,psi2,restitution,sliding,psi2_sliding_theory\n");
         let mut metrics = Map::new();
         let rows: Vec<(f64, f64, f64)> = self
             .before
@@ -232,6 +234,7 @@ impl BinaryCollision {
             .collect();
         metrics.insert("collisions".into(), json!(rows.len()));
         let Some(&(_, _, head_on)) = rows.first() else {
+            write_whole_bytes(&path, table)?;
             return Ok(metrics);
         };
         // A pair slides throughout when the Coulomb impulse cannot stop the
@@ -243,13 +246,13 @@ impl BinaryCollision {
             if sliding {
                 offsets.push(psi1 - psi2);
             }
-            writeln!(
-                file,
-                "{psi1:e},{psi2:e},{e:e},{},{:e}",
+            table.push_str(&format!(
+                "{psi1:e},{psi2:e},{e:e},{},{:e}\n",
                 sliding as u8,
                 psi1 - offset_theory
-            )?;
+            ));
         }
+        write_whole_bytes(&path, table)?;
         metrics.insert("restitution".into(), json!(head_on));
         if !offsets.is_empty() {
             metrics.insert(
@@ -409,18 +412,20 @@ fn silo(
     let bulk_fraction = sorted[sorted.len() / 2];
     let top = base + solid_volume.iter().sum::<f64>() / (section * bulk_fraction);
 
-    let mut file = std::fs::File::create(out.join("silo_profile.csv"))?;
-    writeln!(
-        file,
-        "z,pressure,vertical_stress,horizontal_stress,solid_fraction"
-    )?;
-    for s in 0..slabs {
+    write_whole(&out.join("silo_profile.csv"), |file| {
         writeln!(
             file,
-            "{:e},{:e},{:e},{:e},{:e}",
-            z[s], pressure[s], vertical_stress[s], horizontal_stress[s], fraction[s]
+            "z,pressure,vertical_stress,horizontal_stress,solid_fraction"
         )?;
-    }
+        for s in 0..slabs {
+            writeln!(
+                file,
+                "{:e},{:e},{:e},{:e},{:e}",
+                z[s], pressure[s], vertical_stress[s], horizontal_stress[s], fraction[s]
+            )?;
+        }
+        Ok(())
+    })?;
     // Fit over full slabs between the bottom exclusion and one slab below the top.
     let fit: Vec<usize> = (0..slabs)
         .filter(|&s| z[s] - base >= exclude_bottom && z[s] + slab <= top - slab)
@@ -730,12 +735,13 @@ impl ColumnCollapse {
 
     fn finish(&self, system: &DemSystem, out: &Path) -> std::io::Result<Map<String, Value>> {
         if !self.profiles.is_empty() {
-            let mut file =
-                std::io::BufWriter::new(std::fs::File::create(out.join("profiles.csv"))?);
-            writeln!(file, "time_after_release,x,height,top")?;
-            for (t, x, h, top) in &self.profiles {
-                writeln!(file, "{t:.6e},{x:.6e},{h:.6e},{top:.6e}")?;
-            }
+            write_whole(&out.join("profiles.csv"), |file| {
+                writeln!(file, "time_after_release,x,height,top")?;
+                for (t, x, h, top) in &self.profiles {
+                    writeln!(file, "{t:.6e},{x:.6e},{h:.6e},{top:.6e}")?;
+                }
+                Ok(())
+            })?;
         }
         let mut metrics = Map::new();
         let h0 = self.initial_height.unwrap_or(f64::NAN);

@@ -70,7 +70,7 @@ pub fn run(
         }
     }
 
-    let mut outputs = FluidOutputs::create(out, case, root).map_err(RunError::Io)?;
+    let mut outputs = FluidOutputs::create(out, case, &communicator).map_err(RunError::Io)?;
     let grid = &solver.grid;
     let partition = solver.partition();
     let global_cells = partition.global_cells;
@@ -413,6 +413,10 @@ impl FieldFiles {
         }
         .write(&self.dir.join(&name))
         .map_err(|e| std::io::Error::new(e.kind(), format!("{name}: {e}")))?;
+        // Every rank's piece is whole before the root's index lists it.
+        if ranks > 1 {
+            solver.communicator().barrier();
+        }
         if let Some(index) = &mut self.index {
             if ranks == 1 {
                 index.add(solver.time, &name)?;
@@ -456,8 +460,9 @@ struct FluidOutputs {
 
 impl FluidOutputs {
     /// `tracked.csv` stays empty: a fluid-only scene tracks no particle.
-    fn create(dir: &Path, case: &Case, root: bool) -> std::io::Result<Self> {
-        let run = RunDirectory::create_on(dir, case, root)?;
+    fn create(dir: &Path, case: &Case, communicator: &Communicator) -> std::io::Result<Self> {
+        let root = communicator.is_root();
+        let run = RunDirectory::create_on(dir, case, communicator)?;
         let fields = FieldFiles::create(dir, case, root)?;
         let series = CsvSeries::create_on(
             root,

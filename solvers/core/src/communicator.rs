@@ -225,6 +225,16 @@ impl Communicator {
         let _ = arrays;
     }
 
+    /// Returns once every rank has called it: what each rank did before is
+    /// done on all (e.g. the pieces of an output are written before the
+    /// root's index lists them).
+    pub fn barrier(&self) {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            world.barrier();
+        }
+    }
+
     /// Collects every rank's `local` on the root, indexed by rank (None on
     /// the other ranks).
     pub fn gather(&self, local: &[f64]) -> Option<Vec<Vec<f64>>> {

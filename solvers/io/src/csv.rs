@@ -1,22 +1,25 @@
-//! A CSV file with a fixed header, one row per call, flushed each row so a
-//! run that stops keeps every row written so far.
+//! A CSV file with a fixed header, appended one row per call. Each row
+//! (and the header) goes to the file in one `write` call of the whole line
+//! with its newline, unbuffered, so a run that stops, a kill included,
+//! keeps every row written so far and never leaves a partial row. (A crash
+//! of the machine itself, which loses what the system had not yet put on
+//! disk, can at worst leave a last partial line.)
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::Path;
 
 pub struct CsvSeries {
-    writer: BufWriter<File>,
+    file: File,
     columns: usize,
 }
 
 impl CsvSeries {
     pub fn create(path: &Path, header: &[&str]) -> std::io::Result<Self> {
-        let mut writer = BufWriter::new(File::create(path)?);
-        writeln!(writer, "{}", header.join(","))?;
-        writer.flush()?;
+        let mut file = File::create(path)?;
+        file.write_all(format!("{}\n", header.join(",")).as_bytes())?;
         Ok(CsvSeries {
-            writer,
+            file,
             columns: header.len(),
         })
     }
@@ -27,12 +30,17 @@ impl CsvSeries {
         root.then(|| Self::create(path, header)).transpose()
     }
 
-    /// Writes one row of numbers (17 significant digits, round-trip exact).
+    /// Writes one row of numbers (17 significant digits, round-trip exact)
+    /// in one write of the whole line.
     pub fn row(&mut self, values: &[f64]) -> std::io::Result<()> {
         debug_assert_eq!(values.len(), self.columns);
-        let line: Vec<String> = values.iter().map(|v| format_number(*v)).collect();
-        writeln!(self.writer, "{}", line.join(","))?;
-        self.writer.flush()
+        let mut line = values
+            .iter()
+            .map(|v| format_number(*v))
+            .collect::<Vec<_>>()
+            .join(",");
+        line.push('\n');
+        self.file.write_all(line.as_bytes())
     }
 }
 

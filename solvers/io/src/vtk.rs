@@ -5,9 +5,13 @@
 //!
 //! Arrays are written in binary (base64, little-endian, with a UInt32 byte
 //! count header), which ParaView reads directly; one vertex per particle.
+//!
+//! Every file here is written whole ([`crate::whole`]): under a temporary
+//! name, then renamed, so that a run killed while writing leaves the
+//! previous index or no data file, never one cut short.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use crate::whole::write_whole;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The particle state written at one output time.
@@ -24,70 +28,71 @@ pub struct ParticleFrame<'a> {
 impl ParticleFrame<'_> {
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let n = self.radius.len();
-        let mut out = BufWriter::new(File::create(path)?);
-        writeln!(out, r#"<?xml version="1.0"?>"#)?;
-        writeln!(
-            out,
-            r#"<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
-        )?;
-        writeln!(out, "<PolyData>")?;
-        writeln!(
-            out,
-            r#"<Piece NumberOfPoints="{n}" NumberOfVerts="{n}" NumberOfLines="0" NumberOfStrips="0" NumberOfPolys="0">"#
-        )?;
-        writeln!(out, "<PointData Scalars=\"radius\" Vectors=\"velocity\">")?;
-        write_array(&mut out, "radius", "Float64", 1, &to_bytes_f64(self.radius))?;
-        write_array(
-            &mut out,
-            "id",
-            "UInt64",
-            1,
-            &self
-                .id
-                .iter()
-                .flat_map(|v| v.to_le_bytes())
-                .collect::<Vec<_>>(),
-        )?;
-        write_array(&mut out, "fixed", "UInt8", 1, self.fixed)?;
-        write_array(
-            &mut out,
-            "velocity",
-            "Float64",
-            3,
-            &to_bytes_f64(self.velocity.as_flattened()),
-        )?;
-        write_array(
-            &mut out,
-            "angular_velocity",
-            "Float64",
-            3,
-            &to_bytes_f64(self.angular_velocity.as_flattened()),
-        )?;
-        write_array(
-            &mut out,
-            "force",
-            "Float64",
-            3,
-            &to_bytes_f64(self.force.as_flattened()),
-        )?;
-        writeln!(out, "</PointData>")?;
-        writeln!(out, "<Points>")?;
-        write_array(
-            &mut out,
-            "position",
-            "Float64",
-            3,
-            &to_bytes_f64(self.position.as_flattened()),
-        )?;
-        writeln!(out, "</Points>")?;
-        writeln!(out, "<Verts>")?;
-        let connectivity: Vec<u8> = (0..n as i64).flat_map(|k| k.to_le_bytes()).collect();
-        let offsets: Vec<u8> = (1..=n as i64).flat_map(|k| k.to_le_bytes()).collect();
-        write_array(&mut out, "connectivity", "Int64", 1, &connectivity)?;
-        write_array(&mut out, "offsets", "Int64", 1, &offsets)?;
-        writeln!(out, "</Verts>")?;
-        writeln!(out, "</Piece>\n</PolyData>\n</VTKFile>")?;
-        out.flush()
+        write_whole(path, |out| {
+            writeln!(out, r#"<?xml version="1.0"?>"#)?;
+            writeln!(
+                out,
+                r#"<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
+            )?;
+            writeln!(out, "<PolyData>")?;
+            writeln!(
+                out,
+                r#"<Piece NumberOfPoints="{n}" NumberOfVerts="{n}" NumberOfLines="0" NumberOfStrips="0" NumberOfPolys="0">"#
+            )?;
+            writeln!(out, "<PointData Scalars=\"radius\" Vectors=\"velocity\">")?;
+            write_array(out, "radius", "Float64", 1, &to_bytes_f64(self.radius))?;
+            write_array(
+                out,
+                "id",
+                "UInt64",
+                1,
+                &self
+                    .id
+                    .iter()
+                    .flat_map(|v| v.to_le_bytes())
+                    .collect::<Vec<_>>(),
+            )?;
+            write_array(out, "fixed", "UInt8", 1, self.fixed)?;
+            write_array(
+                out,
+                "velocity",
+                "Float64",
+                3,
+                &to_bytes_f64(self.velocity.as_flattened()),
+            )?;
+            write_array(
+                out,
+                "angular_velocity",
+                "Float64",
+                3,
+                &to_bytes_f64(self.angular_velocity.as_flattened()),
+            )?;
+            write_array(
+                out,
+                "force",
+                "Float64",
+                3,
+                &to_bytes_f64(self.force.as_flattened()),
+            )?;
+            writeln!(out, "</PointData>")?;
+            writeln!(out, "<Points>")?;
+            write_array(
+                out,
+                "position",
+                "Float64",
+                3,
+                &to_bytes_f64(self.position.as_flattened()),
+            )?;
+            writeln!(out, "</Points>")?;
+            writeln!(out, "<Verts>")?;
+            let connectivity: Vec<u8> = (0..n as i64).flat_map(|k| k.to_le_bytes()).collect();
+            let offsets: Vec<u8> = (1..=n as i64).flat_map(|k| k.to_le_bytes()).collect();
+            write_array(out, "connectivity", "Int64", 1, &connectivity)?;
+            write_array(out, "offsets", "Int64", 1, &offsets)?;
+            writeln!(out, "</Verts>")?;
+            writeln!(out, "</Piece>\n</PolyData>\n</VTKFile>")?;
+            Ok(())
+        })
     }
 }
 
@@ -95,41 +100,42 @@ impl ParticleFrame<'_> {
 /// rank: ParaView opens it as a single dataset. `pieces` are the piece
 /// files' paths relative to the index.
 pub fn write_particle_pieces_index(path: &Path, pieces: &[String]) -> std::io::Result<()> {
-    let mut out = BufWriter::new(File::create(path)?);
-    writeln!(out, r#"<?xml version="1.0"?>"#)?;
-    writeln!(
-        out,
-        r#"<VTKFile type="PPolyData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
-    )?;
-    writeln!(out, r#"<PPolyData GhostLevel="0">"#)?;
-    writeln!(out, r#"<PPointData Scalars="radius" Vectors="velocity">"#)?;
-    for (name, kind, components) in [
-        ("radius", "Float64", 1),
-        ("id", "UInt64", 1),
-        ("fixed", "UInt8", 1),
-        ("velocity", "Float64", 3),
-        ("angular_velocity", "Float64", 3),
-        ("force", "Float64", 3),
-    ] {
+    write_whole(path, |out| {
+        writeln!(out, r#"<?xml version="1.0"?>"#)?;
         writeln!(
             out,
-            r#"<PDataArray type="{kind}" Name="{name}" NumberOfComponents="{components}"/>"#
+            r#"<VTKFile type="PPolyData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
         )?;
-    }
-    writeln!(out, "</PPointData>")?;
-    writeln!(
-        out,
-        r#"<PPoints><PDataArray type="Float64" Name="position" NumberOfComponents="3"/></PPoints>"#
-    )?;
-    for piece in pieces {
-        writeln!(out, r#"<Piece Source="{piece}"/>"#)?;
-    }
-    writeln!(
-        out,
-        "</PPolyData>
+        writeln!(out, r#"<PPolyData GhostLevel="0">"#)?;
+        writeln!(out, r#"<PPointData Scalars="radius" Vectors="velocity">"#)?;
+        for (name, kind, components) in [
+            ("radius", "Float64", 1),
+            ("id", "UInt64", 1),
+            ("fixed", "UInt8", 1),
+            ("velocity", "Float64", 3),
+            ("angular_velocity", "Float64", 3),
+            ("force", "Float64", 3),
+        ] {
+            writeln!(
+                out,
+                r#"<PDataArray type="{kind}" Name="{name}" NumberOfComponents="{components}"/>"#
+            )?;
+        }
+        writeln!(out, "</PPointData>")?;
+        writeln!(
+            out,
+            r#"<PPoints><PDataArray type="Float64" Name="position" NumberOfComponents="3"/></PPoints>"#
+        )?;
+        for piece in pieces {
+            writeln!(out, r#"<Piece Source="{piece}"/>"#)?;
+        }
+        writeln!(
+            out,
+            "</PPolyData>
 </VTKFile>"
-    )?;
-    out.flush()
+        )?;
+        Ok(())
+    })
 }
 
 /// How the cells of a field file are laid out.
@@ -167,54 +173,55 @@ pub struct FieldFrame<'a> {
 
 impl FieldFrame<'_> {
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        let mut out = BufWriter::new(File::create(path)?);
-        writeln!(out, r#"<?xml version="1.0"?>"#)?;
-        let extent = extent_text(self.offset, self.cells);
-        let kind = match self.layout {
-            CellLayout::Uniform { .. } => "ImageData",
-            CellLayout::Rectilinear { .. } => "RectilinearGrid",
-        };
-        writeln!(
-            out,
-            r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
-        )?;
-        match &self.layout {
-            CellLayout::Uniform { origin, spacing } => {
-                let [ox, oy, oz] = origin;
-                let [dx, dy, dz] = spacing;
-                writeln!(
-                    out,
-                    r#"<ImageData WholeExtent="{extent}" Origin="{ox:e} {oy:e} {oz:e}" Spacing="{dx:e} {dy:e} {dz:e}">"#
-                )?;
-                writeln!(out, r#"<Piece Extent="{extent}">"#)?;
-            }
-            CellLayout::Rectilinear { faces } => {
-                writeln!(out, r#"<RectilinearGrid WholeExtent="{extent}">"#)?;
-                writeln!(out, r#"<Piece Extent="{extent}">"#)?;
-                writeln!(out, "<Coordinates>")?;
-                for (axis, name) in ["x", "y", "z"].iter().enumerate() {
-                    debug_assert_eq!(faces[axis].len(), self.cells[axis] + 1);
-                    write_array(&mut out, name, "Float64", 1, &to_bytes_f64(faces[axis]))?;
-                }
-                writeln!(out, "</Coordinates>")?;
-            }
-        }
-        writeln!(out, "<CellData>")?;
-        for (name, values) in self.scalars {
-            write_array(&mut out, name, "Float64", 1, &to_bytes_f64(values))?;
-        }
-        for (name, values) in self.vectors {
-            write_array(
-                &mut out,
-                name,
-                "Float64",
-                3,
-                &to_bytes_f64(values.as_flattened()),
+        write_whole(path, |out| {
+            writeln!(out, r#"<?xml version="1.0"?>"#)?;
+            let extent = extent_text(self.offset, self.cells);
+            let kind = match self.layout {
+                CellLayout::Uniform { .. } => "ImageData",
+                CellLayout::Rectilinear { .. } => "RectilinearGrid",
+            };
+            writeln!(
+                out,
+                r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
             )?;
-        }
-        writeln!(out, "</CellData>")?;
-        writeln!(out, "</Piece>\n</{kind}>\n</VTKFile>")?;
-        out.flush()
+            match &self.layout {
+                CellLayout::Uniform { origin, spacing } => {
+                    let [ox, oy, oz] = origin;
+                    let [dx, dy, dz] = spacing;
+                    writeln!(
+                        out,
+                        r#"<ImageData WholeExtent="{extent}" Origin="{ox:e} {oy:e} {oz:e}" Spacing="{dx:e} {dy:e} {dz:e}">"#
+                    )?;
+                    writeln!(out, r#"<Piece Extent="{extent}">"#)?;
+                }
+                CellLayout::Rectilinear { faces } => {
+                    writeln!(out, r#"<RectilinearGrid WholeExtent="{extent}">"#)?;
+                    writeln!(out, r#"<Piece Extent="{extent}">"#)?;
+                    writeln!(out, "<Coordinates>")?;
+                    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+                        debug_assert_eq!(faces[axis].len(), self.cells[axis] + 1);
+                        write_array(out, name, "Float64", 1, &to_bytes_f64(faces[axis]))?;
+                    }
+                    writeln!(out, "</Coordinates>")?;
+                }
+            }
+            writeln!(out, "<CellData>")?;
+            for (name, values) in self.scalars {
+                write_array(out, name, "Float64", 1, &to_bytes_f64(values))?;
+            }
+            for (name, values) in self.vectors {
+                write_array(
+                    out,
+                    name,
+                    "Float64",
+                    3,
+                    &to_bytes_f64(values.as_flattened()),
+                )?;
+            }
+            writeln!(out, "</CellData>")?;
+            writeln!(out, "</Piece>\n</{kind}>\n</VTKFile>")?;
+            Ok(())
+        })
     }
 }
 
@@ -244,61 +251,62 @@ pub fn write_field_pieces_index(
     vectors: &[&str],
     pieces: &[FieldPiece],
 ) -> std::io::Result<()> {
-    let mut out = BufWriter::new(File::create(path)?);
-    writeln!(out, r#"<?xml version="1.0"?>"#)?;
-    let whole = extent_text([0; 3], cells);
-    let kind = match layout {
-        CellLayout::Uniform { .. } => "PImageData",
-        CellLayout::Rectilinear { .. } => "PRectilinearGrid",
-    };
-    writeln!(
-        out,
-        r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
-    )?;
-    match layout {
-        CellLayout::Uniform { origin, spacing } => {
-            let [ox, oy, oz] = origin;
-            let [dx, dy, dz] = spacing;
-            writeln!(
-                out,
-                r#"<PImageData WholeExtent="{whole}" GhostLevel="0" Origin="{ox:e} {oy:e} {oz:e}" Spacing="{dx:e} {dy:e} {dz:e}">"#
-            )?;
-        }
-        CellLayout::Rectilinear { .. } => {
-            writeln!(
-                out,
-                r#"<PRectilinearGrid WholeExtent="{whole}" GhostLevel="0">"#
-            )?;
-            writeln!(out, "<PCoordinates>")?;
-            for name in ["x", "y", "z"] {
-                writeln!(
-                    out,
-                    r#"<PDataArray type="Float64" Name="{name}" NumberOfComponents="1"/>"#
-                )?;
-            }
-            writeln!(out, "</PCoordinates>")?;
-        }
-    }
-    writeln!(out, "<PCellData>")?;
-    for (names, components) in [(scalars, 1), (vectors, 3)] {
-        for name in names {
-            writeln!(
-                out,
-                r#"<PDataArray type="Float64" Name="{name}" NumberOfComponents="{components}"/>"#
-            )?;
-        }
-    }
-    writeln!(out, "</PCellData>")?;
-    for piece in pieces {
+    write_whole(path, |out| {
+        writeln!(out, r#"<?xml version="1.0"?>"#)?;
+        let whole = extent_text([0; 3], cells);
+        let kind = match layout {
+            CellLayout::Uniform { .. } => "PImageData",
+            CellLayout::Rectilinear { .. } => "PRectilinearGrid",
+        };
         writeln!(
             out,
-            r#"<Piece Extent="{}" Source="{}"/>"#,
-            extent_text(piece.offset, piece.cells),
-            piece.source
+            r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
         )?;
-    }
-    writeln!(out, "</{kind}>\n</VTKFile>")?;
-    out.flush()
+        match layout {
+            CellLayout::Uniform { origin, spacing } => {
+                let [ox, oy, oz] = origin;
+                let [dx, dy, dz] = spacing;
+                writeln!(
+                    out,
+                    r#"<PImageData WholeExtent="{whole}" GhostLevel="0" Origin="{ox:e} {oy:e} {oz:e}" Spacing="{dx:e} {dy:e} {dz:e}">"#
+                )?;
+            }
+            CellLayout::Rectilinear { .. } => {
+                writeln!(
+                    out,
+                    r#"<PRectilinearGrid WholeExtent="{whole}" GhostLevel="0">"#
+                )?;
+                writeln!(out, "<PCoordinates>")?;
+                for name in ["x", "y", "z"] {
+                    writeln!(
+                        out,
+                        r#"<PDataArray type="Float64" Name="{name}" NumberOfComponents="1"/>"#
+                    )?;
+                }
+                writeln!(out, "</PCoordinates>")?;
+            }
+        }
+        writeln!(out, "<PCellData>")?;
+        for (names, components) in [(scalars, 1), (vectors, 3)] {
+            for name in names {
+                writeln!(
+                    out,
+                    r#"<PDataArray type="Float64" Name="{name}" NumberOfComponents="{components}"/>"#
+                )?;
+            }
+        }
+        writeln!(out, "</PCellData>")?;
+        for piece in pieces {
+            writeln!(
+                out,
+                r#"<Piece Extent="{}" Source="{}"/>"#,
+                extent_text(piece.offset, piece.cells),
+                piece.source
+            )?;
+        }
+        writeln!(out, "</{kind}>\n</VTKFile>")?;
+        Ok(())
+    })
 }
 
 fn to_bytes_f64(values: &[f64]) -> Vec<u8> {
@@ -350,8 +358,10 @@ pub fn base64(bytes: &[u8]) -> String {
     encoded
 }
 
-/// A `.pvd` collection: one dataset per output time, rewritten after each
-/// addition so that it is valid at any moment of the run.
+/// A `.pvd` collection: one dataset per output time, rewritten whole after
+/// each addition (written aside and renamed over the index) so that it is
+/// valid at any moment of the run, a kill included. Add a dataset after its
+/// file is written: the index then lists only files that are whole.
 pub struct PvdIndex {
     path: PathBuf,
     entries: Vec<(f64, String)>,
@@ -367,21 +377,22 @@ impl PvdIndex {
 
     pub fn add(&mut self, time: f64, file: &str) -> std::io::Result<()> {
         self.entries.push((time, file.to_string()));
-        let mut out = BufWriter::new(File::create(&self.path)?);
-        writeln!(out, r#"<?xml version="1.0"?>"#)?;
-        writeln!(
-            out,
-            r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#
-        )?;
-        writeln!(out, "<Collection>")?;
-        for (t, f) in &self.entries {
+        write_whole(&self.path, |out| {
+            writeln!(out, r#"<?xml version="1.0"?>"#)?;
             writeln!(
                 out,
-                r#"<DataSet timestep="{t:e}" group="" part="0" file="{f}"/>"#
+                r#"<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">"#
             )?;
-        }
-        writeln!(out, "</Collection>\n</VTKFile>")?;
-        out.flush()
+            writeln!(out, "<Collection>")?;
+            for (t, f) in &self.entries {
+                writeln!(
+                    out,
+                    r#"<DataSet timestep="{t:e}" group="" part="0" file="{f}"/>"#
+                )?;
+            }
+            writeln!(out, "</Collection>\n</VTKFile>")?;
+            Ok(())
+        })
     }
 }
 

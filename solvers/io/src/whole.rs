@@ -1,0 +1,101 @@
+//! Files written whole or not at all. A file a run writes in one go (a
+//! particle or field file, an index, the summary, a final table) is written
+//! to a temporary sibling `NAME.tmp` in the same directory, flushed and
+//! synced, then renamed over `NAME`. A rename within a directory replaces
+//! the target in one step, so a reader, or a run killed at any moment,
+//! sees either the previous file or the new one whole, never a file cut
+//! short; at worst a killed run leaves a `NAME.tmp` beside it, which no
+//! index lists and the next run into the folder removes.
+
+use std::ffi::OsString;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// The suffix of the temporary sibling a file is written under.
+pub const TEMPORARY_SUFFIX: &str = ".tmp";
+
+/// The temporary sibling of `path`: `NAME.tmp` in the same directory.
+pub fn temporary_path(path: &Path) -> PathBuf {
+    let mut name: OsString = path.file_name().map(OsString::from).unwrap_or_default();
+    name.push(TEMPORARY_SUFFIX);
+    path.with_file_name(name)
+}
+
+/// Writes `path` whole: `write` fills a buffered temporary sibling, which
+/// is flushed, synced to disk and renamed over `path`. On an error the
+/// temporary file is removed and `path` keeps its previous content.
+pub fn write_whole<F>(path: &Path, write: F) -> std::io::Result<()>
+where
+    F: FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+{
+    let temporary = temporary_path(path);
+    let result = (|| {
+        let mut out = BufWriter::new(File::create(&temporary)?);
+        write(&mut out)?;
+        let file = out.into_inner().map_err(|e| e.into_error())?;
+        file.sync_data()?;
+        drop(file);
+        std::fs::rename(&temporary, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&temporary);
+    }
+    result
+}
+
+/// [`write_whole`] of a text or byte content.
+pub fn write_whole_bytes(path: &Path, content: impl AsRef<[u8]>) -> std::io::Result<()> {
+    write_whole(path, |out| out.write_all(content.as_ref()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("grainflow-io-whole-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_whole_write_replaces_the_file_and_leaves_no_temporary() {
+        let dir = scratch("replace");
+        let path = dir.join("index.pvd");
+        std::fs::write(&path, "old").unwrap();
+        write_whole_bytes(&path, "new content").unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "new content");
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![OsString::from("index.pvd")]);
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn a_failed_write_keeps_the_previous_file_and_removes_the_temporary() {
+        let dir = scratch("fail");
+        let path = dir.join("summary.json");
+        std::fs::write(&path, "{}").unwrap();
+        let result = write_whole(&path, |out| {
+            out.write_all(b"{\"half\": ")?;
+            Err(std::io::Error::other("stopped halfway"))
+        });
+        assert!(result.is_err());
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "{}");
+        assert!(!temporary_path(&path).exists());
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn the_temporary_is_a_sibling_named_after_the_file() {
+        assert_eq!(
+            temporary_path(Path::new("out/fields/fields_000001.vti")),
+            Path::new("out/fields/fields_000001.vti.tmp")
+        );
+    }
+}
