@@ -10,7 +10,8 @@ use crate::case::{AnalysisSection, Case};
 use crate::coupled_analysis::SphereInFluid;
 use crate::fluid_simulation::{cfl_overrun, FieldFiles};
 use crate::output::Outputs;
-use crate::simulation::{peak_memory_bytes, shortest_contact_time, Progress, Summary};
+use crate::progress::Progress;
+use crate::simulation::{peak_memory_bytes, shortest_contact_time, Summary};
 use crate::stability::TimeStepVerdict;
 use crate::{fluid_scene, scene, sharing, stability, RunError};
 use grainflow_core::Communicator;
@@ -278,10 +279,7 @@ pub fn run(
         .particles
         .write_tracked(&system.dem, tracked)
         .map_err(RunError::Io)?;
-    let progress = Progress::new(
-        root && show_progress && std::io::IsTerminal::is_terminal(&std::io::stderr()),
-        end,
-    );
+    let mut progress = Progress::new(root && show_progress, end);
     let mut failure = None;
     let mut max_divergence = 0.0;
     let mut last_report = None;
@@ -356,7 +354,10 @@ pub fn run(
                 .map_err(RunError::Io)?;
             next_tracked += tracked_interval;
         }
-        progress.update(system.flow.time, steps, (end / dt).ceil() as u64);
+        if let Some(line) = progress.update(system.flow.time, steps) {
+            outputs.particles.run.log(&line);
+            eprintln!("{line}");
+        }
     }
     progress.finish();
 

@@ -7,7 +7,8 @@
 use crate::case::{AnalysisSection, Case};
 use crate::fluid_scene::{self, ChannelProfile, ExactFlow};
 use crate::output::RunDirectory;
-use crate::simulation::{peak_memory_bytes, Progress, Summary};
+use crate::progress::Progress;
+use crate::simulation::{peak_memory_bytes, Summary};
 use crate::{sharing, RunError};
 use grainflow_core::Communicator;
 use grainflow_fluid::{FlowSolver, Location, StepReport, ViscousScheme, CFL_LIMIT};
@@ -117,10 +118,7 @@ pub fn run(
     outputs
         .write_frame(&mut solver, first_dt, steps, &report, density)
         .map_err(RunError::Io)?;
-    let progress = Progress::new(
-        root && show_progress && std::io::IsTerminal::is_terminal(&std::io::stderr()),
-        end,
-    );
+    let mut progress = Progress::new(root && show_progress, end);
     let mut failure = None;
     let mut dt = first_dt;
     while solver.time < end * (1.0 - 1e-12) {
@@ -156,7 +154,10 @@ pub fn run(
                 .map_err(RunError::Io)?;
             next_output += interval;
         }
-        progress.update(solver.time, steps, (end / dt).ceil() as u64);
+        if let Some(line) = progress.update(solver.time, steps) {
+            outputs.run.log(&line);
+            eprintln!("{line}");
+        }
     }
     progress.finish();
 

@@ -5,12 +5,12 @@ use crate::analysis::Analysis;
 use crate::case::Case;
 use crate::dry_stepping::DryStepper;
 use crate::output::Outputs;
+use crate::progress::Progress;
 use crate::stability::{self, TimeStepVerdict};
 use crate::{coupled_simulation, fluid_simulation, pouring, scene, sharing, RunError};
 use grainflow_core::Communicator;
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
-use std::io::IsTerminal;
 use std::path::Path;
 use std::time::Instant;
 
@@ -204,16 +204,11 @@ fn run_here(
     };
     let mut moving = false;
 
-    let progress = Progress::new(
-        root && show_progress && std::io::stderr().is_terminal(),
-        end,
-    );
+    let mut progress = Progress::new(root && show_progress, end);
     let mut next_output = 0.0;
     let mut next_tracked = 0.0;
     let mut stop_reason = "end time reached".to_string();
     let mut failure: Option<String> = None;
-    let total_steps = (end / dt).ceil() as u64;
-    let mut logged_decile = 0;
     let mut particle_steps = 0.0;
     let mut wall_state: Vec<bool> = system.walls.iter().map(|w| w.is_present(0.0)).collect();
 
@@ -291,20 +286,9 @@ fn run_here(
             );
             break;
         }
-        progress.update(system.time, system.steps, total_steps);
-        let decile = (10.0 * system.time / end) as u32;
-        if !progress.is_visible() && decile > logged_decile {
-            logged_decile = decile;
-            let elapsed = started.elapsed().as_secs_f64();
-            let eta = elapsed * (end - system.time) / system.time;
-            outputs.run.log(&format!(
-                "step {} t = {:.4e} s ({}%), {:.1} s elapsed, ETA {:.1} s",
-                system.steps,
-                system.time,
-                10 * decile,
-                elapsed,
-                eta
-            ));
+        if let Some(line) = progress.update(system.time, system.steps) {
+            outputs.run.log(&line);
+            eprintln!("{line}");
         }
     }
     progress.finish();
@@ -380,47 +364,4 @@ pub fn peak_memory_bytes() -> Option<u64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
-}
-
-/// A progress bar with ETA on a terminal; nothing otherwise (plain log lines
-/// are written instead).
-pub(crate) struct Progress {
-    bar: Option<indicatif::ProgressBar>,
-}
-
-impl Progress {
-    pub(crate) fn new(visible: bool, end: f64) -> Self {
-        let bar = visible.then(|| {
-            let bar = indicatif::ProgressBar::new(1000);
-            bar.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{elapsed_precise} [{bar:40}] {percent:>3}% {msg} ETA {eta}",
-                )
-                .unwrap()
-                .progress_chars("=> "),
-            );
-            bar.set_message(format!("t = 0 / {end:.3e} s"));
-            bar
-        });
-        Progress { bar }
-    }
-
-    pub(crate) fn is_visible(&self) -> bool {
-        self.bar.is_some()
-    }
-
-    pub(crate) fn update(&self, time: f64, step: u64, total: u64) {
-        if let Some(bar) = &self.bar {
-            if step.is_multiple_of(200) {
-                bar.set_position((1000.0 * step as f64 / total as f64) as u64);
-                bar.set_message(format!("step {step} t = {time:.4e} s"));
-            }
-        }
-    }
-
-    pub(crate) fn finish(&self) {
-        if let Some(bar) = &self.bar {
-            bar.finish_and_clear();
-        }
-    }
 }
