@@ -78,10 +78,14 @@ fn bad_coupled_tables_are_refused_with_the_key_and_nothing_is_written() {
 /// `cases/falling_sphere.toml` at D/Δx = 8 (the validation run is 16) in
 /// its 8 D × 8 D × 24 D box, Δt scaled with Δx (the paper's CFL). The
 /// sphere reaches a plateau (speed changing by less than 0.5 % over the
-/// tenth of the time before its peak), whose Reynolds number is within 6 %
-/// of the Schiller–Naumann balance (eq. 21): the coarse grid and the box
-/// each slow it by 2–4 % (docs/validation.md, §7, where D/Δx = 16 comes
-/// within 3 %). The step is too coarse for the initial-acceleration fit
+/// tenth of the time before its peak), whose Reynolds number is below the
+/// Schiller–Naumann balance (eq. 21) by at most 12 %: the coarse grid,
+/// whose transition layer makes the sphere look larger, and the box slow
+/// it. Measured −10.4 %, and −10.6 % with the paper's rigid inner fluid
+/// (eq. 5–6), which has no inner momentum to take a derivative of: the
+/// two forms agree within 0.2 %. Taken over a volume held fixed, the inner
+/// momentum's derivative had made the sphere fall faster (−4 %), an
+/// agreement that was partly that error's. The step is too coarse for the initial-acceleration fit
 /// (fewer than five steps before 0.2 (D/g)^½), which is then left out;
 /// grainflow-ibm tests it at D/Δx = 16.
 #[test]
@@ -105,7 +109,7 @@ fn falling_sphere_reduced_reaches_the_schiller_naumann_plateau() {
         metric(&summary, "first_step_acceleration")
     );
     assert!(drift.abs() < 5e-3, "no plateau: {drift}");
-    assert!(error.abs() < 0.06, "{summary}");
+    assert!(error < 0.0 && error > -0.12, "{summary}");
     assert!(summary["metrics"].get("initial_acceleration").is_none());
     for file in [
         "case.toml",
@@ -207,16 +211,16 @@ fn bounce_at_d_over_dx_8(
     )
 }
 
-/// `cases/bouncing_sphere.toml` at D/Δx = 8 in a thin liquid (St ≈ 320):
+/// `cases/bouncing_sphere.toml` at D/Δx = 8 in a thin liquid (St ≈ 310):
 /// the rebound lies within the scatter of the experiments of Gondret et
-/// al. and Joseph et al. (±0.1 of their fit exp(−35/St); measured 0.923
-/// and 0.907 against 0.896 read after the stages, 0.907 and 0.893 through
+/// al. and Joseph et al. (±0.1 of their fit exp(−35/St); measured 0.905
+/// and 0.895 against 0.892 read after the stages, 0.886 and 0.884 through
 /// the film), and its peak does not depend on where in its fluid step the
-/// contact falls. Released 0.1 mm apart, one run's step ends catch the
-/// peak right after the contact, the other's only the speed after the
-/// fluid's answer has taken a fifth of it (0.72 and 0.91 of e_n); read
-/// after every stage the two agree within 0.05, a quarter of that spread
-/// (measured 0.016). Before the film force stopped at contact it took a
+/// contact falls: released 0.1 mm apart, the two agree within 0.05
+/// (measured 0.010). Read only at the ends of the fluid steps, the peak is
+/// missed: the fluid's answer within the step has taken 0.17 and 0.20 of
+/// e_n by then (0.73 and 0.69), which is why the analysis reads after
+/// every stage. Before the film force stopped at contact it took a
 /// quarter of this rebound; with the first cells at the wall forced
 /// (`coupling.wall_layer = "forced"`), their suction took 0.05 (0.858 and
 /// 0.881 after the stages, 0.842 and 0.856 through the film).
@@ -235,7 +239,9 @@ fn bouncing_sphere_rebound_is_in_the_band_whatever_the_contact_phase() {
         assert!((ratio - fit).abs() < 0.1, "{runs:?}");
         assert!((through_film - fit).abs() < 0.1, "{runs:?}");
     }
-    assert!((runs[0].2 - runs[1].2).abs() > 0.1, "{runs:?}");
+    for &(_, ratio, step_end, _) in &runs {
+        assert!(ratio - step_end > 0.1, "{runs:?}");
+    }
     assert!((runs[0].1 - runs[1].1).abs() < 0.05, "{runs:?}");
 }
 
@@ -245,13 +251,14 @@ fn bouncing_sphere_rebound_is_in_the_band_whatever_the_contact_phase() {
 /// depends on where in the stage the contact falls: the peaks read there
 /// from two releases 0.1 mm apart are 0.625 and 0.669. Read through the
 /// film (the peak less the film's loss still to come, `coupled_analysis`),
-/// the two agree within 0.05 (measured 0.011), and the rebound is the film
-/// law's, `1 − (1 + 1/e_n) ln(1 + R/2η)/St` = 0.534, less the flow's own
-/// loss, within 0.08 (measured 0.478 and 0.489). With the paper's forcing
-/// of the first cells at the wall (`coupling.wall_layer = "forced"`) the
-/// suction of the sealed wall took 0.09 more (0.443 and 0.449). The
-/// experiments' fit exp(−35/St) is 0.358 here: the film law lies 0.18
-/// above it and the coupled rebound 0.12–0.13 (`docs/validation.md`, §7).
+/// the two agree within 0.05 (measured 0.028), and the rebound lies between
+/// the film law's, `1 − (1 + 1/e_n) ln(1 + R/2η)/St` = 0.524, which has no
+/// loss to the flow, and the lower edge of the experiments' scatter
+/// (their fit exp(−35/St) = 0.351 less 0.1): measured 0.439 and 0.467.
+/// The load from the inner fluid momentum taken over a volume held fixed
+/// gave 0.478 and 0.489, 0.04 above; with the paper's forcing of the first
+/// cells at the wall (`coupling.wall_layer = "forced"`) the suction of the
+/// sealed wall took 0.09 more (measured with that load).
 /// Released 5 D above the floor of a box 9 D tall, the sphere reaches 86 %
 /// of the speed it settles at from 10 D (St = 34.1 against 39.7), which
 /// halves the cost of the runs.
@@ -269,8 +276,9 @@ fn bouncing_sphere_through_the_film_follows_the_film_law_at_moderate_stokes() {
     for &(stokes, _, _, through_film) in &runs {
         assert!(stokes > 30.0 && stokes < 45.0, "{runs:?}");
         let film_law = 1.0 - film_critical / stokes;
+        let scatter_floor = (-35.0 / stokes).exp() - 0.1;
         assert!(
-            through_film < film_law && film_law - through_film < 0.08,
+            through_film < film_law && through_film > scatter_floor,
             "{runs:?}"
         );
     }
