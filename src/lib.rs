@@ -24,6 +24,7 @@ pub mod initial_overlaps;
 pub mod output;
 pub mod pouring;
 pub mod progress;
+pub mod report;
 pub mod scene;
 pub mod sharing;
 pub mod simulation;

@@ -32,6 +32,10 @@ enum Command {
         /// Threads for the force loop (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Print the whole summary as JSON (what `summary.json` holds)
+        /// instead of the few lines for a person.
+        #[arg(long)]
+        json: bool,
     },
     /// Validate a case and print its derived numbers without running it.
     Check {
@@ -77,6 +81,7 @@ fn main() -> ExitCode {
             out,
             overrides,
             threads,
+            json,
         } => {
             if let Some(n) = threads {
                 rayon::ThreadPoolBuilder::new()
@@ -100,8 +105,10 @@ fn main() -> ExitCode {
             // stops the job.
             match simulation::run_on(&loaded, &out, true, communicator.clone()) {
                 Ok(summary) => {
-                    if root {
+                    if root && json {
                         println!("{}", serde_json::to_string_pretty(&summary.json).unwrap());
+                    } else if root {
+                        print!("{}", grainflow::report::text(&loaded, &summary.json, &out));
                     }
                     ExitCode::SUCCESS
                 }

@@ -135,6 +135,8 @@ impl Progress {
                 }
                 None
             }
+            // A run of under a second needs no news of its progress.
+            Display::Lines if elapsed < 1.0 => None,
             Display::Lines => {
                 let reached = |k: u32| fraction >= k as f64 * LINE_FRACTION - 1e-12;
                 if !reached(self.next_line) && elapsed - self.last_line < LINE_EVERY {
