@@ -2,7 +2,9 @@
 //! derived numbers and the models the scene will run.
 
 use crate::case::Case;
+use crate::cost_estimate::{self, Evolution};
 use crate::coupled_simulation;
+use crate::dry_stepping::DryStepper;
 use crate::footprint::{human_bytes, machine_memory, Footprint};
 use crate::simulation::{check_time_step, time_step};
 use crate::{fluid_scene, scene, sharing, stability, RunError};
@@ -185,6 +187,20 @@ pub fn report(case: &Case) -> Result<String, RunError> {
     if let Some(w) = scene::glued_overlap_warning(case).map_err(RunError::Case)? {
         let _ = writeln!(out, "{w}");
     }
+    let (mut stepper, dt, _) = DryStepper::new(case, &mut system)?;
+    let steps = (case.time.end / dt).ceil();
+    let limit = case.time.overlap_limit;
+    let estimate = cost_estimate::probe(steps, Evolution::Contacts, || {
+        stepper.step(&mut system, dt, limit).is_none()
+    });
+    if let Some(estimate) = estimate {
+        let what = if case.time.rest_speed.is_some() {
+            "steps to time.end (at most: the run stops at rest)"
+        } else {
+            "steps to time.end"
+        };
+        let _ = writeln!(out, "{}", estimate.line(steps, what));
+    }
     let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)
 }
@@ -345,6 +361,23 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
         }
         (None, None) => {}
     }
+    // With time.cfl the steps are counted at the first step's size.
+    let dt = case
+        .time
+        .dt
+        .unwrap_or_else(|| solver.time_step_for_cfl(case.time.cfl.unwrap_or(1.0)))
+        .min(case.time.end);
+    let steps = (case.time.end / dt).ceil();
+    let mut solver = solver;
+    let estimate = cost_estimate::probe(steps, Evolution::Steady, || solver.step(dt).is_ok());
+    if let Some(estimate) = estimate {
+        let what = if case.time.dt.is_some() {
+            "steps"
+        } else {
+            "steps of the first step's size"
+        };
+        let _ = writeln!(out, "{}", estimate.line(steps, what));
+    }
     let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)
 }
@@ -479,6 +512,21 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
         .chain(&overlap_warning)
     {
         let _ = writeln!(out, "{w}");
+    }
+    let dt = case
+        .time
+        .dt
+        .expect("validated: grains in a fluid have time.dt");
+    let steps = (case.time.end / dt).ceil();
+    let mut system = system;
+    let estimate = cost_estimate::probe(steps, Evolution::Contacts, || system.step(dt).is_ok());
+    if let Some(estimate) = estimate {
+        let what = if case.time.cfl.is_some() {
+            "steps of time.dt (more where time.cfl shortens them)"
+        } else {
+            "steps"
+        };
+        let _ = writeln!(out, "{}", estimate.line(steps, what));
     }
     let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)

@@ -12,6 +12,7 @@ pub mod analysis;
 pub mod bed_analysis;
 pub mod case;
 pub mod check;
+pub mod cost_estimate;
 pub mod coupled_analysis;
 pub mod coupled_simulation;
 pub mod deposit;
