@@ -17,7 +17,7 @@ use crate::ghosts::Ghosts;
 use crate::lubrication::Lubrication;
 use crate::neighbours::{CellGrid, NeighbourList, PreviousList, LUBRICATED, TOUCHING};
 use crate::particles::{permuted, NewParticle, Particles, PACKED_STATE};
-use crate::thread_share::{wait_until, LazyTeam, RunClaims, ThreadShare};
+use crate::thread_share::{LazyTeam, RunClaims, ThreadShare};
 use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
 use rayon::prelude::*;
@@ -1032,6 +1032,9 @@ impl DemSystem {
                     .expect("each chunk is claimed once");
                 let start = Instant::now();
                 let (overlap, walls) = evaluate(chunk, &mut arrays);
+                // The chunk has published its hand-overs: wake a thread
+                // blocked for them.
+                team.notify();
                 max_overlap = max_overlap.max(overlap);
                 wall_contacts += walls;
                 seconds.push((chunk, start.elapsed().as_secs_f64()));
@@ -1051,7 +1054,7 @@ impl DemSystem {
             // Every chunk is claimed: what still waits receives from chunks
             // that other threads are finishing.
             for (chunk, arrays) in waiting {
-                wait_until(|| all_published(sources_of.of(chunk), &handovers));
+                team.wait(|| all_published(sources_of.of(chunk), &handovers));
                 let (count, bad) = take_in(chunk, arrays, &mut seconds);
                 listed += count;
                 non_finite |= bad;
