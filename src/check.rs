@@ -190,6 +190,14 @@ pub fn report(case: &Case) -> Result<String, RunError> {
             let _ = writeln!(out, "{w}");
         }
     }
+    // As `grainflow run` chooses them without --threads, on one rank.
+    let threads = grainflow_dem::threads::choose_threads(
+        n + pouring.remaining(),
+        rayon::current_num_threads(),
+        1,
+        None,
+    );
+    let _ = writeln!(out, "threads: {} ({})", threads.threads, threads.why);
     let _ = writeln!(
         out,
         "memory estimate: {:.1} MiB",

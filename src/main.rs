@@ -29,7 +29,8 @@ enum Command {
         /// Override a key of the case file, e.g. --set time.end=0.1
         #[arg(long = "set", value_name = "KEY=VALUE")]
         overrides: Vec<String>,
-        /// Threads for the force loop (default: all cores).
+        /// Threads (default: one per 10,000 grains of a dry scene, at most
+        /// the cores; all cores for a fluid).
         #[arg(long)]
         threads: Option<usize>,
     },
@@ -79,6 +80,7 @@ fn main() -> ExitCode {
             threads,
         } => {
             if let Some(n) = threads {
+                grainflow_dem::threads::force_threads(n);
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
                     .build_global()

@@ -129,6 +129,10 @@ pub struct DemSystem {
     share: ThreadShare,
     /// The threads that run those passes.
     team: LazyTeam,
+    /// Threads forced for the passes of the force loop; when `None`, one
+    /// per [`crate::threads::GRAINS_PER_THREAD`] owned grains, at most the
+    /// current rayon pool's.
+    pub threads: Option<usize>,
     pub time: f64,
     pub steps: u64,
     pub last: StepDiagnostics,
@@ -160,6 +164,7 @@ impl DemSystem {
             handover_sources: (u64::MAX, HandoverSources::default()),
             share: ThreadShare::default(),
             team: LazyTeam::default(),
+            threads: crate::threads::forced_threads(),
             time: 0.0,
             steps: 0,
             last: StepDiagnostics::default(),
@@ -607,12 +612,11 @@ impl DemSystem {
     /// Fits the threads' runs of chunks to `n` owned particles and the
     /// current neighbour build.
     fn update_share(&mut self, n: usize) {
-        self.share.update(
-            n,
-            force_chunk(n),
-            rayon::current_num_threads(),
-            self.neighbours.builds,
-        );
+        let threads = self
+            .threads
+            .unwrap_or_else(|| crate::threads::threads_for(n, rayon::current_num_threads()));
+        self.share
+            .update(n, force_chunk(n), threads, self.neighbours.builds);
     }
 
     /// Contact forces and gravity on every owned particle; `dt` advances the

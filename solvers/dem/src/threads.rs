@@ -1,0 +1,124 @@
+//! How many threads a DEM run uses.
+//!
+//! A second thread pays for itself only when a step has enough grains to
+//! cover what the threads cost each other: a hand-over between two CPUs at
+//! every pass (two per step), the grains at the boundary of their runs, and,
+//! on a host whose CPUs are not all free, the waits for a thread the host
+//! has descheduled. Measured (docs/performance.md, "Threads and scene
+//! size"): on a 2-core host kept busy by other processes, one thread was
+//! faster than two for every scene tried from 400 to 12,800 grains (the
+//! 3D column at 800–12,800 grains, the 2D collapse at 400); on a quiet host
+//! two threads run the 20,000-grain column 1.6–1.9 times as fast. So a run
+//! takes one thread per [`GRAINS_PER_THREAD`] grains, at least one and at
+//! most the cores it may use. `--threads N` (or [`force_threads`]) forces N.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Grains per thread of a DEM run when the number of threads is not forced
+/// (see the module's documentation for the crossover).
+pub const GRAINS_PER_THREAD: usize = 10_000;
+
+/// Threads forced for the DEM runs of this process; 0 when not forced.
+static FORCED: AtomicUsize = AtomicUsize::new(0);
+
+/// Forces `threads` threads on the DEM systems made from now on in this
+/// process, whatever their size (`grainflow run --threads N`).
+pub fn force_threads(threads: usize) {
+    FORCED.store(threads.max(1), Ordering::Relaxed);
+}
+
+/// The threads forced with [`force_threads`], if any.
+pub fn forced_threads() -> Option<usize> {
+    match FORCED.load(Ordering::Relaxed) {
+        0 => None,
+        n => Some(n),
+    }
+}
+
+/// Threads for a scene of `grains` grains (per rank) on `cores` cores: one
+/// per [`GRAINS_PER_THREAD`] grains, at least one, at most `cores`.
+pub fn threads_for(grains: usize, cores: usize) -> usize {
+    (grains / GRAINS_PER_THREAD).clamp(1, cores.max(1))
+}
+
+/// MPI ranks of this job on this host, from the launcher's environment
+/// (Open MPI, MPICH, Slurm); 1 when not started by one.
+pub fn ranks_on_this_host() -> usize {
+    [
+        "OMPI_COMM_WORLD_LOCAL_SIZE",
+        "MPI_LOCALNRANKS",
+        "SLURM_NTASKS_PER_NODE",
+    ]
+    .iter()
+    .find_map(|name| std::env::var(name).ok()?.trim().parse::<usize>().ok())
+    .unwrap_or(1)
+    .max(1)
+}
+
+/// The threads a run uses and why, for the log and `grainflow check`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ThreadChoice {
+    pub threads: usize,
+    pub why: String,
+}
+
+/// The threads of a run of `grains` grains (per rank, the grains still to
+/// be poured included) on a host of `cores` cores shared by `ranks` ranks
+/// of the job: `forced` if given, otherwise [`threads_for`] the grains on
+/// this rank's share of the cores.
+pub fn choose_threads(
+    grains: usize,
+    cores: usize,
+    ranks: usize,
+    forced: Option<usize>,
+) -> ThreadChoice {
+    if let Some(threads) = forced {
+        return ThreadChoice {
+            threads,
+            why: format!("forced by --threads {threads}"),
+        };
+    }
+    let ranks = ranks.max(1);
+    let cores_per_rank = (cores / ranks).max(1);
+    let threads = threads_for(grains, cores_per_rank);
+    let cores_text = if ranks > 1 {
+        format!("{cores} cores shared by {ranks} ranks on this host")
+    } else {
+        format!("{cores} cores")
+    };
+    let why = if threads == cores_per_rank && threads > 1 {
+        format!("{grains} grains: every core ({cores_text})")
+    } else if threads == cores_per_rank {
+        format!("{grains} grains on {cores_text}: one core per rank")
+    } else {
+        format!(
+            "{grains} grains on {cores_text}: one thread per {GRAINS_PER_THREAD} grains, \
+             below which one thread is faster; --threads N forces N"
+        )
+    };
+    ThreadChoice { threads, why }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn small_scenes_run_on_one_thread_large_ones_on_every_core() {
+        assert_eq!(threads_for(400, 2), 1);
+        assert_eq!(threads_for(12_800, 2), 1);
+        assert_eq!(threads_for(20_000, 2), 2);
+        assert_eq!(threads_for(1_000_000, 16), 16);
+        assert_eq!(threads_for(0, 0), 1);
+    }
+
+    #[test]
+    fn ranks_on_one_host_share_its_cores() {
+        assert_eq!(choose_threads(50_000, 2, 2, None).threads, 1);
+        assert_eq!(choose_threads(50_000, 8, 2, None).threads, 4);
+        assert_eq!(choose_threads(400, 2, 1, Some(2)).threads, 2);
+        let choice = choose_threads(400, 2, 1, None);
+        assert_eq!(choice.threads, 1);
+        assert!(choice.why.contains("400 grains"), "{}", choice.why);
+    }
+}
