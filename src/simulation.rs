@@ -167,10 +167,11 @@ fn run_here(
 fn dry_threads(system: &DemSystem, pouring: &pouring::Pouring) -> ThreadChoice {
     let ranks = system.communicator.size();
     let grains = system.particles.n_owned + pouring.remaining() / ranks;
+    let cores = rayon::current_num_threads();
     choose_threads(
         grains,
-        rayon::current_num_threads(),
-        threads::ranks_on_this_host().min(ranks),
+        cores,
+        threads::ranks_sharing(cores).min(ranks),
         threads::forced_threads(),
     )
 }

@@ -55,6 +55,32 @@ pub fn ranks_on_this_host() -> usize {
     .max(1)
 }
 
+/// The ranks that share the `cores` this process may use: none but itself
+/// when a launcher has bound it to fewer cores than the host has (its
+/// cores are its own share already), otherwise the job's ranks on this
+/// host ([`ranks_on_this_host`]).
+pub fn ranks_sharing(cores: usize) -> usize {
+    let host = std::fs::read_to_string("/sys/devices/system/cpu/online")
+        .ok()
+        .and_then(|text| online_cpus(&text))
+        .unwrap_or(cores);
+    if cores < host {
+        1
+    } else {
+        ranks_on_this_host()
+    }
+}
+
+/// CPUs in a list such as `0-3,8,10-11` (`/sys/devices/system/cpu/online`).
+fn online_cpus(list: &str) -> Option<usize> {
+    list.trim().split(',').try_fold(0, |count, range| {
+        let mut ends = range.split('-').map(|e| e.trim().parse::<usize>().ok());
+        let first = ends.next()??;
+        let last = ends.next().unwrap_or(Some(first))?;
+        Some(count + last.checked_sub(first)? + 1)
+    })
+}
+
 /// The threads a run uses and why, for the log and `grainflow check`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ThreadChoice {
@@ -81,15 +107,15 @@ pub fn choose_threads(
     let ranks = ranks.max(1);
     let cores_per_rank = (cores / ranks).max(1);
     let threads = threads_for(grains, cores_per_rank);
-    let cores_text = if ranks > 1 {
-        format!("{cores} cores shared by {ranks} ranks on this host")
-    } else {
-        format!("{cores} cores")
+    let cores_text = match (cores, ranks) {
+        (1, 1) => "1 core".to_string(),
+        (_, 1) => format!("{cores} cores"),
+        _ => format!("{cores} cores shared by {ranks} ranks on this host"),
     };
     let why = if threads == cores_per_rank && threads > 1 {
         format!("{grains} grains: every core ({cores_text})")
     } else if threads == cores_per_rank {
-        format!("{grains} grains on {cores_text}: one core per rank")
+        format!("{grains} grains on {cores_text}")
     } else {
         format!(
             "{grains} grains on {cores_text}: one thread per {GRAINS_PER_THREAD} grains, \
@@ -110,6 +136,14 @@ mod tests {
         assert_eq!(threads_for(20_000, 2), 2);
         assert_eq!(threads_for(1_000_000, 16), 16);
         assert_eq!(threads_for(0, 0), 1);
+    }
+
+    #[test]
+    fn online_cpus_are_counted_from_their_ranges() {
+        assert_eq!(online_cpus("0-1\n"), Some(2));
+        assert_eq!(online_cpus("0-3,8,10-11"), Some(7));
+        assert_eq!(online_cpus("0"), Some(1));
+        assert_eq!(online_cpus("x"), None);
     }
 
     #[test]
