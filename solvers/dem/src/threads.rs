@@ -4,13 +4,17 @@
 //! cover what the threads cost each other: a hand-over between two CPUs at
 //! every pass (two per step), the grains at the boundary of their runs, and,
 //! on a host whose CPUs are not all free, the waits for a thread the host
-//! has descheduled. Measured (docs/performance.md, "Threads and scene
-//! size"): on a 2-core host kept busy by other processes, one thread was
-//! faster than two for every scene tried from 400 to 12,800 grains (the
-//! 3D column at 800–12,800 grains, the 2D collapse at 400); on a quiet host
-//! two threads run the 20,000-grain column 1.6–1.9 times as fast. So a run
-//! takes one thread per [`GRAINS_PER_THREAD`] grains, at least one and at
-//! most the cores it may use. `--threads N` (or [`force_threads`]) forces N.
+//! has descheduled. Measured (docs/performance.md, "Threads on a shared
+//! host"): on a 2-core host kept busy by other processes (load average
+//! 6–8), two threads took 1.3–1.8 times as long as one for the 3D column
+//! at every size from 800 to 20,000 grains (1.65 at 6,400, 1.35 at
+//! 12,800), and the 2D collapse (400 grains) took 45–70 times as long
+//! before the team's waits blocked; on a quiet host two threads run the
+//! 20,000-grain column's dense window 1.7–1.9 times as fast. The
+//! crossover lies between, where the host decides it: a run of fewer than
+//! 20,000 grains keeps to one thread, and a larger one keeps the quiet
+//! host's gain: one thread per [`GRAINS_PER_THREAD`] grains, at least one
+//! and at most the cores the run may use. `--threads N` (or [`force_threads`]) forces N.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
