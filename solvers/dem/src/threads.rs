@@ -8,7 +8,7 @@
 //! host"): on a 2-core host kept busy by other processes (load average
 //! 6–8), two threads took 1.3–1.8 times as long as one for the 3D column
 //! at every size from 800 to 20,000 grains (1.65 at 6,400, 1.35 at
-//! 12,800), and the 2D collapse (400 grains) took 45–70 times as long
+//! 12,800), and the 2D collapse (400 grains) took 45–72 times as long
 //! before the team's waits blocked; on a quiet host two threads run the
 //! 20,000-grain column's dense window 1.7–1.9 times as fast. The
 //! crossover lies between, where the host decides it: a run of fewer than
