@@ -77,6 +77,10 @@ pub struct ParallelSection {
     /// nodes.
     #[serde(default = "default_true")]
     pub shared_memory: bool,
+    /// Threads of each rank (`grainflow run --threads N` sets it; default:
+    /// chosen from the scene's size, see `grainflow_dem::threads`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub threads: Option<usize>,
 }
 
 impl ParallelSection {
@@ -784,6 +788,13 @@ impl Case {
                     &format!("allowed: {dim} positive rank counts, one per axis"),
                 ));
             }
+        }
+        if self.parallel.as_ref().and_then(|p| p.threads) == Some(0) {
+            return Err(invalid(
+                "parallel.threads",
+                0,
+                "allowed: at least 1 (or leave it out to choose from the scene's size)",
+            ));
         }
 
         match (&self.particles, &self.contact, &self.fluid) {

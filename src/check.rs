@@ -46,7 +46,9 @@ pub fn report(case: &Case) -> Result<String, RunError> {
     if case.fluid.is_some() {
         return coupled_report(case);
     }
+    let building = std::time::Instant::now();
     let mut system = scene::build(case).map_err(RunError::Case)?;
+    let setup = building.elapsed().as_secs_f64();
     // The first batch of a pour is there at t = 0: its grains count in the
     // time step.
     let (pouring, pour_lines) = crate::pouring::start(case, &mut system).map_err(RunError::Case)?;
@@ -187,11 +189,26 @@ pub fn report(case: &Case) -> Result<String, RunError> {
     if let Some(w) = scene::glued_overlap_warning(case).map_err(RunError::Case)? {
         let _ = writeln!(out, "{w}");
     }
+    // As `grainflow run` chooses them, on one rank.
+    let threads = grainflow_dem::threads::choose_threads(
+        n + pouring.remaining(),
+        rayon::current_num_threads(),
+        1,
+        case.parallel.as_ref().and_then(|p| p.threads),
+    );
+    let _ = writeln!(out, "threads: {} ({})", threads.threads, threads.why);
     let (mut stepper, dt, _) = DryStepper::new(case, &mut system)?;
     let steps = (case.time.end / dt).ceil();
     let limit = case.time.overlap_limit;
-    let estimate = cost_estimate::probe(steps, Evolution::Contacts, || {
-        stepper.step(&mut system, dt, limit).is_none()
+    // Timed on the threads the run would use.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.threads)
+        .build()
+        .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
+    let estimate = pool.install(|| {
+        cost_estimate::probe(setup, steps, Evolution::Contacts, || {
+            stepper.step(&mut system, dt, limit).is_none()
+        })
     });
     if let Some(estimate) = estimate {
         let what = if case.time.rest_speed.is_some() {
@@ -228,7 +245,9 @@ fn crank_nicolson_damping(viscous_number: f64) -> f64 {
 /// `check` of a fluid-only scene: grid, Reynolds number of the initial
 /// flow, the convective and viscous time-step limits, memory.
 fn fluid_report(case: &Case) -> Result<String, RunError> {
+    let building = std::time::Instant::now();
     let solver = fluid_scene::build(case).map_err(RunError::Case)?;
+    let setup = building.elapsed().as_secs_f64();
     let f = case.fluid_section();
     let grid = &solver.grid;
     let dim = grid.dim();
@@ -369,7 +388,8 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
         .min(case.time.end);
     let steps = (case.time.end / dt).ceil();
     let mut solver = solver;
-    let estimate = cost_estimate::probe(steps, Evolution::Steady, || solver.step(dt).is_ok());
+    let estimate =
+        cost_estimate::probe(setup, steps, Evolution::Steady, || solver.step(dt).is_ok());
     if let Some(estimate) = estimate {
         let what = if case.time.dt.is_some() {
             "steps"
@@ -387,7 +407,9 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
 /// Reynolds and Stokes numbers), resolution, the fluid step against the
 /// CFL limit at that terminal velocity, the DEM sub-step, lubrication.
 fn coupled_report(case: &Case) -> Result<String, RunError> {
+    let building = std::time::Instant::now();
     let (system, contact_time) = coupled_simulation::build(case).map_err(RunError::Case)?;
+    let setup = building.elapsed().as_secs_f64();
     let warning = coupled_simulation::check_dem_substep(&system, contact_time)?;
     let density_warning = coupled_simulation::check_density_ratio(&system)?;
     let f = case.fluid_section();
@@ -519,7 +541,9 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
         .expect("validated: grains in a fluid have time.dt");
     let steps = (case.time.end / dt).ceil();
     let mut system = system;
-    let estimate = cost_estimate::probe(steps, Evolution::Contacts, || system.step(dt).is_ok());
+    let estimate = cost_estimate::probe(setup, steps, Evolution::Contacts, || {
+        system.step(dt).is_ok()
+    });
     if let Some(estimate) = estimate {
         let what = if case.time.cfl.is_some() {
             "steps of time.dt (more where time.cfl shortens them)"

@@ -4,7 +4,8 @@
 //! a table of throughputs cannot: this host's CPUs and load, the threads,
 //! the scene's own mix of cells, grains and contacts.
 //!
-//! The uncertainty has two parts: the spread of the timed steps, and how
+//! The uncertainty has two parts: the standard error of the mean timed
+//! step, and how
 //! much a step's cost changes during a run, which a probe at t = 0 cannot
 //! see: grains that settle into a dense pack or a collapse that spreads
 //! change the contacts by several times, a flow's cost hardly moves.
@@ -65,9 +66,16 @@ impl Estimate {
 }
 
 /// Times `step` (one step of the scene; false when it failed) and
-/// extrapolates to `steps` steps. The first step, which sets up plans and
-/// lists, is left out when more were timed. None if no step succeeded.
-pub fn probe(steps: f64, evolution: Evolution, mut step: impl FnMut() -> bool) -> Option<Estimate> {
+/// extrapolates to `steps` steps, after a set-up of `setup` seconds (the
+/// scene's building, timed by the caller). The first step, which sets up
+/// plans and lists, is left out when more were timed. None if no step
+/// succeeded.
+pub fn probe(
+    setup: f64,
+    steps: f64,
+    evolution: Evolution,
+    mut step: impl FnMut() -> bool,
+) -> Option<Estimate> {
     let started = Instant::now();
     let mut times = Vec::new();
     loop {
@@ -82,7 +90,12 @@ pub fn probe(steps: f64, evolution: Evolution, mut step: impl FnMut() -> bool) -
             break;
         }
     }
-    estimate(&times, steps, evolution)
+    estimate(&times, steps, evolution).map(|e| Estimate {
+        seconds: setup + e.seconds,
+        low: setup + e.low,
+        high: setup + e.high,
+        ..e
+    })
 }
 
 /// The estimate from the step times `times` (s).
@@ -93,9 +106,10 @@ fn estimate(times: &[f64], steps: f64, evolution: Evolution) -> Option<Estimate>
     }
     let n = timed.len() as f64;
     let mean = timed.iter().sum::<f64>() / n;
+    // The relative standard error of the mean step.
     let spread = if timed.len() > 1 {
         let variance = timed.iter().map(|t| (t - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        variance.sqrt() / mean
+        (variance / n).sqrt() / mean
     } else {
         0.0
     };
@@ -126,10 +140,11 @@ mod tests {
         let steady = estimate(&[5.0, 0.1, 0.1, 0.1], 1000.0, Evolution::Steady).unwrap();
         assert!((steady.seconds - 100.0).abs() < 1e-9);
         assert!((steady.high - 125.0).abs() < 1e-9 && (steady.low - 80.0).abs() < 1e-9);
-        // Steps that vary widen the range beyond the scene's own factor.
+        // Steps that vary widen the range beyond the scene's own factor, by
+        // the standard error of their mean.
         let varied = estimate(&[5.0, 0.05, 0.15], 1000.0, Evolution::Contacts).unwrap();
         assert!((varied.seconds - 100.0).abs() < 1e-9);
-        let spread = (0.05f64.powi(2) * 2.0).sqrt() / 0.1;
+        let spread = (0.05f64.powi(2) * 2.0 / 2.0).sqrt() / 0.1;
         assert!((varied.high - 100.0 * 2.0 * (1.0 + spread)).abs() < 1e-9);
         assert!(estimate(&[], 10.0, Evolution::Steady).is_none());
     }

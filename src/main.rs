@@ -29,7 +29,8 @@ enum Command {
         /// Override a key of the case file, e.g. --set time.end=0.1
         #[arg(long = "set", value_name = "KEY=VALUE")]
         overrides: Vec<String>,
-        /// Threads for the force loop (default: all cores).
+        /// Threads (default: one per 10,000 grains of a dry scene, at most
+        /// the cores; all cores for a fluid).
         #[arg(long)]
         threads: Option<usize>,
         /// Print the whole summary as JSON (what `summary.json` holds)
@@ -83,11 +84,13 @@ fn main() -> ExitCode {
             threads,
             json,
         } => {
+            let mut overrides = overrides;
             if let Some(n) = threads {
-                rayon::ThreadPoolBuilder::new()
+                // The pool for the flow; the DEM reads it from the case.
+                let _ = rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
-                    .build_global()
-                    .expect("thread pool");
+                    .build_global();
+                overrides.push(format!("parallel.threads={n}"));
             }
             let loaded = match Case::load(&case, &overrides) {
                 Ok(c) => c,

@@ -148,7 +148,7 @@ impl Progress {
                 }
                 Some(format!(
                     "{:>3.0} % after {}: {}",
-                    100.0 * fraction,
+                    (100.0 * fraction).floor(),
                     clock(elapsed),
                     self.status(time, step)
                 ))

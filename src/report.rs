@@ -54,6 +54,7 @@ pub fn comparisons(case: &Case, summary: &Value) -> Vec<Comparison> {
             );
         }
         Some(AnalysisSection::Bouncing) => {
+            compare("restitution", restitution, "contact.restitution");
             compare(
                 "energy_ratio_per_impact",
                 restitution.map(|e| e * e),

@@ -408,6 +408,7 @@ pub fn build_with(
     let placed = particles(case)?;
     check_inside(&domain, &placed)?;
     let mut system = DemSystem::new(domain, contact_law(case), walls(case), skin(case));
+    system.threads = case.parallel.as_ref().and_then(|p| p.threads);
     // Before the particles: the pair list reaches the lubrication range
     // and the contact gap.
     system.lubrication = lubrication(case);

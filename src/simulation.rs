@@ -9,6 +9,7 @@ use crate::progress::Progress;
 use crate::stability::{self, TimeStepVerdict};
 use crate::{coupled_simulation, fluid_simulation, pouring, scene, sharing, RunError};
 use grainflow_core::Communicator;
+use grainflow_dem::threads::{self, choose_threads, ThreadChoice};
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
 use std::path::Path;
@@ -133,9 +134,68 @@ fn run_here(
         return coupled_simulation::run(case, out, show_progress, communicator);
     }
     let started = Instant::now();
-    let root = communicator.is_root();
     let mut system = scene::build_on(case, communicator.clone()).map_err(RunError::Case)?;
-    let (mut pouring, pour_log) = pouring::start(case, &mut system).map_err(RunError::Case)?;
+    let (pouring, pour_log) = pouring::start(case, &mut system).map_err(RunError::Case)?;
+    // The threads: fewer than the pool's for a scene too small to gain from
+    // them (the neighbour builds and the contact solver's run on the pool
+    // too, so it shrinks with them).
+    let choice = dry_threads(case, &system, &pouring);
+    if choice.threads < rayon::current_num_threads() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(choice.threads)
+            .build()
+            .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
+        return pool.install(|| {
+            run_dry(
+                case,
+                out,
+                show_progress,
+                communicator,
+                (started, system, pouring, pour_log, choice),
+            )
+        });
+    }
+    run_dry(
+        case,
+        out,
+        show_progress,
+        communicator,
+        (started, system, pouring, pour_log, choice),
+    )
+}
+
+/// The threads of a dry run of `system`, the grains still to be poured
+/// included.
+fn dry_threads(case: &Case, system: &DemSystem, pouring: &pouring::Pouring) -> ThreadChoice {
+    let ranks = system.communicator.size();
+    let grains = system.particles.n_owned + pouring.remaining() / ranks;
+    let cores = rayon::current_num_threads();
+    choose_threads(
+        grains,
+        cores,
+        threads::ranks_sharing(cores).min(ranks),
+        case.parallel.as_ref().and_then(|p| p.threads),
+    )
+}
+
+/// What [`run_here`] has built for [`run_dry`]: the clock, the scene, its
+/// pouring, the pouring's log lines and the threads.
+type Built = (
+    Instant,
+    DemSystem,
+    pouring::Pouring,
+    Vec<String>,
+    ThreadChoice,
+);
+
+fn run_dry(
+    case: &Case,
+    out: &Path,
+    show_progress: bool,
+    communicator: Communicator,
+    (started, mut system, mut pouring, pour_log, choice): Built,
+) -> Result<Summary, RunError> {
+    let root = communicator.is_root();
     let (mut stepper, dt, warning) = DryStepper::new(case, &mut system)?;
 
     let mut outputs = Outputs::create_on(out, case, communicator.clone()).map_err(RunError::Io)?;
@@ -154,6 +214,9 @@ fn run_here(
     for line in &pour_log {
         outputs.run.log(line);
     }
+    outputs
+        .run
+        .log(&format!("threads: {} ({})", choice.threads, choice.why));
     if communicator.size() > 1 {
         let s = &system.subdomain;
         outputs.run.log(&format!(

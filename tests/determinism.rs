@@ -50,6 +50,8 @@ fn run_with_threads(threads: usize, steps: usize) -> DemSystem {
     on_threads(threads, || {
         let case = Case::from_text(FALLING_PACKING, "packing", &[]).unwrap();
         let mut system = scene::build(&case).unwrap();
+        // Forced: left to choose, a scene this small runs on one thread.
+        system.threads = Some(threads);
         for _ in 0..steps {
             system.step(5.0e-6);
         }

@@ -26,6 +26,7 @@ pub mod particles;
 pub mod stress;
 pub mod system;
 mod thread_share;
+pub mod threads;
 pub mod walls;
 
 pub use contact_law::{ContactLaw, NormalCalibration, NormalStiffness};

@@ -17,7 +17,7 @@ use crate::ghosts::Ghosts;
 use crate::lubrication::Lubrication;
 use crate::neighbours::{CellGrid, NeighbourList, PreviousList, LUBRICATED, TOUCHING};
 use crate::particles::{permuted, NewParticle, Particles, PACKED_STATE};
-use crate::thread_share::{wait_until, LazyTeam, RunClaims, ThreadShare};
+use crate::thread_share::{LazyTeam, RunClaims, ThreadShare};
 use crate::walls::PlaneWall;
 use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
 use rayon::prelude::*;
@@ -129,6 +129,10 @@ pub struct DemSystem {
     share: ThreadShare,
     /// The threads that run those passes.
     team: LazyTeam,
+    /// Threads forced for the passes of the force loop; when `None`, one
+    /// per [`crate::threads::GRAINS_PER_THREAD`] owned grains, at most the
+    /// current rayon pool's.
+    pub threads: Option<usize>,
     pub time: f64,
     pub steps: u64,
     pub last: StepDiagnostics,
@@ -160,6 +164,7 @@ impl DemSystem {
             handover_sources: (u64::MAX, HandoverSources::default()),
             share: ThreadShare::default(),
             team: LazyTeam::default(),
+            threads: None,
             time: 0.0,
             steps: 0,
             last: StepDiagnostics::default(),
@@ -607,12 +612,11 @@ impl DemSystem {
     /// Fits the threads' runs of chunks to `n` owned particles and the
     /// current neighbour build.
     fn update_share(&mut self, n: usize) {
-        self.share.update(
-            n,
-            force_chunk(n),
-            rayon::current_num_threads(),
-            self.neighbours.builds,
-        );
+        let threads = self
+            .threads
+            .unwrap_or_else(|| crate::threads::threads_for(n, rayon::current_num_threads()));
+        self.share
+            .update(n, force_chunk(n), threads, self.neighbours.builds);
     }
 
     /// Contact forces and gravity on every owned particle; `dt` advances the
@@ -1032,6 +1036,9 @@ impl DemSystem {
                     .expect("each chunk is claimed once");
                 let start = Instant::now();
                 let (overlap, walls) = evaluate(chunk, &mut arrays);
+                // The chunk has published its hand-overs: wake a thread
+                // blocked for them.
+                team.notify();
                 max_overlap = max_overlap.max(overlap);
                 wall_contacts += walls;
                 seconds.push((chunk, start.elapsed().as_secs_f64()));
@@ -1051,7 +1058,7 @@ impl DemSystem {
             // Every chunk is claimed: what still waits receives from chunks
             // that other threads are finishing.
             for (chunk, arrays) in waiting {
-                wait_until(|| all_published(sources_of.of(chunk), &handovers));
+                team.wait(|| all_published(sources_of.of(chunk), &handovers));
                 let (count, bad) = take_in(chunk, arrays, &mut seconds);
                 listed += count;
                 non_finite |= bad;
