@@ -719,12 +719,13 @@ impl ColumnCollapse {
 
     /// Front of the deposit on each side of the column's centre: the
     /// farthest grain surface of the main mass, the grains linked to one
-    /// another through gaps smaller than a mean diameter
-    /// ([`deposit::main_mass`]); grains that came to rest alone ahead of it
-    /// do not count. Returns the mean over the sides.
+    /// another by contacts (gaps below [`deposit::CONTACT_GAP`] of a mean
+    /// diameter, [`deposit::main_mass`]); grains that came to rest alone
+    /// ahead of it do not count. Returns the mean over the sides.
     fn front(&self, system: &DemSystem) -> f64 {
         let (centres, radii, diameter) = Self::mobile_grains(system);
-        let mass = deposit::main_mass(&system.domain, &centres, &radii, diameter);
+        let link = deposit::CONTACT_GAP * diameter;
+        let mass = deposit::main_mass(&system.domain, &centres, &radii, link);
         let fronts: Vec<f64> = self
             .sides
             .iter()

@@ -2,18 +2,25 @@
 //! deposit, its front and the mean height of its top.
 //!
 //! Discrete simulations of column collapses measure the runout at the
-//! farthest grain of the main deposit, leaving out the grains ejected ahead
-//! of it that came to rest alone (Staron & Hinch 2005; Utili, Zhao &
-//! Houlsby 2015): what an experiment's camera would call the front. Here a
-//! grain belongs to the deposit when a chain of grains links it to the
-//! largest connected mass, two grains being linked when the gap between
-//! their surfaces is smaller than a grain (no grain could pass between
-//! them). A single file of grains touching one another still counts;
-//! a grain that rolled away alone does not, however close to the front it
-//! stopped once a grain could pass.
+//! farthest grain still in contact with the main deposit, leaving out the
+//! grains ejected ahead of it that came to rest alone (Staron & Hinch
+//! 2005; Utili, Zhao & Houlsby 2015): what an experiment's camera would
+//! call the front. Here a grain belongs to the deposit when a chain of
+//! contacts links it to the largest connected mass, two grains being in
+//! contact when the gap between their surfaces is below [`CONTACT_GAP`] of
+//! a mean diameter: grains resting on one another overlap, and two that
+//! came to rest side by side on the floor touch within that. A single
+//! file of touching grains still counts; a grain that stopped alone, even
+//! a fraction of a grain ahead, does not. (Linking grains through any gap
+//! smaller than a grain instead let sparse grains ahead of a 3D front
+//! percolate: the 3D runouts read 40–60 % longer at a ≈ 0.6–1.)
 
 use crate::grain_pairs::near_pairs;
 use grainflow_core::{Domain, Vec3};
+
+/// Two grains are in contact when their surfaces are less than this
+/// fraction of a mean diameter apart.
+pub const CONTACT_GAP: f64 = 0.05;
 
 /// The grains of the largest mass connected through gaps smaller than
 /// `link_gap` (indices into `centres`, in increasing order).
@@ -125,7 +132,7 @@ mod tests {
     }
 
     #[test]
-    fn the_front_is_the_farthest_grain_no_grain_could_pass_to() {
+    fn the_front_is_the_farthest_grain_linked_to_the_main_mass() {
         // A gap of 0.3 grain links the seventh grain; 1.5 grains cut the eighth.
         let (centres, radii) = row_with_strays(0.3, 1.5);
         let mass = main_mass(&floor_2d(), &centres, &radii, 1.0);
