@@ -39,7 +39,7 @@ fn bad_coupled_tables_are_refused_with_the_key_and_nothing_is_written() {
             "analysis.kind=\"bouncing\"",
             "analysis.kind",
         ),
-        // The paper's load fails below a density ratio of 1.7.
+        // The paper's load fails below a density ratio of 1.8.
         (
             "falling_sphere.toml",
             "coupling.formulation=\"rigid_inner_fluid\"",
