@@ -185,8 +185,10 @@ pub fn check_density_ratio(system: &CoupledSystem) -> Result<Option<String>, Run
     }
     Ok((ratio < RIGID_INNER_FLUID_WARNS_BELOW).then(|| {
         format!(
-            "warning: density ratio {ratio:.4} is close to where \"rigid_inner_fluid\" fails \
-             ({RIGID_INNER_FLUID_FAILS_BELOW}); \"inner_fluid_momentum\" holds further down"
+            "warning: density ratio {ratio:.4} is below {RIGID_INNER_FLUID_WARNS_BELOW}, where \
+             \"rigid_inner_fluid\" lets a grain's spin overshoot and oscillate after a \
+             collision (it fails below {RIGID_INNER_FLUID_FAILS_BELOW}); \"inner_fluid_momentum\" \
+             holds further down"
         )
     }))
 }
