@@ -207,18 +207,23 @@ pub(crate) struct Team {
 const SPIN_BEFORE_PARKING: Duration = Duration::from_micros(300);
 
 /// How long a thread spins for another's result inside a pass before it
-/// blocks. A hand-over that comes at all on a host that runs both threads
-/// comes within a few microseconds; one that has not come by then waits
-/// for a thread the host has descheduled, which a spinning waiter would
-/// only delay further.
-const SPIN_BEFORE_BLOCKING: Duration = Duration::from_micros(20);
+/// blocks. On a host that runs both threads a hand-over comes within this
+/// (a 20,000-grain column's dense passes wait tens of microseconds for the
+/// other run's chunks); one that has not come by then waits for a thread
+/// the host has descheduled, which a spinning waiter would only delay
+/// further. Measured on the 20,000-grain column's settling window, two
+/// threads against one: at 20 µs the gain fell to 1.36–1.63 (the waiter
+/// blocked and paid a wake-up on most waits), at 200 µs it is 1.90–2.23 on
+/// a quiet host, and with a busy process on one core two threads take 1.22
+/// times as long as one, no collapse (docs/performance.md).
+const SPIN_BEFORE_BLOCKING: Duration = Duration::from_micros(200);
 
 /// Spins between two looks at the clock.
 const SPINS_PER_CLOCK: u32 = 64;
 
 /// The most spins of one wait, whatever the clock says: a waiter that the
 /// host deschedules while it spins does not spin again for as long.
-const MOST_SPINS: u64 = 1 << 13;
+const MOST_SPINS: u64 = 1 << 16;
 
 /// The current pass, borrowed from the caller for its duration.
 #[derive(Clone, Copy)]
