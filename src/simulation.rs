@@ -140,28 +140,24 @@ fn run_here(
     // them (the neighbour builds and the contact solver's run on the pool
     // too, so it shrinks with them).
     let choice = dry_threads(case, &system, &pouring);
-    if choice.threads < rayon::current_num_threads() {
+    let threads = choice.threads;
+    let run = move || {
+        run_dry(
+            case,
+            out,
+            show_progress,
+            communicator,
+            (started, system, pouring, pour_log, choice),
+        )
+    };
+    if threads < rayon::current_num_threads() {
         let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(choice.threads)
+            .num_threads(threads)
             .build()
             .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
-        return pool.install(|| {
-            run_dry(
-                case,
-                out,
-                show_progress,
-                communicator,
-                (started, system, pouring, pour_log, choice),
-            )
-        });
+        return pool.install(run);
     }
-    run_dry(
-        case,
-        out,
-        show_progress,
-        communicator,
-        (started, system, pouring, pour_log, choice),
-    )
+    run()
 }
 
 /// The threads of a dry run of `system`, the grains still to be poured
