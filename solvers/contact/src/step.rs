@@ -71,6 +71,44 @@ pub struct HardContact {
 }
 
 impl HardContact {
+    /// Saves the warm start NSCD carries from one step to the next (the
+    /// last step's impulses by contact), sorted by contact so that the same
+    /// state always saves the same bytes.
+    pub fn save_state(&self, state: &mut grainflow_core::State) {
+        let mut keys: Vec<&(u64, u64)> = self.previous_impulses.keys().collect();
+        keys.sort_unstable();
+        let pairs: Vec<u64> = keys.iter().flat_map(|&&(a, b)| [a, b]).collect();
+        let impulses: Vec<f64> = keys
+            .iter()
+            .flat_map(|key| {
+                let (normal, tangential) = self.previous_impulses[*key];
+                [normal, tangential.x, tangential.y, tangential.z]
+            })
+            .collect();
+        state.put_u64s("hard_contact.pairs", &pairs);
+        state.put_f64s("hard_contact.impulses", &impulses);
+    }
+
+    /// Takes back what [`HardContact::save_state`] saved.
+    pub fn restore_state(
+        &mut self,
+        state: &mut grainflow_core::State,
+    ) -> Result<(), grainflow_core::StateError> {
+        let pairs = state.take_u64s("hard_contact.pairs")?;
+        let impulses = state.take_f64s("hard_contact.impulses")?;
+        if pairs.len() % 2 != 0 || impulses.len() != 2 * pairs.len() {
+            return Err(grainflow_core::StateError(
+                "the saved hard-contact impulses do not match their contacts".into(),
+            ));
+        }
+        self.previous_impulses = pairs
+            .chunks_exact(2)
+            .zip(impulses.chunks_exact(4))
+            .map(|(p, i)| ((p[0], p[1]), (i[0], Vec3::new(i[1], i[2], i[3]))))
+            .collect();
+        Ok(())
+    }
+
     pub fn new(method: Method, tolerance: f64, max_iterations: u32, threshold: f64) -> Self {
         HardContact {
             method,

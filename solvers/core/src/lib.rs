@@ -9,6 +9,7 @@
 pub mod communicator;
 pub mod domain;
 pub mod shared;
+pub mod state;
 
 pub use communicator::Communicator;
 pub use domain::{
@@ -16,6 +17,7 @@ pub use domain::{
     Side, Subdomain,
 };
 pub use shared::SharedArray;
+pub use state::{State, StateError};
 
 /// Three-component vector of `f64`. 2D scenes live in the (x, y) plane with
 /// z = 0, rotations about z only.

@@ -15,7 +15,7 @@
 //! stages refresh the ghosts' motion in the same order.
 
 use crate::particles::{Particles, PACKED_MOTION, PACKED_STATE};
-use grainflow_core::{Communicator, Domain, Side, Subdomain, Vec3};
+use grainflow_core::{Communicator, Domain, Side, State, StateError, Subdomain, Vec3};
 
 /// One direction of one axis of the exchange.
 #[derive(Clone, Debug)]
@@ -40,6 +40,82 @@ pub struct Ghosts {
 }
 
 impl Ghosts {
+    /// The stages under `prefix`: per stage its peers (`u64::MAX` for
+    /// none), shift, first ghost and count, and the particles it sends.
+    pub fn save_state(&self, state: &mut State, prefix: &str) {
+        let peer = |p: Option<usize>| p.map_or(u64::MAX, |r| r as u64);
+        let mut header = Vec::new();
+        let mut shifts = Vec::new();
+        let mut sent = Vec::new();
+        for stage in &self.stages {
+            header.extend([
+                peer(stage.destination),
+                peer(stage.source),
+                stage.first as u64,
+                stage.count as u64,
+                stage.sent.len() as u64,
+            ]);
+            shifts.push(stage.shift);
+            sent.extend(stage.sent.iter().map(|&k| k as u64));
+        }
+        state.put_u64s(&format!("{prefix}.stages"), &header);
+        state.put_vec3s(&format!("{prefix}.shifts"), &shifts);
+        state.put_u64s(&format!("{prefix}.sent"), &sent);
+        state.put_usizes(&format!("{prefix}.source"), &self.source);
+    }
+
+    /// Takes back the stages of [`Ghosts::save_state`] for `owned` owned
+    /// particles among `len`.
+    pub fn restore_state(
+        &mut self,
+        state: &mut State,
+        prefix: &str,
+        owned: usize,
+        len: usize,
+    ) -> Result<(), StateError> {
+        let header = state.take_u64s(&format!("{prefix}.stages"))?;
+        let shifts = state.take_vec3s(&format!("{prefix}.shifts"))?;
+        let sent = state.take_u64s(&format!("{prefix}.sent"))?;
+        let source = state.take_usizes(&format!("{prefix}.source"))?;
+        let bad = || {
+            StateError(format!(
+                "the saved ghost stages under {prefix} are inconsistent"
+            ))
+        };
+        if header.len() != 5 * shifts.len() || source.len() != len - owned {
+            return Err(bad());
+        }
+        let peer = |p: u64| (p != u64::MAX).then_some(p as usize);
+        let mut stages = Vec::with_capacity(shifts.len());
+        let mut at = 0;
+        for (h, &shift) in header.chunks_exact(5).zip(&shifts) {
+            let (first, count, sending) = (h[2] as usize, h[3] as usize, h[4] as usize);
+            let to = at + sending;
+            if to > sent.len() || first + count > len {
+                return Err(bad());
+            }
+            let stage_sent: Vec<usize> = sent[at..to].iter().map(|&k| k as usize).collect();
+            if stage_sent.iter().any(|&k| k >= len) {
+                return Err(bad());
+            }
+            stages.push(Stage {
+                destination: peer(h[0]),
+                source: peer(h[1]),
+                shift,
+                sent: stage_sent,
+                first,
+                count,
+            });
+            at = to;
+        }
+        if at != sent.len() {
+            return Err(bad());
+        }
+        self.stages = stages;
+        self.source = source;
+        Ok(())
+    }
+
     /// Drops old ghosts and receives the copies of every particle within
     /// `range` of this subdomain (collective: every rank calls it).
     pub fn build(

@@ -24,6 +24,8 @@ use rayon::prelude::*;
 use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
+mod saved_state;
+
 /// Smallest amount of work handed to one thread: below it the loops run on
 /// the calling thread, so small scenes pay no synchronisation.
 const PARTICLES_PER_TASK: usize = 256;

@@ -56,6 +56,7 @@ pub mod navier_stokes;
 pub mod operators;
 pub mod partition;
 pub mod poisson;
+mod saved_state;
 pub mod transform;
 
 pub use boundary::{Boundaries, BoundaryCondition};

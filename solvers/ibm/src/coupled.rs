@@ -55,6 +55,7 @@
 //! cancel; in a contact the grain and its added mass bounce together.
 
 use grainflow_core::Vec3;
+use grainflow_core::{State, StateError};
 use grainflow_dem::{DemSystem, StepDiagnostics};
 use grainflow_fluid::{stage_fraction, Block, FlowSolver, FluidError, StepReport, STAGES};
 use std::f64::consts::PI;
@@ -418,5 +419,44 @@ pub fn particle_volume(dimension: grainflow_core::Dimension, radius: f64) -> f64
     match dimension {
         grainflow_core::Dimension::Three => 4.0 / 3.0 * PI * radius.powi(3),
         grainflow_core::Dimension::Two => PI * radius * radius,
+    }
+}
+
+impl CoupledSystem {
+    /// Saves what the next coupled step reads: the flow, the grains (with
+    /// the inner fluid momentum and the velocity at the start of the last
+    /// DEM interval that travel with them), the length of the last stage,
+    /// and the time spent so far in each part.
+    pub fn save_state(&self, state: &mut State) {
+        self.flow.save_state(state);
+        self.dem.save_state(state);
+        state.put_f64s(
+            "coupled.previous_stage_dt",
+            self.previous_stage_dt.as_slice(),
+        );
+        let t = &self.timings;
+        state.put_f64s("coupled.timings", &[t.flow, t.forcing, t.loads, t.dem]);
+    }
+
+    /// Takes back what [`CoupledSystem::save_state`] saved, into a system
+    /// built from the same case on a rank of a job of the same size.
+    pub fn restore_state(&mut self, state: &mut State) -> Result<(), StateError> {
+        self.flow.restore_state(state)?;
+        self.dem.restore_state(state)?;
+        let previous = state.take_f64s("coupled.previous_stage_dt")?;
+        if previous.len() > 1 {
+            return Err(StateError(
+                "coupled.previous_stage_dt holds at most one number".into(),
+            ));
+        }
+        self.previous_stage_dt = previous.first().copied();
+        let t = state.take_f64s_of_len("coupled.timings", 4)?;
+        self.timings = Timings {
+            flow: t[0],
+            forcing: t[1],
+            loads: t[2],
+            dem: t[3],
+        };
+        Ok(())
     }
 }
