@@ -11,6 +11,7 @@ use serde_json::{json, Map, Value};
 use std::io::Write;
 use std::path::Path;
 
+#[derive(serde::Serialize, serde::Deserialize)]
 pub enum Analysis {
     None,
     BinaryCollision(BinaryCollision),
@@ -96,6 +97,7 @@ impl Analysis {
 /// potential energy above the bottom of the domain, Σ m |g| h with h the
 /// height along −g from `domain.lower`. A static assembly must stay at
 /// rest: the ratio stays at round-off while the contact solver holds it.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct StaticBox {
     settle: f64,
     /// (t, E_k/E_p) after `settle`, every step.
@@ -165,6 +167,7 @@ fn by_id(system: &DemSystem) -> Vec<usize> {
 /// velocity before impact, before (Ψ1) and after (Ψ2), each in the contact
 /// frame of its instant (first touch, separation). On the sliding branch
 /// Ψ2 = Ψ1 − (7/2) μ (1 + e_n).
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct BinaryCollision {
     /// Per pair: Ψ1 and the normal relative speed before impact.
     before: Vec<(f64, f64)>,
@@ -270,7 +273,7 @@ impl BinaryCollision {
 /// E = ½ m v² + ½ I ω² + m g·(height of the lowest point above the wall) is
 /// constant in free flight (velocity Verlet is exact for a parabola), so the
 /// energy kept by an impact is E after / E before, and e = √ of it.
-#[derive(Default)]
+#[derive(Default, serde::Serialize, serde::Deserialize)]
 pub struct Bouncing {
     in_contact: bool,
     energy_before: f64,
@@ -552,6 +555,7 @@ pub fn janssen_fit_eq22(
 
 /// Symmetric collapse of a column between the gate walls (Izard et al.
 /// 2014, section 3.4): H0 and R0 at release, R∞ at rest.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct ColumnCollapse {
     release_time: f64,
     centre: f64,

@@ -41,6 +41,15 @@ pub struct InclinedBed {
     last: Option<Vec<f64>>,
 }
 
+/// What a checkpoint records of the bed's outputs: the lengths of
+/// `bed_profiles.csv`, `grain_profiles.csv` and `bed_series.csv`, and the
+/// last row of the series (the summary's metrics).
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct BedRecord {
+    pub lengths: [u64; 3],
+    pub last: Option<Vec<f64>>,
+}
+
 /// Columns of `bed_series.csv`.
 const SERIES: [&str; 9] = [
     "t",
@@ -60,8 +69,20 @@ impl InclinedBed {
         case: &Case,
         system: &CoupledSystem,
         slab: Option<f64>,
+        resumed: Option<BedRecord>,
     ) -> std::io::Result<Self> {
         let root = system.dem.communicator.is_root();
+        let open = |name: &str, header: &[&str], length: Option<u64>| {
+            if !root {
+                return Ok(None);
+            }
+            let path = dir.join(name);
+            match length {
+                Some(length) => CsvSeries::resume(&path, header, length).map(Some),
+                None => CsvSeries::create(&path, header).map(Some),
+            }
+        };
+        let lengths = resumed.as_ref().map(|r| r.lengths);
         let p = &system.dem.particles;
         let communicator = &system.dem.communicator;
         let (mut sum, mut count) = (0.0, 0.0);
@@ -80,18 +101,31 @@ impl InclinedBed {
             gravity: system.dem.domain.gravity.norm(),
             viscosity: f.viscosity,
             density_difference: density - f.density,
-            profiles: CsvSeries::create_on(
-                root,
-                &dir.join("bed_profiles.csv"),
+            profiles: open(
+                "bed_profiles.csv",
                 &["t", "z", "fluid_velocity", "solid_fraction"],
+                lengths.map(|l| l[0]),
             )?,
-            grain_profiles: CsvSeries::create_on(
-                root,
-                &dir.join("grain_profiles.csv"),
+            grain_profiles: open(
+                "grain_profiles.csv",
                 &["t", "z", "grain_velocity", "grains"],
+                lengths.map(|l| l[1]),
             )?,
-            series: CsvSeries::create_on(root, &dir.join("bed_series.csv"), &SERIES)?,
-            last: None,
+            series: open("bed_series.csv", &SERIES, lengths.map(|l| l[2]))?,
+            last: resumed.and_then(|r| r.last),
+        })
+    }
+
+    /// What a checkpoint records of the bed's outputs (the root's).
+    pub fn record(&self) -> Option<BedRecord> {
+        let length = |s: &Option<CsvSeries>| s.as_ref().map(CsvSeries::length);
+        Some(BedRecord {
+            lengths: [
+                length(&self.profiles)?,
+                length(&self.grain_profiles)?,
+                length(&self.series)?,
+            ],
+            last: self.last.clone(),
         })
     }
 

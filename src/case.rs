@@ -63,6 +63,10 @@ pub struct Case {
     /// with the least area of cuts).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub parallel: Option<ParallelSection>,
+    /// When checkpoints are written (default: only when the run is told
+    /// to stop, by a signal or `time.wall_limit`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checkpoint: Option<CheckpointSection>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -592,6 +596,42 @@ pub struct TimeSection {
     /// of a fixed `dt` (at most the RK3 limit √3).
     #[serde(default)]
     pub cfl: Option<f64>,
+    /// Wall-clock seconds the run may take (a batch job's limit): before
+    /// it, the run writes a checkpoint and stops, to be resumed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall_limit: Option<f64>,
+}
+
+/// When a run writes checkpoints (besides on SIGTERM, SIGINT and
+/// `time.wall_limit`): every `interval` of simulated time, every `steps`
+/// steps, every `wall_interval` seconds of wall clock, whichever comes
+/// first; the last `keep` are kept.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointSection {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interval: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<u64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wall_interval: Option<f64>,
+    #[serde(default = "default_keep")]
+    pub keep: usize,
+}
+
+impl Default for CheckpointSection {
+    fn default() -> Self {
+        CheckpointSection {
+            interval: None,
+            steps: None,
+            wall_interval: None,
+            keep: default_keep(),
+        }
+    }
+}
+
+fn default_keep() -> usize {
+    2
 }
 
 fn default_overlap_limit() -> f64 {
@@ -753,6 +793,7 @@ impl Case {
     /// Checks ranges and consistency; the error names the key and what is
     /// allowed.
     pub fn validate(&self) -> Result<(), CaseError> {
+        self.validate_checkpoints()?;
         let d = &self.domain;
         if d.dimension != 2 && d.dimension != 3 {
             return Err(invalid("domain.dimension", d.dimension, "allowed: 2 or 3"));
@@ -827,6 +868,31 @@ impl Case {
         }
         self.validate_coupling()?;
         self.validate_walls_time_output()
+    }
+
+    fn validate_checkpoints(&self) -> Result<(), CaseError> {
+        let positive = |key: &str, value: Option<f64>| match value {
+            Some(v) if !(v > 0.0 && v.is_finite()) => {
+                Err(invalid(key, v, "allowed: a positive number of seconds"))
+            }
+            _ => Ok(()),
+        };
+        positive("time.wall_limit", self.time.wall_limit)?;
+        if let Some(c) = &self.checkpoint {
+            positive("checkpoint.interval", c.interval)?;
+            positive("checkpoint.wall_interval", c.wall_interval)?;
+            if c.steps == Some(0) {
+                return Err(invalid("checkpoint.steps", 0, "allowed: at least 1"));
+            }
+            if c.keep == 0 {
+                return Err(invalid(
+                    "checkpoint.keep",
+                    0,
+                    "allowed: at least 1 (the checkpoint a run resumes from)",
+                ));
+            }
+        }
+        Ok(())
     }
 
     fn validate_grains(&self, p: &ParticlesSection, c: &ContactSection) -> Result<(), CaseError> {

@@ -3,10 +3,10 @@
 
 use crate::case::Case;
 use crate::cost_estimate::{self, Evolution};
-use crate::coupled_simulation;
-use crate::dry_stepping::DryStepper;
 use crate::footprint::{human_bytes, machine_memory, Footprint};
-use crate::simulation::{check_time_step, time_step};
+use crate::simulation::coupled as coupled_simulation;
+use crate::simulation::dry::{check_time_step, time_step};
+use crate::simulation::dry_stepper::DryStepper;
 use crate::{fluid_scene, scene, sharing, stability, RunError};
 use grainflow_contact::Method;
 use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};

@@ -38,7 +38,7 @@ use grainflow_ibm::{particle_volume, CoupledReport, CoupledSystem};
 use serde_json::{json, Map, Value};
 
 /// What is recorded after a step.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 struct Sample {
     time: f64,
     /// Velocity along gravity (positive downwards).
@@ -52,13 +52,14 @@ struct Sample {
     fastest_rise_through_film: f64,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 enum Kind {
     None,
     Falling,
     Bouncing,
 }
 
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct SphereInFluid {
     kind: Kind,
     /// Unit vector along gravity.

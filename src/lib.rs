@@ -2,23 +2,21 @@
 //!
 //! This crate assembles scenes from case files and runs them; the physics
 //! lives in the solver crates (`grainflow-dem`, `grainflow-fluid`, ...). A
-//! run goes case file → [`case::Case`] (typed, validated) → [`scene::build`]
-//! → [`simulation::run`] (time loop, [`output::Outputs`], [`analysis`]); a
-//! fluid-only scene goes through [`fluid_scene::build`] and
-//! [`fluid_simulation::run`]; grains in a fluid through
-//! [`coupled_simulation::build`] and [`coupled_simulation::run`].
+//! run goes case file → [`case::Case`] (typed, validated) →
+//! [`simulation::model::Model`] (grains from [`scene::build`], a fluid from
+//! [`fluid_scene::build`], or both) → [`simulation::run`]: one time loop
+//! ([`simulation::time_loop`]) that calls the writers of [`output`] and the
+//! analyses on a schedule, and writes [`checkpoint`]s to resume from.
 
 pub mod analysis;
 pub mod bed_analysis;
 pub mod case;
 pub mod check;
+pub mod checkpoint;
 pub mod cost_estimate;
 pub mod coupled_analysis;
-pub mod coupled_simulation;
 pub mod deposit;
-pub mod dry_stepping;
 pub mod fluid_scene;
-pub mod fluid_simulation;
 pub mod footprint;
 pub mod grain_pairs;
 pub mod initial_overlaps;

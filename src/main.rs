@@ -37,6 +37,12 @@ enum Command {
         /// instead of the few lines for a person.
         #[arg(long)]
         json: bool,
+        /// Resume from a checkpoint: `latest` (the newest in the output
+        /// folder), `auto` (the newest if any, else start afresh) or a
+        /// checkpoint folder. The case may change only its end time,
+        /// outputs, checkpoints and wall limit.
+        #[arg(long, value_name = "latest|auto|CHECKPOINT")]
+        restart: Option<simulation::Restart>,
     },
     /// Validate a case and print its derived numbers without running it.
     Check {
@@ -83,6 +89,7 @@ fn main() -> ExitCode {
             overrides,
             threads,
             json,
+            restart,
         } => {
             let mut overrides = overrides;
             if let Some(n) = threads {
@@ -106,7 +113,18 @@ fn main() -> ExitCode {
             // Case errors and instabilities are found by every rank alike
             // (the checks are global); an output error is one rank's own and
             // stops the job.
-            match simulation::run_on(&loaded, &out, true, communicator.clone()) {
+            let options = simulation::RunOptions {
+                show_progress: true,
+                listen_to_signals: true,
+                restart,
+            };
+            match simulation::run_with(&loaded, &out, communicator.clone(), &options) {
+                Ok(summary) if summary.stopped.is_some() => {
+                    if root {
+                        eprintln!("{}", summary.stopped.unwrap_or_default());
+                    }
+                    ExitCode::from(simulation::stop::EXIT_STOPPED)
+                }
                 Ok(summary) => {
                     if root && json {
                         println!("{}", serde_json::to_string_pretty(&summary.json).unwrap());

@@ -244,6 +244,56 @@ impl Pour {
     }
 }
 
+/// How far one pour has gone: what a checkpoint keeps of it.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct PourProgress {
+    poured: usize,
+    last_batch: std::ops::Range<u64>,
+    batches: usize,
+    next_release: f64,
+    rng: Pcg64,
+}
+
+impl Pouring {
+    /// Saves how far each pour has gone, its random stream included.
+    pub fn save_state(&self, state: &mut grainflow_core::State) {
+        let progress: Vec<PourProgress> = self
+            .pours
+            .iter()
+            .map(|p| PourProgress {
+                poured: p.poured,
+                last_batch: p.last_batch.clone(),
+                batches: p.batches,
+                next_release: p.next_release,
+                rng: p.rng.clone(),
+            })
+            .collect();
+        state.put_value("pouring", &progress);
+    }
+
+    pub fn restore_state(
+        &mut self,
+        state: &mut grainflow_core::State,
+    ) -> Result<(), grainflow_core::StateError> {
+        let progress: Vec<PourProgress> = state.take_value("pouring")?;
+        if progress.len() != self.pours.len() {
+            return Err(grainflow_core::StateError(format!(
+                "the checkpoint holds {} pours, the case {}",
+                progress.len(),
+                self.pours.len()
+            )));
+        }
+        for (pour, p) in self.pours.iter_mut().zip(progress) {
+            pour.poured = p.poured;
+            pour.last_batch = p.last_batch;
+            pour.batches = p.batches;
+            pour.next_release = p.next_release;
+            pour.rng = p.rng;
+        }
+        Ok(())
+    }
+}
+
 /// The scene's pours, with the batches due at t = 0 released into
 /// `system` (before its time step is chosen, so that the lightest poured
 /// grain counts). Returns the log lines of the releases.

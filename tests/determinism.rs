@@ -212,7 +212,7 @@ fn grains_in_a_fluid_give_the_same_bits_on_one_and_two_threads() {
     );
     let run = |threads: usize| {
         on_threads(threads, || {
-            let (mut system, _) = grainflow::coupled_simulation::build(&case).unwrap();
+            let (mut system, _) = grainflow::simulation::coupled::build(&case).unwrap();
             let mut overlap: f64 = 0.0;
             for _ in 0..20 {
                 let report = system.step(6e-4).unwrap();

@@ -7,7 +7,7 @@ mod common;
 
 use common::{last_row, load, metric, run, run_cli};
 use grainflow::case::Case;
-use grainflow::{fluid_simulation, simulation};
+use grainflow::simulation;
 use grainflow_fluid::CFL_LIMIT;
 
 /// Relative L2 error of the Taylor–Green vortex (carried by a stream) at
@@ -422,9 +422,9 @@ fn a_step_that_ends_past_the_rk3_limit_is_a_failure_in_either_mode() {
     let mut adapted = fixed.clone();
     (adapted.time.dt, adapted.time.cfl) = (None, Some(0.5));
     for case in [&fixed, &adapted] {
-        assert!(fluid_simulation::cfl_overrun(CFL_LIMIT, 1e-3, case).is_none());
+        assert!(simulation::fluid::cfl_overrun(CFL_LIMIT, 1e-3, case).is_none());
         for beyond in [1.0001 * CFL_LIMIT, 3.7e4, f64::NAN] {
-            let why = fluid_simulation::cfl_overrun(beyond, 1e-3, case).expect("a failure");
+            let why = simulation::fluid::cfl_overrun(beyond, 1e-3, case).expect("a failure");
             let advice = if case.time.cfl.is_some() {
                 "lower time.cfl"
             } else {

@@ -12,16 +12,57 @@ use std::path::Path;
 pub struct CsvSeries {
     file: File,
     columns: usize,
+    /// Bytes in the file: what a checkpoint records, so that a resumed run
+    /// appends after the rows of the state it resumes from.
+    length: u64,
 }
 
 impl CsvSeries {
     pub fn create(path: &Path, header: &[&str]) -> std::io::Result<Self> {
         let mut file = File::create(path)?;
-        file.write_all(format!("{}\n", header.join(",")).as_bytes())?;
+        let line = format!("{}\n", header.join(","));
+        file.write_all(line.as_bytes())?;
         Ok(CsvSeries {
             file,
             columns: header.len(),
+            length: line.len() as u64,
         })
+    }
+
+    /// Reopens a series to append after its first `length` bytes (the rows
+    /// written up to a checkpoint); rows written after them by a run that
+    /// was stopped are dropped.
+    pub fn resume(path: &Path, header: &[&str], length: u64) -> std::io::Result<Self> {
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(path)?;
+        let found = file.metadata()?.len();
+        let mut first = String::new();
+        std::io::BufRead::read_line(&mut std::io::BufReader::new(&file), &mut first)?;
+        if found < length || first.trim_end() != header.join(",") {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "{} does not hold the {length} bytes the checkpoint recorded under the \
+                     header {}",
+                    path.display(),
+                    header.join(",")
+                ),
+            ));
+        }
+        file.set_len(length)?;
+        std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(length))?;
+        Ok(CsvSeries {
+            file,
+            columns: header.len(),
+            length,
+        })
+    }
+
+    /// Bytes written so far.
+    pub fn length(&self) -> u64 {
+        self.length
     }
 
     /// [`CsvSeries::create`] on the rank that writes the shared files
@@ -40,7 +81,9 @@ impl CsvSeries {
             .collect::<Vec<_>>()
             .join(",");
         line.push('\n');
-        self.file.write_all(line.as_bytes())
+        self.file.write_all(line.as_bytes())?;
+        self.length += line.len() as u64;
+        Ok(())
     }
 }
 

@@ -375,6 +375,16 @@ impl PvdIndex {
         }
     }
 
+    /// An index that already lists `entries` (a resumed run's).
+    pub fn with_entries(path: PathBuf, entries: Vec<(f64, String)>) -> Self {
+        PvdIndex { path, entries }
+    }
+
+    /// The (time, file) entries listed so far.
+    pub fn entries(&self) -> &[(f64, String)] {
+        &self.entries
+    }
+
     pub fn add(&mut self, time: f64, file: &str) -> std::io::Result<()> {
         self.entries.push((time, file.to_string()));
         write_whole(&self.path, |out| {

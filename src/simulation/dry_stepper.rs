@@ -2,10 +2,11 @@
 //! a fraction of the contact time) or hard contact (COCD or NSCD at a fixed
 //! step), and what each checks after every step.
 
+use super::dry::{check_time_step, time_step};
 use crate::case::Case;
-use crate::simulation::{check_time_step, time_step};
 use crate::{scene, RunError};
 use grainflow_contact::{HardContact, Method, StepReport};
+use grainflow_core::{State, StateError};
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
 
@@ -22,7 +23,7 @@ pub enum DryStepper {
 
 /// Run-wide record of the hard-contact steps: their certificates, solver
 /// effort and size.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct HardRecord {
     pub steps: u64,
     pub max_coulomb_violation: f64,
@@ -187,6 +188,23 @@ impl DryStepper {
             DryStepper::Soft { contact_time } => Some(*contact_time),
             DryStepper::Hard { .. } => None,
         }
+    }
+
+    /// Saves the warm start and the record of hard contact (nothing for
+    /// soft contact: its state is the grains').
+    pub fn save_state(&self, state: &mut State) {
+        if let DryStepper::Hard { contact, record } = self {
+            contact.save_state(state);
+            state.put_value("hard_contact.record", record);
+        }
+    }
+
+    pub fn restore_state(&mut self, state: &mut State) -> Result<(), StateError> {
+        if let DryStepper::Hard { contact, record } = self {
+            contact.restore_state(state)?;
+            *record = state.take_value("hard_contact.record")?;
+        }
+        Ok(())
     }
 
     /// The hard-contact metrics of `summary.json` (empty for soft contact).

@@ -1,0 +1,178 @@
+//! The field files of a scene with a fluid: `fields/fields_NNNNNN.vti`
+//! (cell-centred velocity, pressure in Pa, vorticity, and any extra cell
+//! scalars such as the solid fraction) indexed by `fields.pvd`; on several
+//! ranks one piece per rank and output, assembled by a `.pvti`.
+
+use crate::case::Case;
+use grainflow_fluid::FlowSolver;
+use grainflow_io::{write_field_pieces_index, CellLayout, FieldFrame, FieldPiece, PvdIndex};
+use std::path::Path;
+
+/// Cell-centred velocity (mean of a cell's two faces along each axis),
+/// pressure [Pa] and vorticity (the curl on the cell's edges, averaged to
+/// its centre) of the current flow, for ParaView.
+pub fn cell_fields(
+    solver: &mut FlowSolver,
+    density: f64,
+) -> (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>) {
+    solver.fill_velocity_ghosts();
+    let grid = &solver.grid;
+    let dim = grid.dim();
+    let velocity = &solver.velocity;
+    let cells = grid.cell_block();
+    let mut cell_velocity = Vec::new();
+    let mut pressure = Vec::new();
+    let mut vorticity = Vec::new();
+    let line = grid.line_axis();
+    grid.for_each(&cells, |index, point| {
+        let mut u = [0.0; 3];
+        for a in 0..dim {
+            u[a] = 0.5 * (velocity[a][index - grid.stride(a)] + velocity[a][index]);
+        }
+        cell_velocity.push(u);
+        pressure.push(density * solver.pressure[index]);
+        // ω_c = ∂u_b/∂x_a − ∂u_a/∂x_b on the four edges of the cell along c;
+        // each difference spans the distance between the centres on either
+        // side of its edge (edge `e` along the line axis lies on face `e`).
+        let curl = |a: usize, b: usize| {
+            let (sa, sb) = (grid.stride(a), grid.stride(b));
+            let mut sum = 0.0;
+            for shift_a in [1, 0] {
+                for shift_b in [1, 0] {
+                    let edge = index - shift_a * sa - shift_b * sb;
+                    let mut edge_line = point[line];
+                    if a == line {
+                        edge_line -= shift_a;
+                    }
+                    if b == line {
+                        edge_line -= shift_b;
+                    }
+                    sum += (velocity[b][edge + sa] - velocity[b][edge]) / grid.gap(a, edge_line)
+                        - (velocity[a][edge + sb] - velocity[a][edge]) / grid.gap(b, edge_line);
+                }
+            }
+            0.25 * sum
+        };
+        vorticity.push(if dim == 3 {
+            [curl(1, 2), curl(2, 0), curl(0, 1)]
+        } else {
+            [0.0, 0.0, curl(0, 1)]
+        });
+    });
+    (cell_velocity, pressure, vorticity)
+}
+
+/// The field files of a scene with a fluid: `fields/fields_NNNNNN.vti`
+/// (cell-centred velocity, pressure in Pa, vorticity, and any extra
+/// scalars) indexed by `fields.pvd`.
+pub struct FieldFiles {
+    dir: std::path::PathBuf,
+    /// `fields.pvd` (the root's).
+    index: Option<PvdIndex>,
+    /// Lower corner of the domain: the origin of every piece's extent.
+    origin: [f64; 3],
+    pub frames: usize,
+}
+
+impl FieldFiles {
+    /// The field files of a run in `dir` (their folder is made here); a
+    /// resumed run passes the index entries it had.
+    pub fn create(
+        dir: &Path,
+        case: &Case,
+        root: bool,
+        entries: Vec<(f64, String)>,
+    ) -> std::io::Result<Self> {
+        std::fs::create_dir_all(dir.join("fields"))?;
+        let mut origin = [0.0; 3];
+        origin[..case.domain.lower.len()].copy_from_slice(&case.domain.lower);
+        Ok(FieldFiles {
+            dir: dir.to_path_buf(),
+            index: root.then(|| PvdIndex::with_entries(dir.join("fields.pvd"), entries.clone())),
+            origin,
+            frames: entries.len(),
+        })
+    }
+
+    /// The index entries so far (the root's; empty elsewhere).
+    pub fn entries(&self) -> Vec<(f64, String)> {
+        self.index
+            .as_ref()
+            .map_or_else(Vec::new, |i| i.entries().to_vec())
+    }
+
+    /// A field file of the current flow with `extra` cell scalars.
+    pub fn write(
+        &mut self,
+        solver: &mut FlowSolver,
+        density: f64,
+        extra: &[(&str, &[f64])],
+    ) -> std::io::Result<()> {
+        let (velocity, pressure, vorticity) = cell_fields(solver, density);
+        let grid = &solver.grid;
+        let partition = solver.partition();
+        let (ranks, rank) = (partition.size(), solver.communicator().rank());
+        let faces = [0, 1, 2].map(|axis| grid.face_coordinates(axis));
+        let layout = if grid.is_uniform(grid.line_axis()) {
+            CellLayout::Uniform {
+                origin: self.origin,
+                spacing: grid.spacing,
+            }
+        } else {
+            CellLayout::Rectilinear {
+                faces: [&faces[0], &faces[1], &faces[2]],
+            }
+        };
+        let extension = layout.extension();
+        let piece = |r: usize| format!("fields_{:06}_{r:04}.{extension}", self.frames);
+        let name = if ranks == 1 {
+            format!("fields/fields_{:06}.{extension}", self.frames)
+        } else {
+            format!("fields/{}", piece(rank))
+        };
+        let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", &pressure)];
+        scalars.extend_from_slice(extra);
+        FieldFrame {
+            cells: grid.cells,
+            offset: partition.offset(),
+            layout,
+            scalars: &scalars,
+            vectors: &[("velocity", &velocity), ("vorticity", &vorticity)],
+        }
+        .write(&self.dir.join(&name))
+        .map_err(|e| std::io::Error::new(e.kind(), format!("{name}: {e}")))?;
+        // Every rank's piece is whole before the root's index lists it.
+        if ranks > 1 {
+            solver.communicator().barrier();
+        }
+        if let Some(index) = &mut self.index {
+            if ranks == 1 {
+                index.add(solver.time, &name)?;
+            } else {
+                let pieces: Vec<FieldPiece> = (0..ranks)
+                    .map(|r| {
+                        let (offset, cells) = partition.share_of(r);
+                        FieldPiece {
+                            source: piece(r),
+                            offset,
+                            cells,
+                        }
+                    })
+                    .collect();
+                let names: Vec<&str> = scalars.iter().map(|(n, _)| *n).collect();
+                let index_name = format!("fields/fields_{:06}.p{extension}", self.frames);
+                write_field_pieces_index(
+                    &self.dir.join(&index_name),
+                    partition.global_cells,
+                    &layout,
+                    &names,
+                    &["velocity", "vorticity"],
+                    &pieces,
+                )?;
+                index.add(solver.time, &index_name)?;
+            }
+        }
+        self.frames += 1;
+        Ok(())
+    }
+}

@@ -1,0 +1,470 @@
+//! Grains in a fluid: coupled steps (the flow's three Runge–Kutta stages,
+//! each forcing the flow towards the grains' rigid motion and advancing the
+//! DEM over the stage with the hydrodynamic load held fixed), the checks
+//! that refuse a scene before it runs, and the warnings after.
+
+use super::dry::shortest_contact_time;
+use super::fluid::cfl_overrun;
+use crate::case::{AnalysisSection, Case};
+use crate::coupled_analysis::SphereInFluid;
+use crate::output::fields::FieldFiles;
+use crate::stability::TimeStepVerdict;
+use crate::{fluid_scene, scene, sharing, stability, RunError};
+use grainflow_core::{Communicator, State, StateError};
+use grainflow_fluid::time_step_for_cfl_rates;
+use grainflow_ibm::forcing::WallLayer;
+use grainflow_ibm::{
+    CoupledReport, CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW,
+    RIGID_INNER_FLUID_WARNS_BELOW,
+};
+use serde_json::{json, Map, Value};
+
+/// The coupled scene of a validated case with grains and a fluid, and its
+/// DEM sub-step's ratio to the shortest contact time.
+pub fn build(case: &Case) -> Result<(CoupledSystem, f64), String> {
+    build_on(case, Communicator::serial())
+}
+
+/// [`build`] shared among the ranks of `communicator`: the grains in the
+/// flow's process grid, each rank holding the grains of its cells and the
+/// ghosts of those whose immersed boundary reaches them.
+pub fn build_on(case: &Case, communicator: Communicator) -> Result<(CoupledSystem, f64), String> {
+    let mut flow = fluid_scene::build_on(case, communicator.clone())?;
+    // Gravity acts on the grains, buoyancy (−ρ V g) through their loads.
+    // On the fluid, along an axis closed by walls, it is balanced by the
+    // hydrostatic pressure, which the kinematic pressure leaves out; along
+    // a periodic axis no pressure can balance it (the pressure is
+    // periodic), so there it drives the fluid, as down the inclined bed of
+    // Izard et al. (2014, section 4.2). The grains' loads
+    // −ρ∫f + ρ d/dt∫α u − ρ V g hold either way: the forcing inside a grain
+    // hands it the body force on its inner fluid.
+    let periodic = fluid_scene::boundaries(case)
+        .faces
+        .map(|[lower, _]| lower == grainflow_fluid::BoundaryCondition::Periodic);
+    let gravity = flow.body_force;
+    flow.body_force = [0, 1, 2].map(|axis| if periodic[axis] { gravity[axis] } else { 0.0 });
+    let ranks = flow.partition().ranks;
+    let grid = &flow.grid;
+    let reach = |max_radius| grainflow_ibm::forcing::ghost_reach(grid, max_radius);
+    let dem = scene::build_with(case, communicator, Some(ranks), reach)?;
+    let contact_time = shortest_contact_time(&dem);
+    let ratio = case.time.dt_over_contact_time.unwrap_or(0.02);
+    let coupling = match case.coupling.as_ref().map(|c| c.formulation.as_str()) {
+        Some("rigid_inner_fluid") => Coupling::RigidInnerFluid,
+        _ => Coupling::InnerFluidMomentum,
+    };
+    let density = case.fluid_section().density;
+    let mut system = CoupledSystem::new(flow, dem, density, coupling, ratio * contact_time);
+    let coupling_section = case.coupling.clone().unwrap_or_default();
+    system.immersed.forcing_step = coupling_section.forcing_step;
+    if coupling_section.wall_layer == "free" {
+        system.immersed.free_wall_layers = WallLayer::along_walls(
+            &system.flow.grid,
+            &system.flow.boundaries,
+            system.dem.domain.lower.into(),
+            system.dem.domain.upper.into(),
+        );
+    }
+    Ok((system, contact_time))
+}
+
+/// The next fluid step: `time.dt`, or with `time.cfl` the step at which the
+/// flow (with its walls and unbalanced body force,
+/// [`grainflow_fluid::FlowSolver::cfl_bound`]) and the grains (each grain's
+/// speed over the smallest cell size) reach that CFL number, at most
+/// `time.dt`.
+fn step_size(system: &CoupledSystem, case: &Case) -> f64 {
+    let largest = case
+        .time
+        .dt
+        .expect("validated: grains in a fluid have time.dt");
+    let Some(cfl) = case.time.cfl else {
+        return largest;
+    };
+    let grid = &system.flow.grid;
+    let h = grid.spacing[..grid.dim()]
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let (flow_rate, acceleration_rate) = system.flow.cfl_rates();
+    let speed_rate = flow_rate + system.dem.max_speed() / h;
+    largest.min(time_step_for_cfl_rates(cfl, speed_rate, acceleration_rate))
+}
+
+/// Refuses a DEM sub-step past the stability limit of the contacts
+/// (before anything is written); returns a warning past the accuracy limit.
+/// In a fluid the sub-step is set by `time.dt_over_contact_time` alone
+/// (`time.dt` is the fluid's step).
+pub fn check_dem_substep(
+    system: &CoupledSystem,
+    contact_time: f64,
+) -> Result<Option<String>, RunError> {
+    let ratio = system.dem_dt / contact_time;
+    match stability::verdict(ratio) {
+        TimeStepVerdict::Unstable => Err(RunError::Case(format!(
+            "time.dt_over_contact_time = {ratio:.3}: the DEM sub-step {:.3e} s is past the \
+             stability limit {} t_c of the explicit contact integration (t_c = {contact_time:.3e} \
+             s); allowed: time.dt_over_contact_time ≤ {} (default 0.02)",
+            system.dem_dt,
+            stability::STABLE_DT_OVER_TC,
+            stability::STABLE_DT_OVER_TC
+        ))),
+        TimeStepVerdict::Inaccurate => Ok(Some(format!(
+            "warning: the DEM sub-step is {ratio:.3} t_c, past {}: restitution errors above 1 % \
+             (time.dt_over_contact_time ≤ {})",
+            stability::ACCURATE_DT_OVER_TC,
+            stability::ACCURATE_DT_OVER_TC
+        ))),
+        TimeStepVerdict::Accurate => Ok(None),
+    }
+}
+
+/// Below this CFL number at a grain's settling velocity the forced layer
+/// around it, pulled towards its velocity at every stage, thickens the
+/// grain noticeably: at D/Δx = 8 the falling sphere settles 4 % slow at
+/// CFL 1 and 12 % slow at 0.5 (docs/validation.md, §7).
+const FORCING_CFL_WARNING: f64 = 0.6;
+
+/// The warning for a forcing step short against the time a grain takes to
+/// cross a cell (`cfl` = U Δt / Δx, with `coupling.forcing_step` for Δt
+/// where it is set: at the settling velocity in `check`, the run's mean
+/// over the steps in which grains move in `run`).
+pub fn forcing_step_warning(cfl: f64) -> Option<String> {
+    (cfl < FORCING_CFL_WARNING).then(|| {
+        format!(
+            "warning: the grains' CFL number (speed Δt/Δx) is {cfl:.2}: the direct forcing \
+             drags the transition layer along at every stage, so the shorter the step the \
+             larger the grain looks (about 8 % slower settling from CFL 1 to 0.5 at D/Δx = 8); \
+             the forcing is calibrated near CFL 1 (a larger time.dt, time.cfl ≈ 1, or \
+             coupling.forcing_step = Δx/U)"
+        )
+    })
+}
+
+/// The lowest density ratio at which the load from the inner fluid
+/// momentum has been seen to hold, `[2D, 3D]`: a 3D sphere at D/Δx = 8
+/// and Ar = 100 from 10 down to 0.5 over two time units (the map of
+/// `solvers/ibm/tests/falling_sphere.rs`); a 2D disc rising from rest
+/// (D/Δx = 4 and 8, Δt 2e-4 to 2e-3 s, ρ = 1000 kg/m³, μ = 0.19 Pa s)
+/// held at 1.05 and blew up at 0.95 and below. Below these `check` and
+/// `run` warn.
+pub const INNER_FLUID_MOMENTUM_TESTED_DOWN_TO: [f64; 2] = [1.05, 0.5];
+
+/// Refuses the paper's rigid-inner-fluid load where it fails (density
+/// ratio below [`RIGID_INNER_FLUID_FAILS_BELOW`]); returns a warning
+/// close to it, and for the load from the inner fluid momentum below the
+/// ratios it was tested at ([`INNER_FLUID_MOMENTUM_TESTED_DOWN_TO`]).
+pub fn check_density_ratio(system: &CoupledSystem) -> Result<Option<String>, RunError> {
+    let ratio = system.smallest_density_ratio();
+    if system.coupling == Coupling::InnerFluidMomentum {
+        let dim = system.flow.grid.dim();
+        let tested = INNER_FLUID_MOMENTUM_TESTED_DOWN_TO[dim - 2];
+        return Ok((ratio < tested).then(|| {
+            format!(
+                "warning: density ratio rho_p/rho = {ratio:.4} is below {tested}, the lowest at \
+                 which coupling.formulation = \"inner_fluid_momentum\" was seen to hold in \
+                 {dim}D (light grains driven by an explicit load can blow up: a rising 2D disc \
+                 did at 0.95); the run stops with a diagnosis if the flow's CFL number runs away"
+            )
+        }));
+    }
+    if ratio < RIGID_INNER_FLUID_FAILS_BELOW {
+        return Err(RunError::Case(format!(
+            "coupling.formulation = \"rigid_inner_fluid\" fails at density ratio rho_p/rho = \
+             {ratio:.4}: it blows up below {RIGID_INNER_FLUID_FAILS_BELOW}; allowed: \
+             \"inner_fluid_momentum\" (tested down to {} in 3D, {} in 2D), or grains denser \
+             than {RIGID_INNER_FLUID_FAILS_BELOW} times the fluid",
+            INNER_FLUID_MOMENTUM_TESTED_DOWN_TO[1], INNER_FLUID_MOMENTUM_TESTED_DOWN_TO[0]
+        )));
+    }
+    Ok((ratio < RIGID_INNER_FLUID_WARNS_BELOW).then(|| {
+        format!(
+            "warning: density ratio {ratio:.4} is below {RIGID_INNER_FLUID_WARNS_BELOW}, where \
+             \"rigid_inner_fluid\" lets a grain's spin overshoot and oscillate after a \
+             collision (it fails below {RIGID_INNER_FLUID_FAILS_BELOW}); \"inner_fluid_momentum\" \
+             holds further down"
+        )
+    }))
+}
+
+/// Grains in a fluid: coupled steps, fixed or adapted to a CFL number (the
+/// flow's and the grains'), the last one landing on the end time.
+pub struct CoupledModel {
+    pub system: CoupledSystem,
+    analysis: SphereInFluid,
+    contact_time: f64,
+    dt: f64,
+    steps: u64,
+    dem_substeps: usize,
+    max_divergence: f64,
+    last_report: Option<CoupledReport>,
+    /// The grains' CFL number (fastest grain, smallest cell) summed over
+    /// the distance it travels, and that distance: their ratio is the mean
+    /// at which the forcing ran (calibrated near 1), a grain at rest on a
+    /// wall not weighing in.
+    grain_cfl_sum: f64,
+    distance: f64,
+    particles: usize,
+    cells: usize,
+    pub description: Vec<String>,
+    pub warnings: Vec<String>,
+}
+
+impl CoupledModel {
+    /// The coupled scene of a case. Refuses, before anything is written, a
+    /// DEM sub-step past the stability limit and a load that fails at the
+    /// scene's density ratio.
+    pub fn build(case: &Case, communicator: Communicator) -> Result<Self, RunError> {
+        let (system, contact_time) =
+            build_on(case, communicator.clone()).map_err(RunError::Case)?;
+        let mut warnings = Vec::new();
+        warnings.extend(check_dem_substep(&system, contact_time)?);
+        warnings.extend(check_density_ratio(&system)?);
+        let dt = case
+            .time
+            .dt
+            .expect("validated: a coupled scene has time.dt");
+        let grid = &system.flow.grid;
+        let global_cells = system.flow.partition().global_cells;
+        let cells: usize = global_cells.iter().product();
+        let particles = communicator.sum_count(system.dem.particles.n_owned);
+        let mut description = vec![
+            format!(
+                "grainflow {}: {particles} grains in a fluid, {}D staggered grid {:?} ({cells} cells), \
+                 immersed boundaries ({:?}), soft-sphere DEM sub-cycled in each stage{}",
+                env!("CARGO_PKG_VERSION"),
+                grid.dim(),
+                &global_cells[..grid.dim()],
+                system.coupling,
+                if system.dem.lubrication.is_some() {
+                    ", lubrication"
+                } else {
+                    ""
+                }
+            ),
+            format!(
+                "dt = {dt:.4e} s (fluid), DEM sub-step ≤ {:.4e} s = {:.4} t_c",
+                system.dem_dt,
+                system.dem_dt / contact_time
+            ),
+        ];
+        let ranks = communicator.size();
+        if ranks > 1 {
+            let r = system.flow.partition().ranks;
+            description.push(format!(
+                "{ranks} MPI ranks in a process grid of {} x {} x {} (cells and grains)",
+                r[0], r[1], r[2]
+            ));
+            warnings.extend(sharing::load_warning(
+                ranks,
+                None,
+                Some(cells as f64 / ranks as f64),
+            ));
+        }
+        let analysis = SphereInFluid::new(case, &system);
+        Ok(CoupledModel {
+            system,
+            analysis,
+            contact_time,
+            dt,
+            steps: 0,
+            dem_substeps: 0,
+            max_divergence: 0.0,
+            last_report: None,
+            grain_cfl_sum: 0.0,
+            distance: 0.0,
+            particles,
+            cells,
+            description,
+            warnings,
+        })
+    }
+
+    /// The slab height of the inclined bed's analysis, if the case has it.
+    pub fn bed_slab(&self, case: &Case) -> Option<Option<f64>> {
+        match &case.analysis {
+            Some(AnalysisSection::InclinedBed { slab }) => Some(*slab),
+            _ => None,
+        }
+    }
+
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    pub fn reached(&self, end: f64) -> bool {
+        self.system.flow.time >= end * (1.0 - 1e-12)
+    }
+
+    /// One coupled step, the last one landing on `end`; the diagnosis of a
+    /// failure.
+    pub fn advance(&mut self, case: &Case, end: f64) -> Result<(), String> {
+        let step_dt = step_size(&self.system, case).min(end - self.system.flow.time);
+        self.dt = step_dt;
+        let steps = self.steps;
+        let analysis = &mut self.analysis;
+        let time = self.system.flow.time;
+        let report = self
+            .system
+            .step_observed(step_dt, |dem| analysis.after_stage(dem))
+            .map_err(|e| {
+                format!("unstable at t = {time:.6e} s (step {steps}): {e}; reduce time.dt")
+            })?;
+        self.last_report = Some(report);
+        self.dem_substeps += report.dem_substeps;
+        self.max_divergence = report.flow.max_divergence;
+        let time = self.system.flow.time;
+        if !report.flow.kinetic_energy.is_finite() || report.dem.non_finite {
+            return Err(format!(
+                "unstable at t = {time:.6e} s (step {steps}): the flow or a grain is not finite"
+            ));
+        }
+        if let Some(why) = cfl_overrun(report.flow.max_cfl, step_dt, case) {
+            return Err(format!(
+                "unstable at t = {time:.6e} s (step {steps}): {why}"
+            ));
+        }
+        if report.dem.max_overlap_ratio > case.time.overlap_limit {
+            return Err(format!(
+                "unstable at t = {time:.6e} s (step {steps}): overlap of {:.3} radii beyond \
+                 time.overlap_limit = {}; reduce time.dt_over_contact_time",
+                report.dem.max_overlap_ratio, case.time.overlap_limit
+            ));
+        }
+        self.steps += 1;
+        let speed = self.system.dem.max_speed();
+        if speed > 0.0 {
+            let grid = &self.system.flow.grid;
+            let h = grid.spacing[..grid.dim()]
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
+            let layer_step = self.system.immersed.forcing_step.unwrap_or(step_dt);
+            self.grain_cfl_sum += speed * step_dt * (speed * layer_step / h);
+            self.distance += speed * step_dt;
+        }
+        self.analysis
+            .after_step(&self.system, step_dt, &self.last_report);
+        Ok(())
+    }
+
+    /// A row of `flow_series.csv`: the fluid's kinetic energy (J, per unit
+    /// depth in 2D), its CFL number at the last step and divergence.
+    pub fn flow_row(&self, dt: f64) -> [f64; 6] {
+        let flow = &self.system.flow;
+        let density = self.system.fluid_density;
+        [
+            flow.time,
+            dt,
+            self.steps as f64,
+            density * flow.kinetic_energy(),
+            flow.max_cfl(dt),
+            self.max_divergence,
+        ]
+    }
+
+    /// A field file with the solid fraction beside the flow's fields.
+    pub fn write_fields(&mut self, files: &mut FieldFiles) -> std::io::Result<()> {
+        let system = &mut self.system;
+        let solid = system
+            .immersed
+            .cell_solid_fraction(&system.flow.grid, &system.dem.particles);
+        let density = system.fluid_density;
+        files.write(&mut system.flow, density, &[("solid_fraction", &solid)])
+    }
+
+    /// The mean grain CFL number over the run (0 if no grain moved).
+    fn grain_cfl(&self) -> f64 {
+        if self.distance > 0.0 {
+            self.grain_cfl_sum / self.distance
+        } else {
+            0.0
+        }
+    }
+
+    /// The warning for a forcing step short against the grains' crossing
+    /// time, at the end of a run in which grains moved.
+    pub fn closing_warning(&self) -> Option<String> {
+        (self.distance > 0.0)
+            .then(|| forcing_step_warning(self.grain_cfl()))
+            .flatten()
+    }
+
+    /// The metrics of the sphere's analysis (the bed's come from its
+    /// writer).
+    pub fn metrics(&self) -> Map<String, Value> {
+        self.analysis.metrics()
+    }
+
+    /// The scene's own entries of `summary.json`.
+    pub fn summary(&self, case: &Case, wall_seconds: f64) -> Map<String, Value> {
+        let t = self.system.timings;
+        let mut summary = Map::new();
+        for (key, value) in [
+            ("particles", json!(self.particles)),
+            ("cells", json!(self.cells)),
+            ("dimension", json!(self.system.flow.grid.dim())),
+            ("dem_substeps", json!(self.dem_substeps)),
+            ("dt", json!(case.time.dt)),
+            ("cfl", json!(case.time.cfl)),
+            ("mean_grain_cfl", json!(self.grain_cfl())),
+            ("forcing_step", json!(self.system.immersed.forcing_step)),
+            ("dem_dt", json!(self.system.dem_dt)),
+            ("contact_time", json!(self.contact_time)),
+            (
+                "seconds_per_step",
+                json!(wall_seconds / self.steps.max(1) as f64),
+            ),
+            ("seconds_flow", json!(t.flow)),
+            ("seconds_forcing", json!(t.forcing)),
+            ("seconds_loads", json!(t.loads)),
+            ("seconds_dem", json!(t.dem)),
+        ] {
+            summary.insert(key.into(), value);
+        }
+        summary
+    }
+
+    pub fn done_line(&self, wall_seconds: f64) -> String {
+        let t = self.system.timings;
+        format!(
+            "{} steps ({} DEM sub-steps) in {wall_seconds:.2} s: flow {:.2} s, forcing {:.2} s, \
+             loads {:.2} s, DEM {:.2} s",
+            self.steps, self.dem_substeps, t.flow, t.forcing, t.loads, t.dem
+        )
+    }
+
+    pub fn save_state(&self, state: &mut State) {
+        self.system.save_state(state);
+        state.put_value("coupled.analysis", &self.analysis);
+        state.put_value(
+            "coupled.loop",
+            &(
+                self.dt,
+                self.steps,
+                self.dem_substeps,
+                self.max_divergence,
+                self.grain_cfl_sum,
+                self.distance,
+            ),
+        );
+    }
+
+    pub fn restore_state(&mut self, state: &mut State) -> Result<(), StateError> {
+        self.system.restore_state(state)?;
+        self.analysis = state.take_value("coupled.analysis")?;
+        (
+            self.dt,
+            self.steps,
+            self.dem_substeps,
+            self.max_divergence,
+            self.grain_cfl_sum,
+            self.distance,
+        ) = state.take_value("coupled.loop")?;
+        Ok(())
+    }
+}

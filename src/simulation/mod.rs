@@ -1,0 +1,268 @@
+//! The run: builds the scene of a case ([`model::Model`]: grains, a fluid,
+//! or both), then one time loop ([`time_loop`]) advances it, calls the
+//! writers on their [`schedule::Schedule`], writes checkpoints and stops
+//! with a diagnosis when the integration goes wrong, or with a checkpoint
+//! when told to ([`stop`]). A run resumes from a checkpoint of its own
+//! output folder ([`crate::checkpoint`]).
+
+pub mod coupled;
+pub mod dry;
+pub mod dry_stepper;
+pub mod fluid;
+pub mod model;
+pub mod schedule;
+pub mod stop;
+pub mod time_loop;
+
+use crate::case::Case;
+use crate::checkpoint::{self, case_changes};
+use crate::output::writers::{Writers, WritersRecord};
+use crate::output::RunDirectory;
+use crate::{scene, RunError};
+use grainflow_core::Communicator;
+use model::Model;
+use schedule::Schedule;
+use serde_json::{Map, Value};
+use std::path::{Path, PathBuf};
+
+/// Result of a finished run, as written to `summary.json`.
+#[derive(Debug)]
+pub struct Summary {
+    pub json: Value,
+    pub metrics: Map<String, Value>,
+    /// Set when the run stopped early on a signal or its wall-clock limit:
+    /// what it says, the checkpoint to resume from named.
+    pub stopped: Option<String>,
+}
+
+/// Which checkpoint a run resumes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Restart {
+    /// The newest checkpoint in the output folder (refused if none).
+    Latest,
+    /// The newest if there is one, else a fresh start (a batch script that
+    /// resubmits itself).
+    Auto,
+    /// This checkpoint folder.
+    From(PathBuf),
+}
+
+impl std::str::FromStr for Restart {
+    type Err = String;
+    fn from_str(text: &str) -> Result<Self, String> {
+        Ok(match text {
+            "latest" => Restart::Latest,
+            "auto" => Restart::Auto,
+            path => Restart::From(PathBuf::from(path)),
+        })
+    }
+}
+
+/// How a run is started.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// A progress bar or log lines on the terminal.
+    pub show_progress: bool,
+    /// Stop with a checkpoint on SIGTERM and SIGINT (the command line).
+    pub listen_to_signals: bool,
+    pub restart: Option<Restart>,
+}
+
+/// Runs a validated case into `out`. Nothing is written if the scene cannot
+/// be built or its time step is refused.
+pub fn run(case: &Case, out: &Path, show_progress: bool) -> Result<Summary, RunError> {
+    run_on(case, out, show_progress, Communicator::serial())
+}
+
+/// [`run`] on the ranks of `communicator` (every rank calls it).
+pub fn run_on(
+    case: &Case,
+    out: &Path,
+    show_progress: bool,
+    communicator: Communicator,
+) -> Result<Summary, RunError> {
+    let options = RunOptions {
+        show_progress,
+        ..RunOptions::default()
+    };
+    run_with(case, out, communicator, &options)
+}
+
+/// A run, fresh or resumed, on the ranks of `communicator`.
+///
+/// The loop runs on a worker of a thread pool, so that parallel loops too
+/// small to split run inline instead of waking the pool every step.
+pub fn run_with(
+    case: &Case,
+    out: &Path,
+    communicator: Communicator,
+    options: &RunOptions,
+) -> Result<Summary, RunError> {
+    crate::footprint::Footprint::of(case)
+        .check_fits(communicator.size(), crate::footprint::machine_memory())?;
+    if rayon::current_thread_index().is_some() {
+        return run_here(case, out, communicator, options);
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(rayon::current_num_threads())
+        .build()
+        .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
+    pool.install(|| run_here(case, out, communicator, options))
+}
+
+/// Refuses, before anything is written, what does not run on several ranks
+/// yet.
+pub(crate) fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
+    if ranks == 1 {
+        return Ok(());
+    }
+    let refuse = |what: &str| {
+        Err(RunError::Case(format!(
+            "{what} runs on one rank in this version; started on {ranks} ranks: run it \
+             without mpirun (its threads use every core of a node); allowed on several \
+             ranks: scenes with contact.model = \"soft\" and scenes of a fluid alone"
+        )))
+    };
+    if case.has_grains() && scene::hard_contact(case).is_some() {
+        return refuse("hard contact (contact.model = \"cocd\" or \"nscd\")");
+    }
+    Ok(())
+}
+
+/// The checkpoint a run resumes from, if any, with its manifest; refuses
+/// (nothing written) a missing one, one of another case or rank count.
+fn checkpoint_to_resume(
+    case: &Case,
+    out: &Path,
+    communicator: &Communicator,
+    restart: &Option<Restart>,
+) -> Result<Option<(PathBuf, checkpoint::Manifest)>, RunError> {
+    let path = match restart {
+        None => return Ok(None),
+        Some(Restart::From(path)) => path.clone(),
+        Some(Restart::Latest) => checkpoint::latest(out).ok_or_else(|| {
+            RunError::Case(format!(
+                "--restart latest: no finished checkpoint in {}; allowed: --restart auto \
+                 (start afresh when there is none) or a checkpoint folder",
+                out.join(checkpoint::FOLDER).display()
+            ))
+        })?,
+        Some(Restart::Auto) => match checkpoint::latest(out) {
+            Some(path) => path,
+            None => return Ok(None),
+        },
+    };
+    let manifest = checkpoint::read_manifest(&path).map_err(|e| RunError::Case(e.0))?;
+    if manifest.ranks != communicator.size() {
+        return Err(RunError::Case(format!(
+            "{} was written on {} ranks and this run has {}: resume it on {} ranks \
+             (resuming on another number of ranks is not supported yet)",
+            path.display(),
+            manifest.ranks,
+            communicator.size(),
+            manifest.ranks
+        )));
+    }
+    case_changes::check(&manifest.case, &case.to_toml()).map_err(RunError::Case)?;
+    Ok(Some((path, manifest)))
+}
+
+fn run_here(
+    case: &Case,
+    out: &Path,
+    communicator: Communicator,
+    options: &RunOptions,
+) -> Result<Summary, RunError> {
+    check_ranks(case, communicator.size())?;
+    let resume = checkpoint_to_resume(case, out, &communicator, &options.restart)?;
+    let mut model = Model::build(case, communicator.clone())?;
+    let mut resumed = None;
+    if let Some((path, manifest)) = &resume {
+        let fail = |e: String| format!("resuming from {}: {e}", path.display());
+        let mut read = || -> Result<(WritersRecord, Schedule), String> {
+            if manifest.kind != model.kind() {
+                return Err(format!(
+                    "it holds a {} scene, the case a {} scene",
+                    manifest.kind,
+                    model.kind()
+                ));
+            }
+            let mut state = checkpoint::read_state(path, communicator.rank()).map_err(|e| e.0)?;
+            model.restore_state(&mut state).map_err(|e| e.0)?;
+            let writers = state.take_value("writers").map_err(|e| e.0)?;
+            let schedule = state.take_value("schedule").map_err(|e| e.0)?;
+            Ok((writers, schedule))
+        };
+        let read = read();
+        // A rank that cannot read its state stops every rank, before any
+        // writes.
+        if communicator.any(read.is_err()) {
+            return Err(RunError::Case(fail(read.err().unwrap_or_else(|| {
+                "another rank could not read its state".to_string()
+            }))));
+        }
+        let (writers, schedule) = read.expect("checked on every rank");
+        resumed = Some((path.clone(), manifest.clone(), writers, schedule));
+    }
+    // The threads: fewer than the pool's for a dry scene too small to gain
+    // from them (the neighbour builds and the contact solver's run on the
+    // pool too, so it shrinks with them).
+    let threads = match &model {
+        Model::Dry(dry) => dry.threads.threads,
+        _ => rayon::current_num_threads(),
+    };
+    let mut run = move || -> Result<Summary, RunError> {
+        let (run_directory, writers_record) = match &resumed {
+            None => (
+                RunDirectory::create_on(out, case, &communicator).map_err(RunError::Io)?,
+                None,
+            ),
+            Some((_, _, record, _)) => (
+                RunDirectory::resume(out, &communicator, record.log).map_err(RunError::Io)?,
+                Some(record),
+            ),
+        };
+        let mut writers =
+            Writers::create(run_directory, case, &model, &communicator, writers_record)
+                .map_err(RunError::Io)?;
+        let schedule = match &resumed {
+            None => Schedule::of(case),
+            Some((path, manifest, record, schedule)) => {
+                writers.run.log(&format!(
+                    "resumed from {} at t = {:.6e} s (step {}), written by grainflow {}",
+                    path.display(),
+                    manifest.time,
+                    manifest.steps,
+                    manifest.grainflow_version
+                ));
+                Schedule::resumed(case, schedule.clone(), record.wall_seconds)
+            }
+        };
+        time_loop::simulate(
+            case,
+            out,
+            &communicator,
+            &mut model,
+            &mut writers,
+            schedule,
+            options,
+            resumed.is_some(),
+        )
+    };
+    if threads < rayon::current_num_threads() {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
+        return pool.install(run);
+    }
+    run()
+}
+
+/// Peak resident memory of this process (Linux), if known.
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}

@@ -1,0 +1,190 @@
+//! The scene a run advances, whatever it holds: grains alone, a fluid
+//! alone, or grains in a fluid. The time loop sees it through this narrow
+//! interface: advance one step, the time, what the writers record, the
+//! state to save and restore, and the summary at the end.
+
+use super::coupled::CoupledModel;
+use super::dry::DryModel;
+use super::fluid::FluidModel;
+use crate::case::Case;
+use crate::output::fields::FieldFiles;
+use crate::RunError;
+use grainflow_core::{Communicator, State, StateError};
+use grainflow_dem::DemSystem;
+use serde_json::{Map, Value};
+use std::path::Path;
+
+pub enum Model {
+    Dry(Box<DryModel>),
+    Fluid(Box<FluidModel>),
+    Coupled(Box<CoupledModel>),
+}
+
+impl Model {
+    /// The scene of a validated case; refuses (before anything is written)
+    /// what cannot run.
+    pub fn build(case: &Case, communicator: Communicator) -> Result<Self, RunError> {
+        Ok(if !case.has_grains() {
+            Model::Fluid(Box::new(FluidModel::build(case, communicator)?))
+        } else if case.fluid.is_some() {
+            Model::Coupled(Box::new(CoupledModel::build(case, communicator)?))
+        } else {
+            Model::Dry(Box::new(DryModel::build(case, communicator)?))
+        })
+    }
+
+    /// What the kind of scene is called in a checkpoint.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Model::Dry(_) => "dry",
+            Model::Fluid(_) => "fluid",
+            Model::Coupled(_) => "coupled",
+        }
+    }
+
+    /// The log lines that describe the scene, and its warnings.
+    pub fn description(&self) -> (&[String], &[String]) {
+        match self {
+            Model::Dry(m) => (&m.description, &m.warnings),
+            Model::Fluid(m) => (&m.description, &m.warnings),
+            Model::Coupled(m) => (&m.description, &m.warnings),
+        }
+    }
+
+    pub fn time(&self) -> f64 {
+        match self {
+            Model::Dry(m) => m.system.time,
+            Model::Fluid(m) => m.solver.time,
+            Model::Coupled(m) => m.system.flow.time,
+        }
+    }
+
+    pub fn steps(&self) -> u64 {
+        match self {
+            Model::Dry(m) => m.system.steps,
+            Model::Fluid(m) => m.steps(),
+            Model::Coupled(m) => m.steps(),
+        }
+    }
+
+    /// The last step's length (the first step's before any).
+    pub fn dt(&self) -> f64 {
+        match self {
+            Model::Dry(m) => m.dt(),
+            Model::Fluid(m) => m.dt(),
+            Model::Coupled(m) => m.dt(),
+        }
+    }
+
+    /// Whether the run has reached `end` (within half a step for the fixed
+    /// step of the grains; the flow's last step lands on it).
+    pub fn reached(&self, end: f64) -> bool {
+        match self {
+            Model::Dry(m) => m.reached(end),
+            Model::Fluid(m) => m.reached(end),
+            Model::Coupled(m) => m.reached(end),
+        }
+    }
+
+    /// Advances one step towards `end`: the lines for the log, or the
+    /// diagnosis of a failure (the state is then not kept).
+    pub fn advance(&mut self, case: &Case, end: f64) -> Result<Vec<String>, String> {
+        match self {
+            Model::Dry(m) => m.advance(),
+            Model::Fluid(m) => m.advance(case, end).map(|()| Vec::new()),
+            Model::Coupled(m) => m.advance(case, end).map(|()| Vec::new()),
+        }
+    }
+
+    /// Why the run stops before its end time (grains at rest), if it does.
+    pub fn stop_before_end(&mut self) -> Option<String> {
+        match self {
+            Model::Dry(m) => m.at_rest(),
+            _ => None,
+        }
+    }
+
+    /// The grains, if the scene has any.
+    pub fn grains(&self) -> Option<&DemSystem> {
+        match self {
+            Model::Dry(m) => Some(&m.system),
+            Model::Fluid(_) => None,
+            Model::Coupled(m) => Some(&m.system.dem),
+        }
+    }
+
+    pub fn has_flow(&self) -> bool {
+        !matches!(self, Model::Dry(_))
+    }
+
+    /// A row of the flow's series after a step of `dt`, if the scene has a
+    /// fluid.
+    pub fn flow_row(&self, dt: f64) -> Option<[f64; 6]> {
+        match self {
+            Model::Dry(_) => None,
+            Model::Fluid(m) => Some(m.series_row()),
+            Model::Coupled(m) => Some(m.flow_row(dt)),
+        }
+    }
+
+    pub fn write_fields(&mut self, files: &mut FieldFiles) -> std::io::Result<()> {
+        match self {
+            Model::Dry(_) => Ok(()),
+            Model::Fluid(m) => m.write_fields(files),
+            Model::Coupled(m) => m.write_fields(files),
+        }
+    }
+
+    /// The metrics of the scene's analyses at the end (their files written;
+    /// collective). `failed`: the run stopped on a failure.
+    pub fn metrics(
+        &mut self,
+        case: &Case,
+        out: &Path,
+        failed: bool,
+    ) -> std::io::Result<Map<String, Value>> {
+        match self {
+            Model::Dry(m) => m.finish(out, failed),
+            Model::Fluid(m) if !failed => Ok(m.metrics(case)),
+            Model::Coupled(m) if !failed => Ok(m.metrics()),
+            _ => Ok(Map::new()),
+        }
+    }
+
+    /// The scene's own entries of `summary.json`.
+    pub fn summary(&self, case: &Case, wall_seconds: f64) -> Map<String, Value> {
+        match self {
+            Model::Dry(m) => m.summary(case, wall_seconds),
+            Model::Fluid(m) => m.summary(wall_seconds),
+            Model::Coupled(m) => m.summary(case, wall_seconds),
+        }
+    }
+
+    /// The log's last line after `done: <stop reason>; `.
+    pub fn done_line(&self, wall_seconds: f64) -> String {
+        match self {
+            Model::Dry(m) => m.done_line(wall_seconds),
+            Model::Fluid(m) => m.done_line(wall_seconds),
+            Model::Coupled(m) => m.done_line(wall_seconds),
+        }
+    }
+
+    /// Saves everything the next step reads (this rank's share).
+    pub fn save_state(&self, state: &mut State) {
+        match self {
+            Model::Dry(m) => m.save_state(state),
+            Model::Fluid(m) => m.save_state(state),
+            Model::Coupled(m) => m.save_state(state),
+        }
+    }
+
+    /// Takes back what [`Model::save_state`] saved, into a scene built from
+    /// the same case on a job of the same size.
+    pub fn restore_state(&mut self, state: &mut State) -> Result<(), StateError> {
+        match self {
+            Model::Dry(m) => m.restore_state(state),
+            Model::Fluid(m) => m.restore_state(state),
+            Model::Coupled(m) => m.restore_state(state),
+        }
+    }
+}
