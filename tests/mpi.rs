@@ -860,3 +860,105 @@ interval = 5.0e-4
         assert_states_match(&case, &out, ranks, &[&setting], (end, &reference));
     }
 }
+
+/// The inclined bed and the column collapse on 2 ranks, resumed on 2 ranks
+/// from the checkpoint of their 4th step: the same bytes in every series as
+/// the run that never stopped.
+#[test]
+fn runs_on_2_ranks_resume_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let column = dir.path().join("column.toml");
+    std::fs::write(
+        &column,
+        COLUMN
+            .replace("{BLOCK}", RANDOM_BLOCK)
+            .replace("{GATES}", "")
+            .replace("{TRACKED}", &tracked_all(GRAINS))
+            .replace("{TIME}", "end = 0.005"),
+    )
+    .unwrap();
+    let scenes: [(PathBuf, Vec<&str>, &[&str]); 2] = [
+        (
+            root.join("cases/immersed_avalanche.toml"),
+            vec![
+                "fluid.cells=[40,12,40]",
+                "time.end=0.008",
+                "output.interval=0.001",
+                "output.fields=false",
+                "parallel.process_grid=[2,1,1]",
+            ],
+            &[
+                "series.csv",
+                "flow_series.csv",
+                "bed_series.csv",
+                "bed_profiles.csv",
+            ],
+        ),
+        (
+            column,
+            vec!["parallel.process_grid=[2,1,1]", "output.interval=0.0005"],
+            &["series.csv", "tracked.csv", "final_particles.csv"],
+        ),
+    ];
+    for (case, settings, files) in scenes {
+        let mut settings = settings;
+        settings.extend(["checkpoint.steps=4", "checkpoint.keep=100"]);
+        let whole = dir.path().join("whole");
+        let (code, stderr) = run(&case, &whole, 2, &settings, Duration::from_secs(300));
+        assert_eq!(code, 0, "{stderr}");
+        let first = std::fs::read_dir(whole.join("checkpoints"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .min()
+            .unwrap();
+        assert!(first.ends_with("checkpoint_000000000004"), "{first:?}");
+        let restart = format!("--restart={}", first.display());
+        let resumed = dir.path().join("resumed");
+        // The resumed folder as the stopped run left it: later rows too.
+        let status = Command::new("cp")
+            .arg("-r")
+            .arg(&whole)
+            .arg(&resumed)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let mut command = Command::new("mpirun");
+        command
+            .args([
+                "--oversubscribe",
+                "-n",
+                "2",
+                env!("CARGO_BIN_EXE_grainflow"),
+                "run",
+            ])
+            .arg(&case)
+            .arg("--out")
+            .arg(&resumed)
+            .arg(&restart)
+            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+            .env("RAYON_NUM_THREADS", "1");
+        for s in &settings {
+            command.args(["--set", s]);
+        }
+        let output = command.output().unwrap();
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        for file in files {
+            let (a, b) = (
+                std::fs::read(whole.join(file)).unwrap(),
+                std::fs::read(resumed.join(file)).unwrap(),
+            );
+            assert!(
+                a == b,
+                "{case:?}: {file} differs after the restart on 2 ranks"
+            );
+        }
+        std::fs::remove_dir_all(&whole).unwrap();
+        std::fs::remove_dir_all(&resumed).unwrap();
+    }
+}

@@ -121,6 +121,39 @@ pub fn clear_earlier_run(dir: &Path) -> std::io::Result<usize> {
     Ok(removed)
 }
 
+/// Refuses an output folder the run cannot write (before anything is
+/// built or written): the nearest folder of `dir` that exists takes a file
+/// (made and removed at once), and nothing on the way is a file.
+pub fn check_writable(dir: &Path) -> Result<(), RunError> {
+    let refuse = |why: String| {
+        Err(RunError::Case(format!(
+            "--out {}: {why}; allowed: a folder this user can create and write",
+            dir.display()
+        )))
+    };
+    let mut existing = dir;
+    while !existing.exists() {
+        match existing.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() => existing = parent,
+            _ => {
+                existing = Path::new(".");
+                break;
+            }
+        }
+    }
+    if !existing.is_dir() {
+        return refuse(format!("{} is not a folder", existing.display()));
+    }
+    let probe = existing.join(format!(".grainflow-probe-{}", std::process::id()));
+    match File::create(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => refuse(format!("cannot write in {}: {e}", existing.display())),
+    }
+}
+
 /// The files of the output contract every scene writes: the resolved case,
 /// the log and the summary.
 pub struct RunDirectory {

@@ -174,6 +174,20 @@ fn run_here(
     options: &RunOptions,
 ) -> Result<Summary, RunError> {
     check_ranks(case, communicator.size())?;
+    // The root writes the shared files; all ranks stop if it cannot.
+    let writable = if communicator.is_root() {
+        crate::output::check_writable(out)
+    } else {
+        Ok(())
+    };
+    if communicator.any(writable.is_err()) {
+        return Err(writable.err().unwrap_or_else(|| {
+            RunError::Case(format!(
+                "--out {}: the root rank cannot write there",
+                out.display()
+            ))
+        }));
+    }
     let resume = checkpoint_to_resume(case, out, &communicator, &options.restart)?;
     let mut model = Model::build(case, communicator.clone())?;
     let mut resumed = None;

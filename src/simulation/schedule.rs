@@ -25,6 +25,9 @@ pub struct Schedule {
     next_checkpoint: f64,
     next_checkpoint_step: u64,
     next_checkpoint_wall: f64,
+    /// The step of the last checkpoint written, if any.
+    #[serde(default)]
+    last_checkpoint_step: Option<u64>,
 }
 
 impl Schedule {
@@ -45,6 +48,7 @@ impl Schedule {
             next_checkpoint: checkpoint.interval.unwrap_or(f64::INFINITY),
             next_checkpoint_step: checkpoint.steps.unwrap_or(u64::MAX),
             next_checkpoint_wall: checkpoint.wall_interval.unwrap_or(f64::INFINITY),
+            last_checkpoint_step: None,
         }
     }
 
@@ -67,6 +71,7 @@ impl Schedule {
             },
             next_output: record.next_output,
             next_tracked: record.next_tracked,
+            last_checkpoint_step: record.last_checkpoint_step,
             ..fresh
         }
     }
@@ -104,6 +109,7 @@ impl Schedule {
 
     /// Sets the next scheduled checkpoints after one written now.
     pub fn checkpoint_written(&mut self, time: f64, steps: u64, wall_seconds: f64) {
+        self.last_checkpoint_step = Some(steps);
         if let Some(interval) = self.checkpoint_interval {
             while self.next_checkpoint <= time + 1e-12 * interval.max(time.abs()) {
                 self.next_checkpoint += interval;
@@ -115,6 +121,10 @@ impl Schedule {
         if let Some(interval) = self.checkpoint_wall_interval {
             self.next_checkpoint_wall = wall_seconds + interval;
         }
+    }
+
+    pub fn last_checkpoint_step(&self) -> Option<u64> {
+        self.last_checkpoint_step
     }
 
     /// Whether any checkpoint is scheduled on the wall clock (whose

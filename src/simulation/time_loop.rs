@@ -143,6 +143,27 @@ pub fn simulate(
         }
     }
     progress.finish();
+    // A run with checkpoints ends with one, from which it can be taken
+    // further (a later time.end).
+    let ended = failure.is_none() && stopped.is_none();
+    if ended && case.checkpoint.is_some() && schedule.last_checkpoint_step() != Some(model.steps())
+    {
+        schedule.checkpoint_written(model.time(), model.steps(), writers.wall_seconds());
+        let clock = Instant::now();
+        let path = write_checkpoint(
+            case,
+            out,
+            communicator,
+            model,
+            writers,
+            &schedule,
+            "end",
+            keep,
+        )
+        .map_err(RunError::Io)?;
+        longest_checkpoint.add(clock);
+        last_checkpoint = Some(path);
+    }
     finish(
         case,
         out,
