@@ -297,7 +297,10 @@ fn for_each_velocity(solver: &FlowSolver, mut visit: impl FnMut(usize, f64, [f64
 /// Cell-centred velocity (mean of a cell's two faces along each axis),
 /// pressure [Pa] and vorticity (the curl on the cell's edges, averaged to
 /// its centre) of the current flow, for ParaView.
-fn cell_fields(solver: &mut FlowSolver, density: f64) -> (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>) {
+pub(crate) fn cell_fields(
+    solver: &mut FlowSolver,
+    density: f64,
+) -> (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>) {
     solver.fill_velocity_ghosts();
     let grid = &solver.grid;
     let dim = grid.dim();

@@ -21,6 +21,8 @@ pub mod fluid_scene;
 pub mod fluid_simulation;
 pub mod footprint;
 pub mod grain_pairs;
+#[cfg(feature = "hdf5")]
+pub mod hdf5_output;
 pub mod initial_overlaps;
 pub mod output;
 pub mod pouring;

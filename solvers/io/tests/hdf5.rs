@@ -549,7 +549,8 @@ fn two_ranks_write_the_files_of_one() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let status = std::process::Command::new("mpirun")
+    // The ranks' own test reports are shown only on a failure.
+    let run = std::process::Command::new("mpirun")
         .args(["-n", "2", "--oversubscribe"])
         .arg(std::env::current_exe().unwrap())
         .args([
@@ -558,9 +559,15 @@ fn two_ranks_write_the_files_of_one() {
             "--test-threads=1",
         ])
         .env("GRAINFLOW_HDF5_MPI_OUT", dir.path())
-        .status()
+        .output()
         .expect("mpirun starts (is Open MPI installed?)");
-    assert!(status.success(), "mpirun: {status}");
+    assert!(
+        run.status.success(),
+        "mpirun: {}\n{}\n{}",
+        run.status,
+        String::from_utf8_lossy(&run.stdout),
+        String::from_utf8_lossy(&run.stderr)
+    );
     let global = [6, 2, 4];
     assert_field_frame(
         &dir.path().join("fields.h5"),

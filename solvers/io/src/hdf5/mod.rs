@@ -39,7 +39,7 @@ use std::path::Path;
 /// rank of an MPI communicator into one shared file (parallel HDF5). Every
 /// writer of a frame calls its `write` with the same file name and the same
 /// global shapes.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Default)]
 pub struct Writers<'a> {
     #[cfg(feature = "mpi")]
     communicator: Option<&'a mpi::topology::SimpleCommunicator>,
@@ -118,6 +118,12 @@ impl<'a> Writers<'a> {
                 .create(path);
         }
         hdf5_metno::File::create(path)
+    }
+}
+
+impl std::fmt::Debug for Writers<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "rank {} of {} HDF5 writers", self.rank(), self.size())
     }
 }
 
