@@ -27,6 +27,10 @@ mod fields;
 mod particles;
 mod xdmf;
 
+/// The HDF5 library's bindings the frames are written with, for readers
+/// (tests and tools) of the files.
+pub use hdf5_metno;
+
 pub use fields::FieldFrameH5;
 pub use particles::ParticleFrameH5;
 pub use xdmf::{FieldGridDescription, XdmfIndex};
