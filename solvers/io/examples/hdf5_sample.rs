@@ -9,12 +9,15 @@
 //! - `particles.xdmf`: two frames of 7 and then 9 grains at t = 0, 0.5.
 //!
 //! Every value is a function of the cell, the field and the time, so a
-//! reader can check them against the HDF5 datasets.
+//! reader can check them against the HDF5 datasets. The same frames are
+//! also written as VTK files beside them (`fields.pvd`, `stretched.pvd`,
+//! `particles.pvd`), for readers of both formats to compare
+//! (`postprocess/read_output.py --compare DIR`).
 //!
 //! usage: cargo run --release -p grainflow-io --features hdf5 --example hdf5_sample -- DIR
 
 use grainflow_io::hdf5::{FieldFrameH5, FieldGridDescription, ParticleFrameH5, Writers, XdmfIndex};
-use grainflow_io::CellLayout;
+use grainflow_io::{CellLayout, FieldFrame, ParticleFrame, PvdIndex};
 use std::path::Path;
 
 fn main() -> std::io::Result<()> {
@@ -30,16 +33,23 @@ fn main() -> std::io::Result<()> {
     let cells = [6, 4, 3];
     let (origin, spacing) = ([-1.0, 0.0, 0.5], [0.25, 0.5, 1.0]);
     let mut index = XdmfIndex::new(dir.join("fields.xdmf"), "fields");
+    let mut pvd = PvdIndex::new(dir.join("fields.pvd"));
     for (frame, time) in [0.0, 0.5, 1.0].into_iter().enumerate() {
-        let name = format!("fields/fields_{frame:06}.h5");
+        let name = format!("fields/fields_{frame:06}");
         write_fields(
-            &dir.join(&name),
+            dir,
+            &name,
             &writers,
             time,
             cells,
             CellLayout::Uniform { origin, spacing },
         )?;
-        index.add_fields(time, &name, &description(cells, Some((origin, spacing))))?;
+        index.add_fields(
+            time,
+            &format!("{name}.h5"),
+            &description(cells, Some((origin, spacing))),
+        )?;
+        pvd.add(time, &format!("{name}.vti"))?;
     }
 
     let cells = [5, 4, 1];
@@ -51,39 +61,53 @@ fn main() -> std::io::Result<()> {
     let layout = CellLayout::Rectilinear {
         faces: [&faces[0], &faces[1], &faces[2]],
     };
-    let name = "fields/stretched_000000.h5";
-    write_fields(&dir.join(name), &writers, 0.25, cells, layout)?;
+    let name = "fields/stretched_000000";
+    write_fields(dir, name, &writers, 0.25, cells, layout)?;
     XdmfIndex::new(dir.join("stretched.xdmf"), "stretched").add_fields(
         0.25,
-        name,
+        &format!("{name}.h5"),
         &description(cells, None),
     )?;
+    PvdIndex::new(dir.join("stretched.pvd")).add(0.25, &format!("{name}.vtr"))?;
 
     let mut index = XdmfIndex::new(dir.join("particles.xdmf"), "particles");
+    let mut pvd = PvdIndex::new(dir.join("particles.pvd"));
     for (frame, (time, n)) in [(0.0, 7u64), (0.5, 9)].into_iter().enumerate() {
-        let name = format!("particles/particles_{frame:06}.h5");
+        let name = format!("particles/particles_{frame:06}");
         let id: Vec<u64> = (0..n).collect();
         let v = |s: f64| -> Vec<[f64; 3]> {
             id.iter()
                 .map(|&k| [0.0, 1.0, 2.0].map(|c| s * k as f64 + c + time))
                 .collect()
         };
+        let (position, velocity, spin, force) = (v(0.1), v(-1.0), v(2.0), v(0.5));
+        let radius: Vec<f64> = id.iter().map(|&k| 0.01 * (1.0 + k as f64)).collect();
+        let fixed: Vec<u8> = id.iter().map(|&k| u8::from(k == 0)).collect();
+        let contacts: Vec<u32> = id.iter().map(|&k| (k % 4) as u32).collect();
         let count = ParticleFrameH5 {
             time,
             id: &id,
-            position: &v(0.1),
-            velocity: &v(-1.0),
-            angular_velocity: &v(2.0),
-            force: &v(0.5),
-            radius: &id
-                .iter()
-                .map(|&k| 0.01 * (1.0 + k as f64))
-                .collect::<Vec<_>>(),
-            contacts: &id.iter().map(|&k| (k % 4) as u32).collect::<Vec<_>>(),
-            fixed: &id.iter().map(|&k| u8::from(k == 0)).collect::<Vec<_>>(),
+            position: &position,
+            velocity: &velocity,
+            angular_velocity: &spin,
+            force: &force,
+            radius: &radius,
+            contacts: &contacts,
+            fixed: &fixed,
         }
-        .write(&dir.join(&name), &writers)?;
-        index.add_particles(time, &name, count)?;
+        .write(&dir.join(format!("{name}.h5")), &writers)?;
+        index.add_particles(time, &format!("{name}.h5"), count)?;
+        ParticleFrame {
+            id: &id,
+            position: &position,
+            velocity: &velocity,
+            angular_velocity: &spin,
+            force: &force,
+            radius: &radius,
+            fixed: &fixed,
+        }
+        .write(&dir.join(format!("{name}.vtp")))?;
+        pvd.add(time, &format!("{name}.vtp"))?;
     }
     println!("sample HDF5 frames and XDMF indices in {}", dir.display());
     Ok(())
@@ -105,9 +129,11 @@ fn description(
 }
 
 /// Fields whose value in cell (i, j, k) is `f·100 + i + 10 j + 0.01 k + t`
-/// (plus `c·1000` for component c of a vector).
+/// (plus `c·1000` for component c of a vector), as `dir/name.h5` and as
+/// the VTK file `dir/name.vti` (uniform) or `.vtr` (rectilinear).
 fn write_fields(
-    path: &Path,
+    dir: &Path,
+    name: &str,
     writers: &Writers,
     time: f64,
     cells: [usize; 3],
@@ -145,6 +171,14 @@ fn write_fields(
         .zip(&vectors)
         .map(|(n, v)| (*n, &v[..]))
         .collect();
+    FieldFrame {
+        cells,
+        offset: [0; 3],
+        layout,
+        scalars: &scalars,
+        vectors: &vectors,
+    }
+    .write(&dir.join(format!("{name}.{}", layout.extension())))?;
     FieldFrameH5 {
         time,
         global_cells: cells,
@@ -154,5 +188,5 @@ fn write_fields(
         scalars: &scalars,
         vectors: &vectors,
     }
-    .write(path, writers)
+    .write(&dir.join(format!("{name}.h5")), writers)
 }
