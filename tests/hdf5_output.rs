@@ -150,3 +150,160 @@ mod with_hdf5 {
             .is_none());
     }
 }
+
+/// A flow and grains shared among two MPI ranks write the files of one
+/// rank: the field frame of each is the same global array, and the grains
+/// are the same (in rank order in the file, so compared by id). Needs the
+/// features `hdf5` and `mpi`, Open MPI's `mpirun` and parallel HDF5.
+#[cfg(all(feature = "hdf5", feature = "mpi"))]
+mod on_two_ranks {
+    use super::*;
+    use grainflow::hdf5_output::{Hdf5Fields, Hdf5Particles};
+    use grainflow_core::Communicator;
+    use grainflow_io::hdf5::hdf5_metno::File;
+    use std::collections::BTreeMap;
+
+    const OUT: &str = "GRAINFLOW_HDF5_RANKS_OUT";
+
+    fn flow_case() -> Case {
+        taylor_green(&["output.format=\"hdf5\"", "fluid.cells=[16, 8]"]).unwrap()
+    }
+
+    fn grain_case() -> Case {
+        Case::load(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/column_collapse_3d.toml"),
+            &[
+                "output.format=\"hdf5\"".to_string(),
+                "particles.block[0].count=300".to_string(),
+            ],
+        )
+        .unwrap()
+    }
+
+    /// Writes a field frame after two steps and a particle frame into `out`.
+    fn write_frames(out: &Path, communicator: Communicator) {
+        let case = flow_case();
+        let mut solver = grainflow::fluid_scene::build_on(&case, communicator.clone()).unwrap();
+        solver.step(0.01).unwrap();
+        solver.step(0.01).unwrap();
+        let mut fields = Hdf5Fields::create(out, &case, &communicator)
+            .unwrap()
+            .unwrap();
+        fields.write(&mut solver, 1000.0, &[]).unwrap();
+        let case = grain_case();
+        let system = grainflow::scene::build_on(&case, communicator.clone()).unwrap();
+        let mut particles = Hdf5Particles::create(out, &case, &communicator)
+            .unwrap()
+            .unwrap();
+        particles.write(&system).unwrap();
+    }
+
+    #[test]
+    fn rank_side_of_the_two_rank_run() {
+        let Ok(out) = std::env::var(OUT) else {
+            return;
+        };
+        let universe = grainflow_core::communicator::mpi_backend::initialize().unwrap();
+        write_frames(Path::new(&out), Communicator::world(universe.world()));
+    }
+
+    fn datasets(path: &Path) -> BTreeMap<String, Vec<f64>> {
+        let file = File::open(path).unwrap();
+        let mut found = BTreeMap::new();
+        for name in file.member_names().unwrap() {
+            if let Ok(dataset) = file.dataset(&name) {
+                found.insert(name, dataset.read_raw::<f64>().unwrap());
+            }
+        }
+        if file.group("grid").is_ok() {
+            for axis in ["x", "y", "z"] {
+                let name = format!("grid/{axis}");
+                let faces = file.dataset(&name).unwrap().read_raw().unwrap();
+                found.insert(name, faces);
+            }
+        }
+        found
+    }
+
+    /// Each grain's datasets' rows, by id.
+    fn grains(path: &Path) -> BTreeMap<u64, Vec<f64>> {
+        let all = datasets(path);
+        let ids: Vec<u64> = File::open(path)
+            .unwrap()
+            .dataset("id")
+            .unwrap()
+            .read_raw()
+            .unwrap();
+        let n = ids.len();
+        ids.iter()
+            .enumerate()
+            .map(|(k, &id)| {
+                let row = all
+                    .iter()
+                    .filter(|(name, _)| !name.starts_with("grid/"))
+                    .flat_map(|(_, v)| {
+                        let width = v.len() / n.max(1);
+                        v[k * width..(k + 1) * width].to_vec()
+                    })
+                    .collect();
+                (id, row)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn two_ranks_write_the_frames_of_one() {
+        if std::env::var_os(OUT).is_some() {
+            return;
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let (one, two) = (dir.path().join("one"), dir.path().join("two"));
+        std::fs::create_dir_all(&one).unwrap();
+        std::fs::create_dir_all(&two).unwrap();
+        write_frames(&one, Communicator::serial());
+        let run = std::process::Command::new("mpirun")
+            .args(["-n", "2", "--oversubscribe"])
+            .arg(std::env::current_exe().unwrap())
+            .args([
+                "--exact",
+                "on_two_ranks::rank_side_of_the_two_rank_run",
+                "--test-threads=1",
+            ])
+            .env(OUT, &two)
+            .output()
+            .expect("mpirun starts (is Open MPI installed?)");
+        assert!(
+            run.status.success(),
+            "mpirun: {}\n{}\n{}",
+            run.status,
+            String::from_utf8_lossy(&run.stdout),
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let fields = "fields/fields_000000.h5";
+        let (serial, shared) = (datasets(&one.join(fields)), datasets(&two.join(fields)));
+        assert_eq!(
+            serial.keys().collect::<Vec<_>>(),
+            shared.keys().collect::<Vec<_>>()
+        );
+        for (name, values) in &serial {
+            let other = &shared[name];
+            assert_eq!(values.len(), other.len(), "{name}");
+            let worst = values
+                .iter()
+                .zip(other)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            // The flow's contract across decompositions: round-off.
+            assert!(worst < 1e-10, "{name}: {worst:e}");
+        }
+        let particles = "particles/particles_000000.h5";
+        let (serial, shared) = (grains(&one.join(particles)), grains(&two.join(particles)));
+        assert_eq!(serial.len(), 300);
+        assert_eq!(serial, shared);
+        for index in ["fields.xdmf", "particles.xdmf"] {
+            let a = std::fs::read_to_string(one.join(index)).unwrap();
+            let b = std::fs::read_to_string(two.join(index)).unwrap();
+            assert_eq!(a, b, "{index}");
+        }
+    }
+}
