@@ -16,10 +16,9 @@
 //! fastest, which is XDMF's and the solver's order, so a rank's block is a
 //! hyperslab written as it is held.
 
-use super::{check_name, invalid, scalar_attribute, text_attribute, write_frame, Writers};
+use super::{block, check_name, invalid, scalar_attribute, text_attribute, write_frame, Writers};
 use crate::vtk::CellLayout;
 use hdf5_metno::Group;
-use ndarray::{s, ArrayView1, ArrayView3, ArrayView4};
 use std::path::Path;
 
 /// Cell-centred fields at one output time, seen from one writer: its block
@@ -49,7 +48,7 @@ impl FieldFrameH5<'_> {
     /// it with its own block, the same names and the same global grid).
     pub fn write(&self, path: &Path, writers: &Writers) -> std::io::Result<()> {
         self.check(path)?;
-        write_frame(path, writers, |file| self.fill(file))
+        write_frame(path, writers, |file| self.fill(file, writers))
     }
 
     /// Refuses a frame whose arrays do not match its block.
@@ -95,28 +94,26 @@ impl FieldFrameH5<'_> {
         Ok(())
     }
 
-    fn fill(&self, file: &hdf5_metno::File) -> hdf5_metno::Result<()> {
+    fn fill(&self, file: &hdf5_metno::File, writers: &Writers) -> hdf5_metno::Result<()> {
         let [gx, gy, gz] = self.global_cells;
         let [ox, oy, oz] = self.offset;
         let [nx, ny, nz] = self.cells;
-        let block = s![oz..oz + nz, oy..oy + ny, ox..ox + nx];
         for (name, values) in self.scalars {
-            let view = ArrayView3::from_shape((nz, ny, nx), values).map_err(shape_error)?;
-            file.new_dataset::<f64>()
+            let dataset = file
+                .new_dataset::<f64>()
                 .shape([gz, gy, gx])
-                .create(*name)?
-                .write_slice(view, block)?;
+                .create(*name)?;
+            writers.write_block(&dataset, block(values, &[nz, ny, nx])?, &[oz, oy, ox])?;
         }
-        let block = s![oz..oz + nz, oy..oy + ny, ox..ox + nx, ..];
         for (name, values) in self.vectors {
-            let view = ArrayView4::from_shape((nz, ny, nx, 3), values.as_flattened())
-                .map_err(shape_error)?;
-            file.new_dataset::<f64>()
+            let dataset = file
+                .new_dataset::<f64>()
                 .shape([gz, gy, gx, 3])
-                .create(*name)?
-                .write_slice(view, block)?;
+                .create(*name)?;
+            let values = block(values.as_flattened(), &[nz, ny, nx, 3])?;
+            writers.write_block(&dataset, values, &[oz, oy, ox, 0])?;
         }
-        self.fill_grid(&file.create_group("grid")?)?;
+        self.fill_grid(&file.create_group("grid")?, writers)?;
         scalar_attribute(file, "time", &self.time)?;
         file.new_attr::<u64>()
             .shape([3])
@@ -128,8 +125,8 @@ impl FieldFrameH5<'_> {
     /// The group `grid`: face coordinates along each axis. Along an axis,
     /// the ranks at the lower end of the other two axes write their faces
     /// (every face once: a rank also writes its upper face only at the
-    /// grid's upper end).
-    fn fill_grid(&self, grid: &Group) -> hdf5_metno::Result<()> {
+    /// grid's upper end); the others take part with nothing.
+    fn fill_grid(&self, grid: &Group, writers: &Writers) -> hdf5_metno::Result<()> {
         let faces: [Vec<f64>; 3] = [0, 1, 2].map(|axis| match self.layout {
             CellLayout::Uniform { origin, spacing } => (0..=self.cells[axis])
                 .map(|i| origin[axis] + (self.offset[axis] + i) as f64 * spacing[axis])
@@ -142,13 +139,14 @@ impl FieldFrameH5<'_> {
                 .shape([self.global_cells[axis] + 1])
                 .create(name)?;
             let others_at_start = (0..3).filter(|&a| a != axis).all(|a| self.offset[a] == 0);
-            if others_at_start {
-                let start = self.offset[axis];
-                let at_end = start + self.cells[axis] == self.global_cells[axis];
-                let count = self.cells[axis] + usize::from(at_end);
-                let view = ArrayView1::from(&faces[axis][..count]);
-                dataset.write_slice(view, s![start..start + count])?;
-            }
+            let start = self.offset[axis];
+            let at_end = start + self.cells[axis] == self.global_cells[axis];
+            let count = if others_at_start {
+                self.cells[axis] + usize::from(at_end)
+            } else {
+                0
+            };
+            writers.write_block(&dataset, block(&faces[axis][..count], &[count])?, &[start])?;
         }
         match self.layout {
             CellLayout::Uniform { origin, spacing } => {
@@ -166,8 +164,4 @@ impl FieldFrameH5<'_> {
         }
         Ok(())
     }
-}
-
-fn shape_error(e: ndarray::ShapeError) -> hdf5_metno::Error {
-    hdf5_metno::Error::from(format!("array shape: {e}"))
 }

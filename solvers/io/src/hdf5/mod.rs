@@ -14,10 +14,11 @@
 //! library) every rank writes its share of the one file of a frame through
 //! MPI-IO ([`Writers::mpi`]): the file, its datasets and attributes are
 //! created by all ranks together (HDF5's collective metadata calls), then
-//! each rank writes its own hyperslab (independent transfers: a rank may
-//! have nothing to write). A frame is written under `NAME.tmp` and renamed
-//! once every rank has closed it, as [`crate::write_whole`] does, so a
-//! killed run never leaves a frame cut short under its name.
+//! every rank writes its own hyperslab of each dataset in one collective
+//! transfer (`H5FD_MPIO_COLLECTIVE`; a rank with nothing to write takes
+//! part with an empty selection). A frame is written under `NAME.tmp` and
+//! renamed once every rank has closed it, as [`crate::write_whole`] does,
+//! so a killed run never leaves a frame cut short under its name.
 //!
 //! Every error comes back as an [`std::io::Error`] naming the file. On
 //! several ranks an error on one rank leaves the others in a collective
@@ -36,6 +37,7 @@ pub use particles::ParticleFrameH5;
 pub use xdmf::{FieldGridDescription, XdmfIndex};
 
 use crate::whole::temporary_path;
+use ndarray::{ArrayViewD, IxDyn};
 use std::marker::PhantomData;
 use std::path::Path;
 
@@ -112,6 +114,99 @@ impl<'a> Writers<'a> {
         local
     }
 
+    /// Writes `block` into `dataset` from the index `start`. On several
+    /// ranks every writer calls it for every dataset in the same order (a
+    /// collective transfer), those with nothing to write with an empty
+    /// block.
+    pub(crate) fn write_block<T: hdf5_metno::H5Type>(
+        &self,
+        dataset: &hdf5_metno::Dataset,
+        block: ArrayViewD<'_, T>,
+        start: &[usize],
+    ) -> hdf5_metno::Result<()> {
+        use hdf5_sys::h5d::H5Dwrite;
+        use hdf5_sys::h5p::{H5Pclose, H5P_DEFAULT};
+        use hdf5_sys::h5s::{H5S_seloper_t, H5Sselect_hyperslab, H5Sselect_none};
+        let count = block.shape().to_vec();
+        let n = block.len();
+        let Some(values) = block.as_slice() else {
+            return Err("a block not in C order".into());
+        };
+        if start.len() != count.len() {
+            return Err(format!("a block of {count:?} from {start:?}").into());
+        }
+        let file_space = dataset.space()?;
+        let memory_space = hdf5_metno::Dataspace::try_new(count.clone())?;
+        let memory_type = hdf5_metno::Datatype::from_type::<T>()?;
+        let start: Vec<u64> = start.iter().map(|&s| s as u64).collect();
+        let count: Vec<u64> = count.iter().map(|&c| c as u64).collect();
+        let transfer = self.transfer_list()?;
+        // SAFETY: every id is open for the call (owned by the handles
+        // above or closed below), the selections hold `n` elements each and
+        // `values` holds `n` elements of the memory type; HDF5's calls are
+        // serialised by hdf5-metno's lock.
+        let status = hdf5_metno::sync::sync(|| unsafe {
+            let selected = if n == 0 {
+                H5Sselect_none(file_space.id()).min(H5Sselect_none(memory_space.id()))
+            } else {
+                H5Sselect_hyperslab(
+                    file_space.id(),
+                    H5S_seloper_t::H5S_SELECT_SET,
+                    start.as_ptr(),
+                    std::ptr::null(),
+                    count.as_ptr(),
+                    std::ptr::null(),
+                )
+            };
+            let written = if selected < 0 {
+                selected
+            } else {
+                H5Dwrite(
+                    dataset.id(),
+                    memory_type.id(),
+                    memory_space.id(),
+                    file_space.id(),
+                    transfer.unwrap_or(H5P_DEFAULT),
+                    values.as_ptr().cast(),
+                )
+            };
+            if let Some(list) = transfer {
+                H5Pclose(list);
+            }
+            written
+        });
+        if status < 0 {
+            return Err(format!("writing {} ({count:?} from {start:?})", dataset.name()).into());
+        }
+        Ok(())
+    }
+
+    /// A transfer property list of collective MPI-IO on several ranks, or
+    /// `None` (HDF5's default) for one process; the caller closes it.
+    fn transfer_list(&self) -> hdf5_metno::Result<Option<hdf5_sys::h5i::hid_t>> {
+        #[cfg(feature = "mpi")]
+        if self.communicator.is_some() {
+            use hdf5_sys::h5p::{
+                H5FD_mpio_xfer_t, H5Pclose, H5Pcreate, H5Pset_dxpl_mpio, H5P_CLS_DATASET_XFER,
+            };
+            // SAFETY: the class id is HDF5's (initialised: a file is open);
+            // the list is closed here on failure, by the caller otherwise.
+            let list = hdf5_metno::sync::sync(|| unsafe {
+                let list = H5Pcreate(*H5P_CLS_DATASET_XFER);
+                if list >= 0 && H5Pset_dxpl_mpio(list, H5FD_mpio_xfer_t::H5FD_MPIO_COLLECTIVE) < 0 {
+                    H5Pclose(list);
+                    return -1;
+                }
+                list
+            });
+            if list < 0 {
+                return Err("a collective MPI-IO transfer list".into());
+            }
+            return Ok(Some(list));
+        }
+        Ok(None)
+    }
+
     /// Creates (truncates) `path` for writing by every writer.
     fn create_file(&self, path: &Path) -> hdf5_metno::Result<hdf5_metno::File> {
         #[cfg(feature = "mpi")]
@@ -129,6 +224,15 @@ impl std::fmt::Debug for Writers<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "rank {} of {} HDF5 writers", self.rank(), self.size())
     }
+}
+
+/// `values` as the block of shape `shape` (C order) they must fill.
+pub(crate) fn block<'a, T>(
+    values: &'a [T],
+    shape: &[usize],
+) -> hdf5_metno::Result<ArrayViewD<'a, T>> {
+    ArrayViewD::from_shape(IxDyn(shape), values)
+        .map_err(|e| format!("{} values for a block of {shape:?}: {e}", values.len()).into())
 }
 
 /// An [`std::io::Error`] for a failure on `path`.

@@ -13,9 +13,8 @@
 //! sum of the counts, gathered from every rank) and each rank writes its
 //! rows into the one file through parallel HDF5.
 
-use super::{check_name, invalid, scalar_attribute, write_frame, Writers};
+use super::{block, check_name, invalid, scalar_attribute, write_frame, Writers};
 use hdf5_metno::{Dataset, File, H5Type};
-use ndarray::{s, ArrayView1, ArrayView2};
 use std::path::Path;
 
 /// The grains one writer owns at one output time (each slice one entry per
@@ -63,21 +62,20 @@ impl ParticleFrameH5<'_> {
         let start: usize = counts[..writers.rank()].iter().sum();
         let total: usize = counts.iter().sum();
         write_frame(path, writers, |file| {
-            let rows = start..start + n;
             for (name, values) in [
                 ("position", self.position),
                 ("velocity", self.velocity),
                 ("angular_velocity", self.angular_velocity),
                 ("force", self.force),
             ] {
-                let view = ArrayView2::from_shape((n, 3), values.as_flattened())
-                    .map_err(|e| hdf5_metno::Error::from(format!("{name}: {e}")))?;
-                dataset::<f64>(file, name, &[total, 3])?.write_slice(view, s![rows.clone(), ..])?;
+                let dataset = dataset::<f64>(file, name, &[total, 3])?;
+                let values = block(values.as_flattened(), &[n, 3])?;
+                writers.write_block(&dataset, values, &[start, 0])?;
             }
-            column(file, "radius", self.radius, total, start)?;
-            column(file, "id", self.id, total, start)?;
-            column(file, "contacts", self.contacts, total, start)?;
-            column(file, "fixed", self.fixed, total, start)?;
+            column_of(file, writers, "radius", self.radius, total, start)?;
+            column_of(file, writers, "id", self.id, total, start)?;
+            column_of(file, writers, "contacts", self.contacts, total, start)?;
+            column_of(file, writers, "fixed", self.fixed, total, start)?;
             scalar_attribute(file, "time", &self.time)?;
             scalar_attribute(file, "count", &(total as u64))?;
             Ok(())
@@ -91,13 +89,14 @@ fn dataset<T: H5Type>(file: &File, name: &str, shape: &[usize]) -> hdf5_metno::R
 }
 
 /// A dataset of `total` entries whose rows `start..` are `values`.
-fn column<T: H5Type>(
+fn column_of<T: H5Type>(
     file: &File,
+    writers: &Writers,
     name: &str,
     values: &[T],
     total: usize,
     start: usize,
 ) -> hdf5_metno::Result<()> {
-    dataset::<T>(file, name, &[total])?
-        .write_slice(ArrayView1::from(values), s![start..start + values.len()])
+    let dataset = dataset::<T>(file, name, &[total])?;
+    writers.write_block(&dataset, block(values, &[values.len()])?, &[start])
 }
