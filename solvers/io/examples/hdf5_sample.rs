@@ -6,7 +6,7 @@
 //!   (pressure, solid_fraction, velocity, vorticity) at t = 0, 0.5, 1;
 //! - `stretched.xdmf`: one frame of a 2D grid of 5 × 4 cells stretched
 //!   along y (one cell thick along z), at t = 0.25;
-//! - `particles.xdmf`: two frames of 7 and then 9 grains at t = 0, 0.5.
+//! - `particles.xdmf`: three frames of 7, 9 and no grains at t = 0, 0.5, 1.
 //!
 //! Every value is a function of the cell, the field and the time, so a
 //! reader can check them against the HDF5 datasets. The same frames are
@@ -72,7 +72,7 @@ fn main() -> std::io::Result<()> {
 
     let mut index = XdmfIndex::new(dir.join("particles.xdmf"), "particles");
     let mut pvd = PvdIndex::new(dir.join("particles.pvd"));
-    for (frame, (time, n)) in [(0.0, 7u64), (0.5, 9)].into_iter().enumerate() {
+    for (frame, (time, n)) in [(0.0, 7u64), (0.5, 9), (1.0, 0)].into_iter().enumerate() {
         let name = format!("particles/particles_{frame:06}");
         let id: Vec<u64> = (0..n).collect();
         let v = |s: f64| -> Vec<[f64; 3]> {
