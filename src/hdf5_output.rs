@@ -19,10 +19,19 @@
 //! if let Some(p) = &mut particles { p.write(&system)?; }
 //! ```
 //!
-//! With `output.format = "hdf5"` the run skips `FieldFiles` and the `.vtp`
-//! files of `Outputs::write_frame` (its `series.csv` row stays). An error
-//! on one rank leaves the others in a collective call: the run loop stops
-//! the job with `Communicator::abort_others`, as for the VTK files.
+//! Still to be done where the run loop lives (these writers are not called
+//! yet):
+//! - with `output.format = "hdf5"`, skip `FieldFiles` and the `.vtp` files
+//!   of `Outputs::write_frame` (its `series.csv` row stays), and call the
+//!   writers above at the same output times;
+//! - `output::clear_earlier_run` should own the HDF5 outputs too:
+//!   `fields.xdmf` and `particles.xdmf` in `OWNED_FILES`, the extension
+//!   `h5` in `OWNED_FRAMES` for `fields/` and `particles/` (a frame's
+//!   temporary is `NAME.h5.tmp`, which `is_owned_frame` already strips).
+//!
+//! An error on one rank leaves the others in a collective call: the run
+//! loop stops the job with `Communicator::abort_others`, as for the VTK
+//! files.
 
 use crate::case::{Case, OutputFormat};
 use crate::fluid_simulation::cell_fields;
