@@ -653,6 +653,32 @@ pub struct OutputSection {
     /// Write fluid field files (velocity, pressure, vorticity) for ParaView.
     #[serde(default = "default_true")]
     pub fields: bool,
+    /// The format of the particle and field files (default `"vtk"`).
+    #[serde(default, skip_serializing_if = "OutputFormat::is_vtk")]
+    pub format: OutputFormat,
+}
+
+/// The format of a run's particle and field files.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OutputFormat {
+    /// VTK XML: `particles/*.vtp` and `fields/*.vti` (`.vtr` on a
+    /// stretched grid), one piece per rank, indexed by `particles.pvd` and
+    /// `fields.pvd`.
+    #[default]
+    Vtk,
+    /// HDF5: `particles/particles_NNNNNN.h5` and `fields/fields_NNNNNN.h5`,
+    /// one file per output time on any number of ranks, indexed by the
+    /// XDMF files `particles.xdmf` and `fields.xdmf` (needs a build with
+    /// the cargo feature `hdf5`).
+    Hdf5,
+}
+
+impl OutputFormat {
+    /// Whether this is the default format, VTK.
+    pub fn is_vtk(&self) -> bool {
+        *self == OutputFormat::Vtk
+    }
 }
 
 impl Default for OutputSection {
@@ -662,6 +688,7 @@ impl Default for OutputSection {
             tracked_interval: None,
             particles: true,
             fields: true,
+            format: OutputFormat::Vtk,
         }
     }
 }
@@ -1882,6 +1909,16 @@ impl Case {
         }
         if let Some(i) = self.output.tracked_interval {
             positive("output.tracked_interval", i)?;
+        }
+        if self.output.format == OutputFormat::Hdf5 && !cfg!(feature = "hdf5") {
+            return Err(invalid(
+                "output.format",
+                "\"hdf5\"",
+                "this grainflow was built without the HDF5 writers: build it with \
+                 `cargo build --release --features hdf5` (needs the system's HDF5 library, e.g. \
+                 Debian's libhdf5-dev; with --features mpi too, libhdf5-openmpi-dev), or use \
+                 output.format = \"vtk\"",
+            ));
         }
         if self.time.cfl.is_some() && self.time.dt.is_some() && !coupled {
             return Err(invalid(

@@ -19,6 +19,8 @@ pub mod deposit;
 pub mod fluid_scene;
 pub mod footprint;
 pub mod grain_pairs;
+#[cfg(feature = "hdf5")]
+pub mod hdf5_output;
 pub mod initial_overlaps;
 pub mod output;
 pub mod pouring;

@@ -240,7 +240,7 @@ fn sigterm_stops_a_run_with_a_checkpoint_and_status_75_and_it_resumes_to_the_sam
         if resumes > 0 {
             args.extend(["--restart", "latest"]);
         }
-        let mut child = start("binary_collision.toml", &pieces, &args);
+        let child = start("binary_collision.toml", &pieces, &args);
         // Stopped twice, once it has written some rows past where it began.
         let begun = rows(&pieces.join("series.csv"));
         if resumes < 2 {

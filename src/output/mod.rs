@@ -43,6 +43,8 @@ pub const OWNED_FILES: &[&str] = &[
     "final_particles.csv",
     "fields.pvd",
     "particles.pvd",
+    "fields.xdmf",
+    "particles.xdmf",
     "collisions.csv",
     "silo_profile.csv",
     "kinetic_to_potential.csv",
@@ -57,8 +59,8 @@ pub const OWNED_FILES: &[&str] = &[
 /// piece indexes (e.g. `fields/fields_000012.vti`,
 /// `particles/particles_000003_0001.vtp`, `fields/fields_000004.pvti`).
 const OWNED_FRAMES: &[(&str, &str, &[&str])] = &[
-    ("fields", "fields_", &["vti", "vtr", "pvti", "pvtr"]),
-    ("particles", "particles_", &["vtp", "pvtp"]),
+    ("fields", "fields_", &["vti", "vtr", "pvti", "pvtr", "h5"]),
+    ("particles", "particles_", &["vtp", "pvtp", "h5"]),
 ];
 
 /// Whether `name` (in the frame folder of `prefix`) is a frame a run

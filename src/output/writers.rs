@@ -12,7 +12,7 @@ use super::fields::FieldFiles;
 use super::grains::{grain_series_row, write_tracked, ParticleFiles, GRAIN_SERIES, TRACKED};
 use super::RunDirectory;
 use crate::bed_analysis::{BedRecord, InclinedBed};
-use crate::case::Case;
+use crate::case::{Case, OutputFormat};
 use crate::simulation::model::Model;
 use grainflow_core::Communicator;
 use grainflow_io::CsvSeries;
@@ -62,6 +62,9 @@ pub struct WritersRecord {
     pub particle_entries: Vec<(f64, String)>,
     pub field_frames: usize,
     pub field_entries: Vec<(f64, String)>,
+    /// HDF5 frames written and the grids of their XDMF indices.
+    pub hdf5_fields: (usize, Vec<String>),
+    pub hdf5_particles: (usize, Vec<String>),
     pub wall_seconds: f64,
     pub output_seconds: f64,
     pub checkpoint_seconds: f64,
@@ -76,6 +79,10 @@ pub struct Writers {
     tracked_ids: Vec<u64>,
     particles: Option<ParticleFiles>,
     fields: Option<FieldFiles>,
+    #[cfg(feature = "hdf5")]
+    hdf5_fields: Option<crate::hdf5_output::Hdf5Fields>,
+    #[cfg(feature = "hdf5")]
+    hdf5_particles: Option<crate::hdf5_output::Hdf5Particles>,
     pub bed: Option<InclinedBed>,
     /// The clock of this piece of the run, and the seconds of the pieces
     /// before it (a resumed run).
@@ -126,6 +133,7 @@ impl Writers {
         let grains = model.grains().is_some();
         let flow = model.has_flow();
         let series_header: &[&str] = if grains { &GRAIN_SERIES } else { &FLOW_SERIES };
+        let vtk = case.output.format == OutputFormat::Vtk;
         let mut writers = Writers {
             series: series(
                 root,
@@ -152,12 +160,34 @@ impl Writers {
             } else {
                 Vec::new()
             },
-            particles: (grains && case.output.particles)
+            particles: (vtk && grains && case.output.particles)
                 .then(|| ParticleFiles::create(&dir, communicator.clone(), record.particle_entries))
                 .transpose()?,
-            fields: (flow && case.output.fields)
+            fields: (vtk && flow && case.output.fields)
                 .then(|| FieldFiles::create(&dir, case, root, record.field_entries))
                 .transpose()?,
+            #[cfg(feature = "hdf5")]
+            hdf5_fields: if flow {
+                crate::hdf5_output::Hdf5Fields::create(
+                    &dir,
+                    case,
+                    communicator,
+                    record.hdf5_fields,
+                )?
+            } else {
+                None
+            },
+            #[cfg(feature = "hdf5")]
+            hdf5_particles: if grains {
+                crate::hdf5_output::Hdf5Particles::create(
+                    &dir,
+                    case,
+                    communicator,
+                    record.hdf5_particles,
+                )?
+            } else {
+                None
+            },
             bed: None,
             run,
             started: Instant::now(),
@@ -202,6 +232,10 @@ impl Writers {
             if let Some(files) = &mut self.particles {
                 files.write(system)?;
             }
+            #[cfg(feature = "hdf5")]
+            if let Some(files) = &mut self.hdf5_particles {
+                files.write(system)?;
+            }
         }
         if let Some(row) = model.flow_row(dt) {
             let series = if model.grains().is_some() {
@@ -213,8 +247,19 @@ impl Writers {
                 series.row(&row)?;
             }
         }
-        if let Some(files) = &mut self.fields {
-            model.write_fields(files)?;
+        if let Some(output) = model.field_output() {
+            let extra: Vec<(&str, &[f64])> = output
+                .solid_fraction
+                .iter()
+                .map(|s| ("solid_fraction", s.as_slice()))
+                .collect();
+            if let Some(files) = &mut self.fields {
+                files.write(output.solver, output.density, &extra)?;
+            }
+            #[cfg(feature = "hdf5")]
+            if let Some(files) = &mut self.hdf5_fields {
+                files.write(output.solver, output.density, &extra)?;
+            }
         }
         if let (Some(bed), Model::Coupled(coupled)) = (&mut self.bed, &*model) {
             bed.sample(&coupled.system)?;
@@ -259,6 +304,22 @@ impl Writers {
                 .map_or_else(Vec::new, |f| f.entries()),
             field_frames: self.fields.as_ref().map_or(0, |f| f.frames),
             field_entries: self.fields.as_ref().map_or_else(Vec::new, |f| f.entries()),
+            #[cfg(feature = "hdf5")]
+            hdf5_fields: self
+                .hdf5_fields
+                .as_ref()
+                .map(|f| f.record())
+                .unwrap_or_default(),
+            #[cfg(feature = "hdf5")]
+            hdf5_particles: self
+                .hdf5_particles
+                .as_ref()
+                .map(|f| f.record())
+                .unwrap_or_default(),
+            #[cfg(not(feature = "hdf5"))]
+            hdf5_fields: Default::default(),
+            #[cfg(not(feature = "hdf5"))]
+            hdf5_particles: Default::default(),
             wall_seconds: self.wall_seconds(),
             output_seconds: self.output_seconds,
             checkpoint_seconds: self.checkpoint_seconds,

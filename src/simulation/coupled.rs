@@ -7,7 +7,6 @@ use super::dry::shortest_contact_time;
 use super::fluid::cfl_overrun;
 use crate::case::{AnalysisSection, Case};
 use crate::coupled_analysis::SphereInFluid;
-use crate::output::fields::FieldFiles;
 use crate::stability::TimeStepVerdict;
 use crate::{fluid_scene, scene, sharing, stability, RunError};
 use grainflow_core::{Communicator, State, StateError};
@@ -365,16 +364,6 @@ impl CoupledModel {
             flow.max_cfl(dt),
             self.max_divergence,
         ]
-    }
-
-    /// A field file with the solid fraction beside the flow's fields.
-    pub fn write_fields(&mut self, files: &mut FieldFiles) -> std::io::Result<()> {
-        let system = &mut self.system;
-        let solid = system
-            .immersed
-            .cell_solid_fraction(&system.flow.grid, &system.dem.particles);
-        let density = system.fluid_density;
-        files.write(&mut system.flow, density, &[("solid_fraction", &solid)])
     }
 
     /// The mean grain CFL number over the run (0 if no grain moved).

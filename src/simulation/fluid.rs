@@ -4,7 +4,6 @@
 
 use crate::case::{AnalysisSection, Case};
 use crate::fluid_scene::{self, ChannelProfile, ExactFlow};
-use crate::output::fields::FieldFiles;
 use crate::{sharing, RunError};
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_fluid::{FlowSolver, Location, StepReport, ViscousScheme, CFL_LIMIT};
@@ -196,8 +195,9 @@ impl FluidModel {
         ]
     }
 
-    pub fn write_fields(&mut self, files: &mut FieldFiles) -> std::io::Result<()> {
-        files.write(&mut self.solver, self.density, &[])
+    /// The fluid's density [kg/m³] (the solver works per unit density).
+    pub fn density(&self) -> f64 {
+        self.density
     }
 
     pub fn metrics(&self, case: &Case) -> Map<String, Value> {

@@ -7,12 +7,19 @@ use super::coupled::CoupledModel;
 use super::dry::DryModel;
 use super::fluid::FluidModel;
 use crate::case::Case;
-use crate::output::fields::FieldFiles;
 use crate::RunError;
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_dem::DemSystem;
+use grainflow_fluid::FlowSolver;
 use serde_json::{Map, Value};
 use std::path::Path;
+
+/// What a field file of the flow is written from.
+pub struct FieldOutput<'a> {
+    pub solver: &'a mut FlowSolver,
+    pub density: f64,
+    pub solid_fraction: Option<Vec<f64>>,
+}
 
 pub enum Model {
     Dry(Box<DryModel>),
@@ -127,11 +134,28 @@ impl Model {
         }
     }
 
-    pub fn write_fields(&mut self, files: &mut FieldFiles) -> std::io::Result<()> {
+    /// The flow and what its field files hold besides velocity, pressure
+    /// and vorticity (the solid fraction of grains in a fluid), if the
+    /// scene has a fluid.
+    pub fn field_output(&mut self) -> Option<FieldOutput<'_>> {
         match self {
-            Model::Dry(_) => Ok(()),
-            Model::Fluid(m) => m.write_fields(files),
-            Model::Coupled(m) => m.write_fields(files),
+            Model::Dry(_) => None,
+            Model::Fluid(m) => Some(FieldOutput {
+                density: m.density(),
+                solver: &mut m.solver,
+                solid_fraction: None,
+            }),
+            Model::Coupled(m) => {
+                let system = &mut m.system;
+                let solid = system
+                    .immersed
+                    .cell_solid_fraction(&system.flow.grid, &system.dem.particles);
+                Some(FieldOutput {
+                    density: system.fluid_density,
+                    solver: &mut system.flow,
+                    solid_fraction: Some(solid),
+                })
+            }
         }
     }
 

@@ -45,8 +45,8 @@ pub fn simulate(
             writers.run.log(line);
         }
     }
-    for warning in warnings.to_vec() {
-        writers.run.warn(&warning);
+    for warning in warnings {
+        writers.run.warn(warning);
     }
     let end = case.time.end;
     if !resumed {

@@ -56,6 +56,13 @@ impl Communicator {
         }
     }
 
+    /// The MPI communicator of the ranks (None for the serial one), for
+    /// libraries that take one themselves, e.g. parallel HDF5.
+    #[cfg(feature = "mpi")]
+    pub fn mpi(&self) -> Option<&mpi::topology::SimpleCommunicator> {
+        self.world.as_ref().map(|world| &world.communicator)
+    }
+
     pub fn rank(&self) -> usize {
         self.rank
     }

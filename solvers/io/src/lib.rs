@@ -1,9 +1,13 @@
 //! grainflow output writers: VTK PolyData particle files and ImageData
 //! field files with a ParaView time-series index (`.pvd`), and CSV series
 //! written row by row. Files written in one go are written whole
-//! ([`whole`]): under a temporary name, then renamed.
+//! ([`whole`]): under a temporary name, then renamed. With the cargo
+//! feature `hdf5`, [`hdf5`] writes the same frames as HDF5 files indexed
+//! by XDMF (one file per frame on any number of MPI ranks).
 
 pub mod csv;
+#[cfg(feature = "hdf5")]
+pub mod hdf5;
 pub mod vtk;
 pub mod whole;
 
