@@ -375,3 +375,82 @@ fn check_warns_of_light_grains_below_the_tested_density_ratios() {
     );
     assert!(!tested.contains("warning: density ratio"), "{tested}");
 }
+
+/// Bad input of every kind: exit status 2, a message naming what is wrong
+/// and what is allowed, no panic, and nothing written.
+#[test]
+fn a_sweep_of_bad_inputs_gets_status_2_a_named_reason_and_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let malformed = dir.path().join("malformed.toml");
+    std::fs::write(&malformed, "[time\nend = 1.0\n").unwrap();
+    let a_file = dir.path().join("a_file");
+    std::fs::write(&a_file, "not a folder").unwrap();
+    let out = dir.path().join("out");
+    let bouncing = case("bouncing_dry.toml");
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec![malformed.display().to_string()], "malformed.toml"),
+        (
+            vec![bouncing.clone(), "--set".into(), "time.end=\"soon\"".into()],
+            "time.end",
+        ),
+        (
+            vec![bouncing.clone(), "--set".into(), "time.end=-1".into()],
+            "time.end",
+        ),
+        (
+            vec![bouncing.clone(), "--set".into(), "checkpoint.keep=0".into()],
+            "checkpoint.keep",
+        ),
+        (
+            vec![bouncing.clone(), "--set".into(), "time.wall_limit=0".into()],
+            "time.wall_limit",
+        ),
+        (
+            vec![
+                bouncing.clone(),
+                "--set".into(),
+                "checkpoint.every=3".into(),
+            ],
+            "every",
+        ),
+        (
+            vec![bouncing.clone(), "--restart".into(), "latest".into()],
+            "--restart",
+        ),
+        (
+            vec![
+                bouncing.clone(),
+                "--restart".into(),
+                dir.path().join("nowhere").display().to_string(),
+            ],
+            "nowhere",
+        ),
+    ];
+    for (args, named) in cases {
+        let result = grainflow()
+            .arg("run")
+            .args(&args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(named), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+    // An output folder that cannot be made: its parent is a file.
+    let result = grainflow()
+        .args(["run", &bouncing, "--out"])
+        .arg(a_file.join("out"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--out") && stderr.contains("not a folder"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read_to_string(&a_file).unwrap(), "not a folder");
+}

@@ -147,6 +147,81 @@ mod with_hdf5 {
         assert!(index.contains(&format!("NumberOfElements=\"{}\"", p.n_owned)));
     }
 
+    /// A run of grains in a fluid written as HDF5, resumed from its first
+    /// checkpoint into a copy of its folder: the same indices, byte for
+    /// byte, and the same arrays in its last frames.
+    #[test]
+    fn a_resumed_run_continues_its_hdf5_frames_and_indices() {
+        let overrides: Vec<String> = [
+            "output.format=\"hdf5\"",
+            "output.fields=true",
+            "output.interval=0.004",
+            "fluid.cells=[32,32,96]",
+            "time.end=0.02",
+            "checkpoint.steps=4",
+            "checkpoint.keep=10",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let case = Case::load(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/falling_sphere.toml"),
+            &overrides,
+        )
+        .unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let (whole, resumed) = (dir.path().join("whole"), dir.path().join("resumed"));
+        grainflow::simulation::run(&case, &whole, false).unwrap();
+        let copied = std::process::Command::new("cp")
+            .arg("-r")
+            .arg(&whole)
+            .arg(&resumed)
+            .status()
+            .unwrap();
+        assert!(copied.success());
+        let options = grainflow::simulation::RunOptions {
+            restart: Some(grainflow::simulation::Restart::From(
+                resumed.join("checkpoints/checkpoint_000000000004"),
+            )),
+            ..Default::default()
+        };
+        grainflow::simulation::run_with(&case, &resumed, Communicator::serial(), &options).unwrap();
+        for index in [
+            "fields.xdmf",
+            "particles.xdmf",
+            "series.csv",
+            "flow_series.csv",
+        ] {
+            let (a, b) = (
+                std::fs::read(whole.join(index)).unwrap(),
+                std::fs::read(resumed.join(index)).unwrap(),
+            );
+            assert!(a == b, "{index} differs after the restart");
+        }
+        let frames = std::fs::read_dir(whole.join("fields")).unwrap().count();
+        assert!(frames >= 3, "{frames} field frames");
+        for (folder, prefix, array) in [
+            ("fields", "fields", "velocity"),
+            ("particles", "particles", "position"),
+        ] {
+            let name = format!("{folder}/{prefix}_{:06}.h5", frames - 1);
+            let read = |run: &Path| -> Vec<f64> {
+                File::open(run.join(&name))
+                    .unwrap()
+                    .dataset(array)
+                    .unwrap()
+                    .read_raw::<f64>()
+                    .unwrap()
+            };
+            let (a, b) = (read(&whole), read(&resumed));
+            assert!(!a.is_empty());
+            assert!(
+                a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{name}: {array} differs"
+            );
+        }
+    }
+
     #[test]
     fn vtk_cases_get_no_hdf5_writers() {
         let case = taylor_green(&[]).unwrap();

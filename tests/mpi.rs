@@ -862,8 +862,8 @@ interval = 5.0e-4
 }
 
 /// The inclined bed and the column collapse on 2 ranks, resumed on 2 ranks
-/// from the checkpoint of their 4th step: the same bytes in every series as
-/// the run that never stopped.
+/// from their first checkpoint (step 4 of 16, step 100 of 1000): the same
+/// bytes in every series as the run that never stopped.
 #[test]
 fn runs_on_2_ranks_resume_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
@@ -878,7 +878,7 @@ fn runs_on_2_ranks_resume_bit_for_bit() {
             .replace("{TIME}", "end = 0.005"),
     )
     .unwrap();
-    let scenes: [(PathBuf, Vec<&str>, &[&str]); 2] = [
+    let scenes: [(PathBuf, Vec<&str>, &[&str], u64); 2] = [
         (
             root.join("cases/immersed_avalanche.toml"),
             vec![
@@ -894,16 +894,19 @@ fn runs_on_2_ranks_resume_bit_for_bit() {
                 "bed_series.csv",
                 "bed_profiles.csv",
             ],
+            4,
         ),
         (
             column,
             vec!["parallel.process_grid=[2,1,1]", "output.interval=0.0005"],
             &["series.csv", "tracked.csv", "final_particles.csv"],
+            100,
         ),
     ];
-    for (case, settings, files) in scenes {
+    for (case, settings, files, every) in scenes {
         let mut settings = settings;
-        settings.extend(["checkpoint.steps=4", "checkpoint.keep=100"]);
+        let every_steps = format!("checkpoint.steps={every}");
+        settings.extend([every_steps.as_str(), "checkpoint.keep=100"]);
         let whole = dir.path().join("whole");
         let (code, stderr) = run(&case, &whole, 2, &settings, Duration::from_secs(300));
         assert_eq!(code, 0, "{stderr}");
@@ -912,7 +915,10 @@ fn runs_on_2_ranks_resume_bit_for_bit() {
             .map(|e| e.unwrap().path())
             .min()
             .unwrap();
-        assert!(first.ends_with("checkpoint_000000000004"), "{first:?}");
+        assert!(
+            first.ends_with(format!("checkpoint_{every:012}")),
+            "{first:?}"
+        );
         let restart = format!("--restart={}", first.display());
         let resumed = dir.path().join("resumed");
         // The resumed folder as the stopped run left it: later rows too.

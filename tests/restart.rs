@@ -145,7 +145,15 @@ fn a_fluid_resumes_bit_for_bit() {
 
 #[test]
 fn grains_in_a_fluid_resume_bit_for_bit() {
-    resumes_bit_for_bit("falling_sphere.toml", &["time.end=0.03"], 4);
+    resumes_bit_for_bit(
+        "falling_sphere.toml",
+        &[
+            "time.end=0.02",
+            "fluid.cells=[32,32,96]",
+            "output.fields=true",
+        ],
+        2,
+    );
 }
 
 #[test]
@@ -285,37 +293,41 @@ fn sigterm_stops_a_run_with_a_checkpoint_and_status_75_and_it_resumes_to_the_sam
 fn a_kill_during_checkpoint_writes_leaves_a_checkpoint_to_resume_from() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    // A checkpoint at every step of a 410-grain column under hard contact:
-    // each is synced to disk, so that kills at a few moments land in or
-    // around writes.
-    let mut args = vec![
+    // A checkpoint at every step of a 410-grain column under hard contact,
+    // each synced to disk: a kill a few milliseconds after one is whole
+    // lands in or around the next write.
+    let settings = [
         "--set",
-        "time.end=0.05",
+        "time.end=0.04",
         "--set",
         "checkpoint.steps=1",
         "--set",
         "checkpoint.keep=2",
+        "--set",
+        "output.interval=0.002",
     ];
-    for (round, delay) in [150u64, 330, 470].into_iter().enumerate() {
+    let mut args = settings.to_vec();
+    args.extend(["--restart", "auto"]);
+    for delay in [3u64, 11, 23, 37] {
         let mut child = start("column_collapse_cocd_2d.toml", &out, &args);
+        let before = checkpoint::latest(&out);
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+        while checkpoint::latest(&out) == before {
+            assert!(
+                std::time::Instant::now() < deadline,
+                "no checkpoint written"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
         std::thread::sleep(std::time::Duration::from_millis(delay));
         signal(&child, "KILL");
         child.wait().unwrap();
-        if checkpoint::latest(&out).is_none() {
-            // Killed before the first checkpoint was whole: nothing to
-            // resume from, start again.
-            continue;
-        }
-        let latest = checkpoint::latest(&out).unwrap();
-        let manifest = checkpoint::read_manifest(&latest).unwrap();
+        let latest = checkpoint::latest(&out).expect("a checkpoint survives the kill");
+        checkpoint::read_manifest(&latest).unwrap();
         let state: State = checkpoint::read_state(&latest, 0).unwrap();
-        assert!(state.contains("dem.particles.position"), "round {round}");
-        assert!(manifest.steps > 0);
-        if round == 0 {
-            args.extend(["--restart", "auto"]);
-        }
+        assert!(state.contains("dem.particles.position"));
     }
-    // The last one resumes to the end.
+    // Resumed after four kills, it ends as the run that was never killed.
     let output = start("column_collapse_cocd_2d.toml", &out, &args)
         .wait_with_output()
         .unwrap();
@@ -324,6 +336,18 @@ fn a_kill_during_checkpoint_writes_leaves_a_checkpoint_to_resume_from() {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
+    let whole = dir.path().join("whole");
+    let output = start("column_collapse_cocd_2d.toml", &whole, &settings)
+        .wait_with_output()
+        .unwrap();
+    assert!(output.status.success());
+    for file in ["series.csv", "final_particles.csv"] {
+        let (a, b) = (
+            std::fs::read(whole.join(file)).unwrap(),
+            std::fs::read(out.join(file)).unwrap(),
+        );
+        assert!(a == b, "{file} differs after the kills");
+    }
 }
 
 #[test]

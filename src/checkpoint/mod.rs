@@ -92,8 +92,16 @@ pub fn write(
     let root = communicator.is_root();
     if root {
         std::fs::create_dir_all(&folder).map_err(|e| with_path(&folder, e))?;
-        if unfinished.exists() {
-            std::fs::remove_dir_all(&unfinished).map_err(|e| with_path(&unfinished, e))?;
+        // What killed writes left (this step's included).
+        for entry in std::fs::read_dir(&folder).map_err(|e| with_path(&folder, e))? {
+            let path = entry?.path();
+            let stale = path
+                .file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with(PREFIX) && n.ends_with(UNFINISHED));
+            if stale {
+                std::fs::remove_dir_all(&path).map_err(|e| with_path(&path, e))?;
+            }
         }
         std::fs::create_dir(&unfinished).map_err(|e| with_path(&unfinished, e))?;
     }
