@@ -4,11 +4,12 @@ time to set a case up from scratch, for a dry scene of 10^6 grains and a
 256^3 fluid, on 1 and (with --ranks 2, cargo feature `mpi`) 2 ranks.
 
 Each scene runs two steps with a checkpoint after each (`checkpoint.steps
-= 1`); the log gives each write's seconds and the state files their bytes.
-Then the run resumes from the first checkpoint and ends after the second
-step: its set-up (build + read + restore, up to its first step) is timed
-against a fresh run's set-up, both read from `timing.csv`'s first row
-minus the step time (`wall_seconds` of the first output).
+= 1`); the log gives each write's seconds (synced to disk) and the state
+files their bytes. Then the run resumes from the first checkpoint and ends
+after the second step: the log gives the seconds to read and restore the
+state, and the whole command's time (scene built, state read, one step,
+one checkpoint) is set against the fresh run's (built, two steps, two
+checkpoints).
 
 usage: scripts/bench/checkpoint_io.py [--ranks 1] [--grains 1000000]
          [--cells 256] [--binary target/release/grainflow] [--json FILE]
@@ -91,6 +92,11 @@ def run(binary, case, out, ranks, extra):
     return time.perf_counter() - started
 
 
+def read_seconds(out):
+    text = open(os.path.join(out, "log.txt")).read()
+    return [float(s) for s in re.findall(r"read and restored in ([0-9.]+) s", text)][-1]
+
+
 def checkpoint_seconds(out):
     text = open(os.path.join(out, "log.txt")).read()
     return [float(s) for s in re.findall(r"checkpoint \S+ \(\w+, ([0-9.]+) s\)", text)]
@@ -111,8 +117,11 @@ def measure(binary, name, text, ranks, workdir):
     subprocess.run(["cp", "-r", fresh, resumed], check=True)
     total_resumed = run(binary, case, resumed, ranks, ["--restart", os.path.join(
         resumed, "checkpoints", os.path.basename(first))])
+    read = read_seconds(resumed)
     return {
         "scene": name,
+        "read_restore_seconds": read,
+        "read_gb_per_s": state_bytes / read / 1e9,
         "ranks": ranks,
         "state_bytes": state_bytes,
         "write_seconds": writes,

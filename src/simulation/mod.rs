@@ -193,6 +193,7 @@ fn run_here(
     let mut resumed = None;
     if let Some((path, manifest)) = &resume {
         let fail = |e: String| format!("resuming from {}: {e}", path.display());
+        let clock = std::time::Instant::now();
         let mut read = || -> Result<(WritersRecord, Schedule), String> {
             if manifest.kind != model.kind() {
                 return Err(format!(
@@ -216,7 +217,8 @@ fn run_here(
             }))));
         }
         let (writers, schedule) = read.expect("checked on every rank");
-        resumed = Some((path.clone(), manifest.clone(), writers, schedule));
+        let seconds = clock.elapsed().as_secs_f64();
+        resumed = Some((path.clone(), manifest.clone(), writers, schedule, seconds));
     }
     // The threads: fewer than the pool's for a dry scene too small to gain
     // from them (the neighbour builds and the contact solver's run on the
@@ -231,7 +233,7 @@ fn run_here(
                 RunDirectory::create_on(out, case, &communicator).map_err(RunError::Io)?,
                 None,
             ),
-            Some((_, _, record, _)) => (
+            Some((_, _, record, _, _)) => (
                 RunDirectory::resume(out, &communicator, record.log).map_err(RunError::Io)?,
                 Some(record),
             ),
@@ -241,9 +243,10 @@ fn run_here(
                 .map_err(RunError::Io)?;
         let schedule = match &resumed {
             None => Schedule::of(case),
-            Some((path, manifest, record, schedule)) => {
+            Some((path, manifest, record, schedule, seconds)) => {
                 writers.run.log(&format!(
-                    "resumed from {} at t = {:.6e} s (step {}), written by grainflow {}",
+                    "resumed from {} at t = {:.6e} s (step {}), written by grainflow {}; \
+                     read and restored in {seconds:.3} s",
                     path.display(),
                     manifest.time,
                     manifest.steps,

@@ -229,7 +229,7 @@ fn write_checkpoint(
     let seconds = clock.elapsed().as_secs_f64();
     writers.checkpoint_seconds += seconds;
     writers.run.log(&format!(
-        "t = {:.6e} s (step {}): checkpoint {} ({reason}, {seconds:.2} s)",
+        "t = {:.6e} s (step {}): checkpoint {} ({reason}, {seconds:.3} s)",
         manifest.time,
         manifest.steps,
         path.display()
