@@ -968,3 +968,137 @@ fn runs_on_2_ranks_resume_bit_for_bit() {
         std::fs::remove_dir_all(&resumed).unwrap();
     }
 }
+
+/// `grainflow run CASE --out OUT --restart=CHECKPOINT` on `ranks` ranks.
+fn resume(case: &Path, out: &Path, ranks: usize, overrides: &[&str], checkpoint: &Path) {
+    let restart = format!("--restart={}", checkpoint.display());
+    let binary = env!("CARGO_BIN_EXE_grainflow");
+    let mut command = if ranks == 1 {
+        Command::new(binary)
+    } else {
+        let mut c = Command::new("mpirun");
+        c.args(["--oversubscribe", "-n", &ranks.to_string(), binary]);
+        c
+    };
+    command
+        .arg("run")
+        .arg(case)
+        .arg("--out")
+        .arg(out)
+        .arg(&restart)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("RAYON_NUM_THREADS", "1");
+    for s in overrides {
+        command.args(["--set", s]);
+    }
+    let output = command.output().unwrap();
+    assert!(
+        output.status.success(),
+        "{ranks} ranks from {checkpoint:?}: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+/// A copy of a run's folder, resumed there from its checkpoint at `step`.
+fn copy_run(from: &Path, to: &Path, step: u64) -> PathBuf {
+    let status = Command::new("cp")
+        .arg("-r")
+        .arg(from)
+        .arg(to)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    to.join(format!("checkpoints/checkpoint_{step:012}"))
+}
+
+/// Checkpoints resume on another number of ranks within the bound 1e-10
+/// of the decomposition's contract: the column collapse written on 2 ranks
+/// resumed on 1 and 4 (after 100 of 200 steps), the Beltrami flow written
+/// on 1 rank resumed on 2 and 4, the inclined bed written on 2 ranks
+/// resumed on 1.
+#[test]
+fn a_checkpoint_resumes_on_another_number_of_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let column = dir.path().join("column.toml");
+    std::fs::write(
+        &column,
+        COLUMN
+            .replace("{BLOCK}", RANDOM_BLOCK)
+            .replace("{GATES}", "")
+            .replace("{TRACKED}", &tracked_all(GRAINS))
+            .replace("{TIME}", "end = 0.001"),
+    )
+    .unwrap();
+    let settings = ["checkpoint.steps=100", "checkpoint.keep=10"];
+    let whole = dir.path().join("column_2");
+    let (code, stderr) = run(&column, &whole, 2, &settings, Duration::from_secs(120));
+    assert_eq!(code, 0, "{stderr}");
+    let (end, reference) = final_states(&whole);
+    for ranks in [1, 4] {
+        let out = dir.path().join(format!("column_2_to_{ranks}"));
+        let checkpoint = copy_run(&whole, &out, 100);
+        resume(&column, &out, ranks, &settings, &checkpoint);
+        let (other_end, states) = final_states(&out);
+        assert_eq!(other_end, end);
+        let largest = deviation(&reference, &states);
+        println!("column, 2 ranks resumed on {ranks}: {largest:.3e}");
+        assert!(largest <= 1e-10, "column on {ranks} ranks: {largest:e}");
+    }
+
+    let flow = root.join("cases/taylor_green_3d.toml");
+    let settings = [
+        "fluid.cells=[16,16,16]",
+        "time.end=0.2",
+        "output.interval=0.2",
+        "checkpoint.steps=5",
+        "checkpoint.keep=10",
+    ];
+    let whole = dir.path().join("flow_1");
+    let (code, stderr) = run(&flow, &whole, 1, &settings, Duration::from_secs(120));
+    assert_eq!(code, 0, "{stderr}");
+    let reference = read_velocity(&whole, 1);
+    for ranks in [2, 4] {
+        let out = dir.path().join(format!("flow_1_to_{ranks}"));
+        let checkpoint = copy_run(&whole, &out, 5);
+        resume(&flow, &out, ranks, &settings, &checkpoint);
+        let largest = field_deviation(&reference, &read_velocity(&out, 1));
+        println!("Beltrami flow, 1 rank resumed on {ranks}: {largest:.3e}");
+        assert!(largest <= 1e-10, "flow on {ranks} ranks: {largest:e}");
+    }
+
+    let bed = root.join("cases/immersed_avalanche.toml");
+    let settings = [
+        "fluid.cells=[40,12,40]",
+        "time.end=0.005",
+        "output.interval=0.005",
+        "output.fields=false",
+        "checkpoint.steps=4",
+        "checkpoint.keep=10",
+    ];
+    let last_row = |out: &Path| -> Vec<f64> {
+        let text = std::fs::read_to_string(out.join("bed_series.csv")).unwrap();
+        let row = text.lines().last().unwrap();
+        row.split(',').map(|v| v.parse().unwrap()).collect()
+    };
+    let whole = dir.path().join("bed_2");
+    let mut on_two = settings.to_vec();
+    on_two.push("parallel.process_grid=[2,1,1]");
+    let (code, stderr) = run(&bed, &whole, 2, &on_two, Duration::from_secs(120));
+    assert_eq!(code, 0, "{stderr}");
+    let out = dir.path().join("bed_2_to_1");
+    let checkpoint = copy_run(&whole, &out, 4);
+    resume(&bed, &out, 1, &settings, &checkpoint);
+    let (reference, row) = (last_row(&whole), last_row(&out));
+    let scale = reference[2..5].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (column, (a, b)) in reference.iter().zip(&row).enumerate() {
+        let size = if (2..5).contains(&column) {
+            scale
+        } else {
+            a.abs()
+        };
+        let deviation = (a - b).abs() / size.max(f64::MIN_POSITIVE);
+        assert!(deviation <= 1e-10, "bed column {column}: {a} against {b}");
+    }
+}

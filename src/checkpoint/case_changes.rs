@@ -1,8 +1,9 @@
 //! Which changes to a case a resumed run accepts. A run resumes the state
 //! of the case that wrote its checkpoint; only keys that do not enter the
 //! physics of the steps to come may differ: when it ends, what it writes
-//! and how often, when it checkpoints, its wall-clock limit and its thread
-//! count (results do not depend on it). Any other change is refused,
+//! and how often, when it checkpoints, its wall-clock limit, its threads
+//! and how it is shared among ranks (results do not depend on them beyond
+//! round-off). Any other change is refused,
 //! naming the keys, since it would silently change the physics.
 
 /// The keys a resumed run may change, and the sections it may change
@@ -16,10 +17,14 @@ pub const SAFE_KEYS: &[&str] = &[
     "output.fields",
     "output.format",
     "parallel.threads",
+    "parallel.process_grid",
+    "parallel.shared_memory",
 ];
 pub const SAFE_SECTIONS: &[&str] = &["checkpoint"];
 
 fn is_safe(key: &str) -> bool {
+    // An element of an array key (`parallel.process_grid[0]`) is the key's.
+    let key = key.split('[').next().unwrap_or(key);
     SAFE_KEYS.contains(&key)
         || SAFE_SECTIONS
             .iter()

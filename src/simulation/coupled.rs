@@ -443,8 +443,19 @@ impl CoupledModel {
         );
     }
 
+    /// Takes back the states of every rank of a job of another size.
+    pub fn restore_redistributed(&mut self, states: &mut [State]) -> Result<(), StateError> {
+        self.system.restore_redistributed(states)?;
+        self.restore_run(&mut states[0])
+    }
+
     pub fn restore_state(&mut self, state: &mut State) -> Result<(), StateError> {
         self.system.restore_state(state)?;
+        self.restore_run(state)
+    }
+
+    /// The analysis and counters of a state (the same on every rank).
+    fn restore_run(&mut self, state: &mut State) -> Result<(), StateError> {
         self.analysis = state.take_value("coupled.analysis")?;
         (
             self.dt,

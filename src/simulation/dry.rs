@@ -306,8 +306,26 @@ impl DryModel {
         );
     }
 
+    /// Takes back the states of every rank of a job of another size (the
+    /// grains by where they are; the rest from the first, the old root's).
+    pub fn restore_redistributed(&mut self, states: &mut [State]) -> Result<(), StateError> {
+        self.system.restore_redistributed(states)?;
+        let root = self.system.communicator.is_root();
+        self.restore_run(&mut states[0])?;
+        // On several ranks the analyses live on the root.
+        if self.distributed && !root {
+            self.analysis = Analysis::None;
+        }
+        Ok(())
+    }
+
     pub fn restore_state(&mut self, state: &mut State) -> Result<(), StateError> {
         self.system.restore_state(state)?;
+        self.restore_run(state)
+    }
+
+    /// The contact solver, pours, analyses and counters of a state.
+    fn restore_run(&mut self, state: &mut State) -> Result<(), StateError> {
         self.stepper.restore_state(state)?;
         self.pouring.restore_state(state)?;
         self.analysis = state.take_value("dry.analysis")?;

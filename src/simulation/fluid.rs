@@ -238,8 +238,18 @@ impl FluidModel {
         state.put_u64("fluid.steps", self.steps);
     }
 
+    /// Takes back the blocks of every rank of a job of another size.
+    pub fn restore_redistributed(&mut self, states: &mut [State]) -> Result<(), StateError> {
+        self.solver.restore_redistributed(states)?;
+        self.restore_counters(&mut states[0])
+    }
+
     pub fn restore_state(&mut self, state: &mut State) -> Result<(), StateError> {
         self.solver.restore_state(state)?;
+        self.restore_counters(state)
+    }
+
+    fn restore_counters(&mut self, state: &mut State) -> Result<(), StateError> {
         let numbers = state.take_f64s_of_len("fluid.loop", 4)?;
         self.dt = numbers[0];
         self.report = StepReport {

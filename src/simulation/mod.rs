@@ -134,7 +134,6 @@ pub(crate) fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
 fn checkpoint_to_resume(
     case: &Case,
     out: &Path,
-    communicator: &Communicator,
     restart: &Option<Restart>,
 ) -> Result<Option<(PathBuf, checkpoint::Manifest)>, RunError> {
     let path = match restart {
@@ -153,16 +152,6 @@ fn checkpoint_to_resume(
         },
     };
     let manifest = checkpoint::read_manifest(&path).map_err(|e| RunError::Case(e.0))?;
-    if manifest.ranks != communicator.size() {
-        return Err(RunError::Case(format!(
-            "{} was written on {} ranks and this run has {}: resume it on {} ranks \
-             (resuming on another number of ranks is not supported yet)",
-            path.display(),
-            manifest.ranks,
-            communicator.size(),
-            manifest.ranks
-        )));
-    }
     case_changes::check(&manifest.case, &case.to_toml()).map_err(RunError::Case)?;
     Ok(Some((path, manifest)))
 }
@@ -188,7 +177,7 @@ fn run_here(
             ))
         }));
     }
-    let resume = checkpoint_to_resume(case, out, &communicator, &options.restart)?;
+    let resume = checkpoint_to_resume(case, out, &options.restart)?;
     let mut model = Model::build(case, communicator.clone())?;
     let mut resumed = None;
     if let Some((path, manifest)) = &resume {
@@ -202,10 +191,23 @@ fn run_here(
                     model.kind()
                 ));
             }
-            let mut state = checkpoint::read_state(path, communicator.rank()).map_err(|e| e.0)?;
-            model.restore_state(&mut state).map_err(|e| e.0)?;
-            let writers = state.take_value("writers").map_err(|e| e.0)?;
-            let schedule = state.take_value("schedule").map_err(|e| e.0)?;
+            let mut states = if manifest.ranks == communicator.size() {
+                vec![checkpoint::read_state(path, communicator.rank()).map_err(|e| e.0)?]
+            } else {
+                // Another number of ranks: every rank reads every state
+                // and keeps its share.
+                (0..manifest.ranks)
+                    .map(|rank| checkpoint::read_state(path, rank).map_err(|e| e.0))
+                    .collect::<Result<Vec<_>, _>>()?
+            };
+            if manifest.ranks == communicator.size() {
+                model.restore_state(&mut states[0]).map_err(|e| e.0)?;
+            } else {
+                model.restore_redistributed(&mut states).map_err(|e| e.0)?;
+            }
+            // The writers' records and the schedule: the (old) root's.
+            let writers = states[0].take_value("writers").map_err(|e| e.0)?;
+            let schedule = states[0].take_value("schedule").map_err(|e| e.0)?;
             Ok((writers, schedule))
         };
         let read = read();

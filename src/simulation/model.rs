@@ -202,6 +202,17 @@ impl Model {
         }
     }
 
+    /// Takes back the states saved on every rank of a job of another size
+    /// (all read by every rank; collective): grains by where they are, the
+    /// flow block by block; the run continues within round-off.
+    pub fn restore_redistributed(&mut self, states: &mut [State]) -> Result<(), StateError> {
+        match self {
+            Model::Dry(m) => m.restore_redistributed(states),
+            Model::Fluid(m) => m.restore_redistributed(states),
+            Model::Coupled(m) => m.restore_redistributed(states),
+        }
+    }
+
     /// Takes back what [`Model::save_state`] saved, into a scene built from
     /// the same case on a job of the same size.
     pub fn restore_state(&mut self, state: &mut State) -> Result<(), StateError> {

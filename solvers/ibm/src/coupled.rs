@@ -438,11 +438,24 @@ impl CoupledSystem {
         state.put_f64s("coupled.timings", &[t.flow, t.forcing, t.loads, t.dem]);
     }
 
+    /// Takes back the states saved on every rank of a job of another size
+    /// (read by every rank; collective): the flow block by block, the
+    /// grains by where they are, the rest from the first state.
+    pub fn restore_redistributed(&mut self, states: &mut [State]) -> Result<(), StateError> {
+        self.flow.restore_redistributed(states)?;
+        self.dem.restore_redistributed(states)?;
+        self.restore_coupling(&mut states[0])
+    }
+
     /// Takes back what [`CoupledSystem::save_state`] saved, into a system
     /// built from the same case on a rank of a job of the same size.
     pub fn restore_state(&mut self, state: &mut State) -> Result<(), StateError> {
         self.flow.restore_state(state)?;
         self.dem.restore_state(state)?;
+        self.restore_coupling(state)
+    }
+
+    fn restore_coupling(&mut self, state: &mut State) -> Result<(), StateError> {
         let previous = state.take_f64s("coupled.previous_stage_dt")?;
         if previous.len() > 1 {
             return Err(StateError(
