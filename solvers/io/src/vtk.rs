@@ -310,7 +310,11 @@ pub fn write_field_pieces_index(
 }
 
 fn to_bytes_f64(values: &[f64]) -> Vec<u8> {
-    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+    let mut bytes = Vec::with_capacity(8 * values.len());
+    for v in values {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    bytes
 }
 
 fn write_array(
@@ -334,28 +338,33 @@ fn write_array(
 /// Standard base64 with padding (RFC 4648).
 pub fn base64(bytes: &[u8]) -> String {
     const TABLE: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut encoded = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        encoded.push(TABLE[(n >> 18) as usize & 63] as char);
-        encoded.push(TABLE[(n >> 12) as usize & 63] as char);
-        encoded.push(if chunk.len() > 1 {
-            TABLE[(n >> 6) as usize & 63] as char
-        } else {
-            '='
-        });
-        encoded.push(if chunk.len() > 2 {
-            TABLE[n as usize & 63] as char
-        } else {
-            '='
-        });
+    let mut encoded = Vec::with_capacity(bytes.len().div_ceil(3) * 4);
+    let whole = bytes.chunks_exact(3);
+    let rest = whole.remainder();
+    for chunk in whole {
+        let n = (u32::from(chunk[0]) << 16) | (u32::from(chunk[1]) << 8) | u32::from(chunk[2]);
+        encoded.extend_from_slice(&[
+            TABLE[(n >> 18) as usize & 63],
+            TABLE[(n >> 12) as usize & 63],
+            TABLE[(n >> 6) as usize & 63],
+            TABLE[n as usize & 63],
+        ]);
     }
-    encoded
+    if !rest.is_empty() {
+        let b = [rest[0], *rest.get(1).unwrap_or(&0)];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8);
+        encoded.extend_from_slice(&[
+            TABLE[(n >> 18) as usize & 63],
+            TABLE[(n >> 12) as usize & 63],
+            if rest.len() > 1 {
+                TABLE[(n >> 6) as usize & 63]
+            } else {
+                b'='
+            },
+            b'=',
+        ]);
+    }
+    String::from_utf8(encoded).expect("the base64 alphabet is ASCII")
 }
 
 /// A `.pvd` collection: one dataset per output time, rewritten whole after
@@ -416,6 +425,8 @@ mod tests {
         assert_eq!(base64(b"f"), "Zg==");
         assert_eq!(base64(b"fo"), "Zm8=");
         assert_eq!(base64(b"foo"), "Zm9v");
+        assert_eq!(base64(b"foob"), "Zm9vYg==");
+        assert_eq!(base64(b"fooba"), "Zm9vYmE=");
         assert_eq!(base64(b"foobar"), "Zm9vYmFy");
     }
 }
