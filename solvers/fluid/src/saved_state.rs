@@ -106,7 +106,7 @@ impl FlowSolver {
                 |b: &Block| (0..3).all(|a| g[a] >= b.offset[a] && g[a] < b.offset[a] + b.cells[a]);
             blocks
                 .iter()
-                .position(|b| owns(b))
+                .position(owns)
                 .or_else(|| blocks.iter().position(|b| index(b).is_some()))
                 .and_then(|n| index(&blocks[n]).map(|i| (n, i)))
         };
