@@ -561,8 +561,17 @@ fn memory_line(case: &Case) -> String {
     let machine = machine_memory()
         .map(|m| format!(" (this machine: {})", human_bytes(m)))
         .unwrap_or_default();
+    let footprint = Footprint::of(case);
+    let keep = case.checkpoint.as_ref().map_or(2, |c| c.keep);
     format!(
-        "memory estimate: {}{machine}",
-        human_bytes(Footprint::of(case).bytes)
+        "memory estimate: {}{machine}\ncheckpoint: about {} each on disk, the last {keep} kept \
+         (written on SIGTERM, SIGINT, time.wall_limit{})",
+        human_bytes(footprint.bytes),
+        human_bytes(footprint.checkpoint_bytes(case.walls.len())),
+        if case.checkpoint.is_some() {
+            ", the [checkpoint] schedule and at the end"
+        } else {
+            ""
+        }
     )
 }

@@ -42,7 +42,24 @@ pub struct Footprint {
     pub bytes: f64,
 }
 
+/// Bytes of a checkpoint per grain (its arrays and its pair list with the
+/// tangential histories) besides its wall histories (a vector per wall,
+/// at least one), and per fluid cell (velocity and pressure with their
+/// ghost layers), as measured on a dense packing of 10⁶ grains on a floor
+/// (388 MB) and a 256³ flow (550 MB): docs/performance.md.
+pub const CHECKPOINT_BYTES_PER_GRAIN: f64 = 366.0;
+pub const CHECKPOINT_BYTES_PER_GRAIN_AND_WALL: f64 = 24.0;
+pub const CHECKPOINT_BYTES_PER_CELL: f64 = 33.0;
+
 impl Footprint {
+    /// The size of one checkpoint of the scene, every rank together.
+    pub fn checkpoint_bytes(&self, walls: usize) -> f64 {
+        let grains: f64 = self.grains.iter().map(|(_, n)| n).sum();
+        let per_grain =
+            CHECKPOINT_BYTES_PER_GRAIN + CHECKPOINT_BYTES_PER_GRAIN_AND_WALL * walls.max(1) as f64;
+        grains * per_grain + self.cells * CHECKPOINT_BYTES_PER_CELL
+    }
+
     /// Counts the grains and cells of `case` without creating them.
     pub fn of(case: &Case) -> Footprint {
         let dim = case.domain.dimension as usize;

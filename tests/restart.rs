@@ -433,3 +433,37 @@ fn walk(dir: &Path) -> Vec<(PathBuf, std::time::SystemTime)> {
     found.sort();
     found
 }
+
+/// The size `check` announces for a checkpoint is within 15 % of what a
+/// run writes, for grains alone and for a fluid with a grain.
+#[test]
+fn the_checkpoint_size_check_announces_is_what_a_run_writes() {
+    for (name, overrides) in [
+        (
+            "column_collapse_3d.toml",
+            vec!["time.end=1e-4", "checkpoint.keep=1"],
+        ),
+        (
+            "falling_sphere.toml",
+            vec![
+                "time.end=0.004",
+                "fluid.cells=[32,32,96]",
+                "checkpoint.keep=1",
+            ],
+        ),
+    ] {
+        let case = load(name, &overrides);
+        let dir = tempfile::tempdir().unwrap();
+        run(&case, dir.path(), None);
+        let written = std::fs::metadata(checkpoints(dir.path())[0].join("rank_0000.state"))
+            .unwrap()
+            .len() as f64;
+        let announced =
+            grainflow::footprint::Footprint::of(&case).checkpoint_bytes(case.walls.len());
+        let error = (announced / written - 1.0).abs();
+        assert!(
+            error < 0.15,
+            "{name}: {announced} announced, {written} written"
+        );
+    }
+}
