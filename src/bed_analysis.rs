@@ -48,6 +48,10 @@ pub struct InclinedBed {
 pub struct BedRecord {
     pub lengths: [u64; 3],
     pub last: Option<Vec<f64>>,
+    /// The mean diameter and slab height measured at the start (a resumed
+    /// run's grains come in another order, whose sum differs at round-off).
+    pub diameter: f64,
+    pub slab: f64,
 }
 
 /// Columns of `bed_series.csv`.
@@ -92,11 +96,15 @@ impl InclinedBed {
                 count += 1.0;
             }
         }
-        let diameter = communicator.sum(sum) / communicator.sum(count).max(1.0);
+        let mut diameter = communicator.sum(sum) / communicator.sum(count).max(1.0);
+        let mut slab = slab.unwrap_or(0.5 * diameter);
+        if let Some(record) = &resumed {
+            (diameter, slab) = (record.diameter, record.slab);
+        }
         let f = case.fluid_section();
         let density = case.particles_section().density;
         Ok(InclinedBed {
-            slab: slab.unwrap_or(0.5 * diameter),
+            slab,
             diameter,
             gravity: system.dem.domain.gravity.norm(),
             viscosity: f.viscosity,
@@ -126,6 +134,8 @@ impl InclinedBed {
                 length(&self.series)?,
             ],
             last: self.last.clone(),
+            diameter: self.diameter,
+            slab: self.slab,
         })
     }
 
