@@ -124,14 +124,15 @@ impl InclinedBed {
         })
     }
 
-    /// What a checkpoint records of the bed's outputs (the root's).
+    /// What a checkpoint records of the bed (the file lengths are the
+    /// root's, which writes them; 0 elsewhere).
     pub fn record(&self) -> Option<BedRecord> {
-        let length = |s: &Option<CsvSeries>| s.as_ref().map(CsvSeries::length);
+        let length = |s: &Option<CsvSeries>| s.as_ref().map_or(0, CsvSeries::length);
         Some(BedRecord {
             lengths: [
-                length(&self.profiles)?,
-                length(&self.grain_profiles)?,
-                length(&self.series)?,
+                length(&self.profiles),
+                length(&self.grain_profiles),
+                length(&self.series),
             ],
             last: self.last.clone(),
             diameter: self.diameter,

@@ -861,6 +861,22 @@ interval = 5.0e-4
     }
 }
 
+/// The column of the tests without gates (collapsing from the start),
+/// every grain tracked, written into `dir` with the `[time]` line `time`.
+fn open_column(dir: &Path, time: &str) -> PathBuf {
+    let column = dir.join("column.toml");
+    std::fs::write(
+        &column,
+        COLUMN
+            .replace("{BLOCK}", RANDOM_BLOCK)
+            .replace("{GATES}", "")
+            .replace("{TRACKED}", &tracked_all(GRAINS))
+            .replace("{TIME}", time),
+    )
+    .unwrap();
+    column
+}
+
 /// The inclined bed and the column collapse on 2 ranks, resumed on 2 ranks
 /// from their first checkpoint (step 4 of 16, step 100 of 1000): the same
 /// bytes in every series as the run that never stopped.
@@ -868,16 +884,7 @@ interval = 5.0e-4
 fn runs_on_2_ranks_resume_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let column = dir.path().join("column.toml");
-    std::fs::write(
-        &column,
-        COLUMN
-            .replace("{BLOCK}", RANDOM_BLOCK)
-            .replace("{GATES}", "")
-            .replace("{TRACKED}", &tracked_all(GRAINS))
-            .replace("{TIME}", "end = 0.005"),
-    )
-    .unwrap();
+    let column = open_column(dir.path(), "end = 0.005");
     let scenes: [(PathBuf, Vec<&str>, &[&str], u64); 2] = [
         (
             root.join("cases/immersed_avalanche.toml"),
@@ -919,41 +926,10 @@ fn runs_on_2_ranks_resume_bit_for_bit() {
             first.ends_with(format!("checkpoint_{every:012}")),
             "{first:?}"
         );
-        let restart = format!("--restart={}", first.display());
         let resumed = dir.path().join("resumed");
         // The resumed folder as the stopped run left it: later rows too.
-        let status = Command::new("cp")
-            .arg("-r")
-            .arg(&whole)
-            .arg(&resumed)
-            .status()
-            .unwrap();
-        assert!(status.success());
-        let mut command = Command::new("mpirun");
-        command
-            .args([
-                "--oversubscribe",
-                "-n",
-                "2",
-                env!("CARGO_BIN_EXE_grainflow"),
-                "run",
-            ])
-            .arg(&case)
-            .arg("--out")
-            .arg(&resumed)
-            .arg(&restart)
-            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-            .env("RAYON_NUM_THREADS", "1");
-        for s in &settings {
-            command.args(["--set", s]);
-        }
-        let output = command.output().unwrap();
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
+        let checkpoint = copy_run(&whole, &resumed, every);
+        resume(&case, &resumed, 2, &settings, &checkpoint);
         for file in files {
             let (a, b) = (
                 std::fs::read(whole.join(file)).unwrap(),
@@ -1021,16 +997,7 @@ fn copy_run(from: &Path, to: &Path, step: u64) -> PathBuf {
 fn a_checkpoint_resumes_on_another_number_of_ranks() {
     let dir = tempfile::tempdir().unwrap();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let column = dir.path().join("column.toml");
-    std::fs::write(
-        &column,
-        COLUMN
-            .replace("{BLOCK}", RANDOM_BLOCK)
-            .replace("{GATES}", "")
-            .replace("{TRACKED}", &tracked_all(GRAINS))
-            .replace("{TIME}", "end = 0.001"),
-    )
-    .unwrap();
+    let column = open_column(dir.path(), "end = 0.001");
     let settings = ["checkpoint.steps=100", "checkpoint.keep=10"];
     let whole = dir.path().join("column_2");
     let (code, stderr) = run(&column, &whole, 2, &settings, Duration::from_secs(120));
