@@ -25,12 +25,11 @@
 //! files.
 
 use crate::case::{Case, OutputFormat};
-use crate::output::fields::cell_fields;
+use crate::output::fields::{cell_fields, cell_layout};
 use grainflow_core::Communicator;
 use grainflow_dem::DemSystem;
 use grainflow_fluid::FlowSolver;
 use grainflow_io::hdf5::{FieldFrameH5, FieldGridDescription, ParticleFrameH5, Writers, XdmfIndex};
-use grainflow_io::CellLayout;
 use std::path::{Path, PathBuf};
 
 /// Whether `case` asks for HDF5 frames.
@@ -115,16 +114,7 @@ impl Hdf5Fields {
         let partition = solver.partition();
         let faces = [0, 1, 2].map(|axis| grid.face_coordinates(axis));
         let uniform = grid.is_uniform(grid.line_axis());
-        let layout = if uniform {
-            CellLayout::Uniform {
-                origin: self.origin,
-                spacing: grid.spacing,
-            }
-        } else {
-            CellLayout::Rectilinear {
-                faces: [&faces[0], &faces[1], &faces[2]],
-            }
-        };
+        let layout = cell_layout(grid, self.origin, &faces);
         let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", &pressure)];
         scalars.extend_from_slice(extra);
         let vectors: [(&str, &[[f64; 3]]); 2] =

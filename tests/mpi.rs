@@ -72,6 +72,24 @@ const GRAINS: usize = 400;
 const RANDOM_BLOCK: &str = "[[particles.block]]\nkind = \"random\"\nlower = [-0.05, 0.0, 0.0]\n\
                             upper = [0.05, 0.06, 0.15]\ncount = 400";
 
+/// The `grainflow` command on `ranks` MPI ranks (without mpirun for one),
+/// one thread each, allowed to run as root.
+fn grainflow_on(ranks: usize) -> Command {
+    let binary = env!("CARGO_BIN_EXE_grainflow");
+    let mut command = if ranks == 1 {
+        Command::new(binary)
+    } else {
+        let mut c = Command::new("mpirun");
+        c.args(["--oversubscribe", "-n", &ranks.to_string(), binary]);
+        c
+    };
+    command
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("RAYON_NUM_THREADS", "1");
+    command
+}
+
 /// `grainflow run CASE --out OUT [--set ...]` on `ranks` MPI ranks (without
 /// mpirun for one), stopped if it has not ended within `limit`: (exit code,
 /// stderr); a run that outlives the limit fails the test.
@@ -82,14 +100,7 @@ fn run(
     overrides: &[&str],
     limit: Duration,
 ) -> (i32, String) {
-    let binary = env!("CARGO_BIN_EXE_grainflow");
-    let mut command = if ranks == 1 {
-        Command::new(binary)
-    } else {
-        let mut c = Command::new("mpirun");
-        c.args(["--oversubscribe", "-n", &ranks.to_string(), binary]);
-        c
-    };
+    let mut command = grainflow_on(ranks);
     command
         .args([
             "run",
@@ -97,9 +108,6 @@ fn run(
             "--out",
             out.to_str().unwrap(),
         ])
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("RAYON_NUM_THREADS", "1")
         .stdout(Stdio::null())
         .stderr(Stdio::piped());
     for assignment in overrides {
@@ -948,23 +956,13 @@ fn runs_on_2_ranks_resume_bit_for_bit() {
 /// `grainflow run CASE --out OUT --restart=CHECKPOINT` on `ranks` ranks.
 fn resume(case: &Path, out: &Path, ranks: usize, overrides: &[&str], checkpoint: &Path) {
     let restart = format!("--restart={}", checkpoint.display());
-    let binary = env!("CARGO_BIN_EXE_grainflow");
-    let mut command = if ranks == 1 {
-        Command::new(binary)
-    } else {
-        let mut c = Command::new("mpirun");
-        c.args(["--oversubscribe", "-n", &ranks.to_string(), binary]);
-        c
-    };
+    let mut command = grainflow_on(ranks);
     command
         .arg("run")
         .arg(case)
         .arg("--out")
         .arg(out)
-        .arg(&restart)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("RAYON_NUM_THREADS", "1");
+        .arg(&restart);
     for s in overrides {
         command.args(["--set", s]);
     }

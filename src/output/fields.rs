@@ -4,7 +4,7 @@
 //! ranks one piece per rank and output, assembled by a `.pvti`.
 
 use crate::case::Case;
-use grainflow_fluid::FlowSolver;
+use grainflow_fluid::{FlowSolver, Grid};
 use grainflow_io::{write_field_pieces_index, CellLayout, FieldFrame, FieldPiece, PvdIndex};
 use std::path::Path;
 
@@ -62,6 +62,22 @@ pub fn cell_fields(
     (cell_velocity, pressure, vorticity)
 }
 
+/// How the cells of `grid` are laid out for a field file: a uniform grid
+/// by its `origin` and spacing, a stretched one by its `faces` (from
+/// `Grid::face_coordinates`).
+pub fn cell_layout<'a>(grid: &Grid, origin: [f64; 3], faces: &'a [Vec<f64>; 3]) -> CellLayout<'a> {
+    if grid.is_uniform(grid.line_axis()) {
+        CellLayout::Uniform {
+            origin,
+            spacing: grid.spacing,
+        }
+    } else {
+        CellLayout::Rectilinear {
+            faces: [&faces[0], &faces[1], &faces[2]],
+        }
+    }
+}
+
 /// The field files of a scene with a fluid: `fields/fields_NNNNNN.vti`
 /// (cell-centred velocity, pressure in Pa, vorticity, and any extra
 /// scalars) indexed by `fields.pvd`.
@@ -113,16 +129,7 @@ impl FieldFiles {
         let partition = solver.partition();
         let (ranks, rank) = (partition.size(), solver.communicator().rank());
         let faces = [0, 1, 2].map(|axis| grid.face_coordinates(axis));
-        let layout = if grid.is_uniform(grid.line_axis()) {
-            CellLayout::Uniform {
-                origin: self.origin,
-                spacing: grid.spacing,
-            }
-        } else {
-            CellLayout::Rectilinear {
-                faces: [&faces[0], &faces[1], &faces[2]],
-            }
-        };
+        let layout = cell_layout(grid, self.origin, &faces);
         let extension = layout.extension();
         let piece = |r: usize| format!("fields_{:06}_{r:04}.{extension}", self.frames);
         let name = if ranks == 1 {

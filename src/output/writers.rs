@@ -247,7 +247,12 @@ impl Writers {
                 series.row(&row)?;
             }
         }
-        if let Some(output) = model.field_output() {
+        #[cfg(feature = "hdf5")]
+        let any_fields = self.fields.is_some() || self.hdf5_fields.is_some();
+        #[cfg(not(feature = "hdf5"))]
+        let any_fields = self.fields.is_some();
+        // The solid fraction of a field file only when one is written.
+        if let Some(output) = any_fields.then(|| model.field_output()).flatten() {
             let extra: Vec<(&str, &[f64])> = output
                 .solid_fraction
                 .iter()
