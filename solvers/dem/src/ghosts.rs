@@ -228,6 +228,37 @@ impl Ghosts {
 }
 
 impl Ghosts {
+    /// Copies `width` numbers per owned particle onto its ghosts, stage by
+    /// stage as built (a ghost of a ghost receives its copy in turn):
+    /// `values` holds `width` numbers per local particle (owned, then
+    /// ghosts); on return each ghost's entries equal its particle's
+    /// (collective). For per-particle quantities that are not part of the
+    /// particles' motion.
+    pub fn copy_to_ghosts(&self, values: &mut [f64], width: usize, communicator: &Communicator) {
+        let mut message = Vec::new();
+        for (tag, stage) in self.stages.iter().enumerate() {
+            message.clear();
+            for &k in &stage.sent {
+                message.extend_from_slice(&values[k * width..(k + 1) * width]);
+            }
+            let received = communicator.shift(
+                COPY_TAG + tag as u16,
+                &message,
+                stage.destination,
+                stage.source,
+            );
+            assert_eq!(
+                received.len(),
+                stage.count * width,
+                "a neighbour copied onto a different set of ghosts than it built"
+            );
+            values[stage.first * width..(stage.first + stage.count) * width]
+                .copy_from_slice(&received);
+        }
+    }
+}
+
+impl Ghosts {
     /// Adds what was accumulated on each ghost to the particle it copies,
     /// stage by stage in reverse (a ghost of a ghost passes its share on):
     /// `values` holds `width` numbers per local particle (owned, then
@@ -262,6 +293,9 @@ impl Ghosts {
 
 /// First message tag of the reverse sums.
 const REVERSE_TAG: u16 = 500;
+
+/// First message tag of the copies onto ghosts.
+const COPY_TAG: u16 = 700;
 
 fn opposite(side: Side) -> Side {
     match side {

@@ -18,12 +18,29 @@
 //! below a cell.
 //!
 //! The force is a damper of coefficient `c = 6π μ R*² / (δ + η)` on the
-//! normal relative velocity. As `δ → 0` with a small roughness, `c Δt / m*`
-//! grows past any explicit limit, so each pair is integrated implicitly:
-//! over a step `Δt` the damper alone takes `v_n` to `v_n / (1 + c Δt / m*)`,
-//! which is the force `−c v_n / (1 + c Δt / m*)` applied for `Δt`. That
-//! force never reverses the approach within a step, whatever the gap, and
-//! tends to the explicit one when `c Δt / m* ≪ 1`.
+//! normal relative velocity. As `δ → 0` with a small roughness, `c Δt / m`
+//! grows past any explicit limit, so the films are integrated implicitly.
+//! Alone, a film takes `v_n` over a step `Δt` to `v_n / (1 + c Δt / m*)`:
+//! the force `−c v_n / (1 + c Δt / m*)` applied for `Δt`. A grain held by
+//! several films (between two walls, in a packing) must see them implicit
+//! together: each made implicit on its own pair, two films facing each
+//! other flip the grain's velocity without decay once `c Δt / m ≳ 1`, and
+//! three or more make it grow. So each film is divided by the sum of the
+//! film rates of both its grains,
+//!
+//! ```text
+//! F = −c v_n / (1 + Δt (r_i + r_j)),     r_i = Σ_{films of i} c_k / m_i,
+//! ```
+//!
+//! (a wall has `r = 0`). With one film this is the pair's implicit step;
+//! for a grain between two walls it is the exact implicit step of the two,
+//! `v / (1 + Δt r_i)`. In any network the films on grain i change its
+//! velocity within a step by at most `a_i = Δt r_i / (1 + Δt r_i) < 1`
+//! times the relative velocities they act on, so by Gershgorin's theorem
+//! the eigenvalues of the step's damping lie in `[0, 2 max a_i) ⊂ [0, 2)`:
+//! no mode of the network grows, whatever the gaps and the step (this is
+//! the Jacobi scaling of the implicit system `(M + Δt C) v⁺ = M v`). It
+//! tends to the explicit force when `Δt r ≪ 1`.
 
 use grainflow_core::Vec3;
 use std::f64::consts::PI;
@@ -41,12 +58,33 @@ pub struct Lubrication {
 }
 
 impl Lubrication {
+    /// The damping coefficient `c = 6π μ R*² / (δ + η)` of the film
+    /// between a grain of radius `radius` and a partner of radius
+    /// `partner_radius` (infinite for a wall) at surface gap `gap`; zero
+    /// beyond the range and while the surfaces overlap.
+    #[inline]
+    pub fn damping(&self, gap: f64, radius: f64, partner_radius: f64) -> f64 {
+        let smaller = radius.min(partner_radius);
+        if gap > self.range * smaller || gap < 0.0 {
+            return 0.0;
+        }
+        let reduced_radius = if partner_radius.is_finite() {
+            radius * partner_radius / (radius + partner_radius)
+        } else {
+            radius
+        };
+        6.0 * PI * self.viscosity * reduced_radius * reduced_radius
+            / (gap + self.roughness * smaller)
+    }
+
     /// Force on i from a partner of radius `partner_radius` (infinite for a
     /// wall) at surface gap `gap` (negative while they overlap), along the
     /// unit normal `normal` from the partner to i, with relative velocity
-    /// `relative_velocity = u_i − u_j`, `inverse_mass_sum = 1/m_i + 1/m_j`
-    /// and DEM step `dt` (0 gives the explicit force). Zero beyond the range
-    /// and while the surfaces overlap.
+    /// `relative_velocity = u_i − u_j`; `film_rates = r_i + r_j`, the sum of
+    /// the two grains' film rates (module doc; the pair's own
+    /// `c (1/m_i + 1/m_j)` when it is their only film), and DEM step `dt`
+    /// (0 gives the explicit force). Zero beyond the range and while the
+    /// surfaces overlap.
     #[inline]
     #[allow(clippy::too_many_arguments)] // the scalars of one pair, kept flat for the hot loop
     pub fn force(
@@ -56,22 +94,14 @@ impl Lubrication {
         relative_velocity: Vec3,
         radius: f64,
         partner_radius: f64,
-        inverse_mass_sum: f64,
+        film_rates: f64,
         dt: f64,
     ) -> Vec3 {
-        let smaller = radius.min(partner_radius);
-        if gap > self.range * smaller || gap < 0.0 {
+        let damping = self.damping(gap, radius, partner_radius);
+        if damping == 0.0 {
             return Vec3::zeros();
         }
-        let reduced_radius = if partner_radius.is_finite() {
-            radius * partner_radius / (radius + partner_radius)
-        } else {
-            radius
-        };
-        let gap = gap.max(0.0);
-        let damping = 6.0 * PI * self.viscosity * reduced_radius * reduced_radius
-            / (gap + self.roughness * smaller);
-        let implicit = damping / (1.0 + damping * dt * inverse_mass_sum);
+        let implicit = damping / (1.0 + dt * film_rates);
         -implicit * relative_velocity.dot(&normal) * normal
     }
 
@@ -179,10 +209,15 @@ mod tests {
         let mass = 1e-6;
         let n = Vec3::new(0.0, 1.0, 0.0);
         let v = -0.3;
+        let damping = 6.0 * PI * 1e-3 * 1e-6 / 1e-6;
+        assert_relative_eq!(
+            law().damping(0.0, 1e-3, f64::INFINITY),
+            damping,
+            max_relative = 1e-14
+        );
         for dt in [1e-9, 1e-6, 1e-3, 1.0] {
-            let f = law().force(0.0, n, v * n, 1e-3, f64::INFINITY, 1.0 / mass, dt);
+            let f = law().force(0.0, n, v * n, 1e-3, f64::INFINITY, damping / mass, dt);
             let after = v + dt * f.y / mass;
-            let damping = 6.0 * PI * 1e-3 * 1e-6 / 1e-6;
             assert_relative_eq!(after, v / (1.0 + damping * dt / mass), max_relative = 1e-12);
             assert!(after <= 0.0 && after > v);
         }

@@ -4,8 +4,9 @@
 //! 1. half kick v += Δt/2 F/m, ω += Δt/2 T/I, then drift x += Δt v;
 //! 2. rebuild the neighbour list (migrate, sort, ghosts) if a particle moved
 //!    more than half the skin, else refresh the ghosts;
-//! 3. contact forces (eq. 13–16) and, in a fluid, lubrication (eq. 19):
-//!    each particle evaluates the pairs it holds the upper side of, its
+//! 3. contact forces (eq. 13–16) and, in a fluid, lubrication (eq. 19),
+//!    its films implicit together through each grain's film rate
+//!    (`system/film_rates.rs`): each particle evaluates the pairs it holds the upper side of, its
 //!    walls, gravity and the external (hydrodynamic) load; then each
 //!    particle collects the pairs evaluated by its partners, in a fixed
 //!    order;
@@ -24,6 +25,7 @@ use rayon::prelude::*;
 use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
 
+mod film_rates;
 mod saved_state;
 
 /// Smallest amount of work handed to one thread: below it the loops run on
@@ -102,6 +104,10 @@ pub struct DemSystem {
     /// The step the film forces of the current totals were made implicit
     /// for (0 before the first step: explicit).
     film_dt: f64,
+    /// Per local particle (owned, then ghosts), the sum over its
+    /// lubrication films of their damping over its mass at the last force
+    /// evaluation (`film_rates.rs`); empty without lubrication.
+    film_rate: Vec<f64>,
     pub walls: Vec<PlaneWall>,
     /// Tangential displacement of each owned particle against each wall:
     /// `wall_history[p * wall_stride() + w]`.
@@ -154,6 +160,7 @@ impl DemSystem {
             listing_gap: 0.0,
             ghost_reach: 0.0,
             film_dt: 0.0,
+            film_rate: Vec::new(),
             walls,
             wall_history: Vec::new(),
             wall_touching: Vec::new(),
@@ -663,6 +670,7 @@ impl DemSystem {
         closing_kick: Option<f64>,
     ) -> StepDiagnostics {
         self.film_dt = film_dt;
+        self.update_film_rates();
         let n = self.particles.n_owned;
         assert_eq!(self.wall_candidates.len(), n, "wall candidates not built");
         self.contacts.resize(n, 0);
@@ -751,6 +759,7 @@ impl DemSystem {
         let external_loads = self.external_loads;
         let chunks = n.div_ceil(chunk_len);
         let sources_of = &self.handover_sources.1;
+        let film_rate = &self.film_rate;
         let list = &mut self.neighbours;
         let (offsets, upper_start, partner) = (&list.offsets, &list.upper_start, &list.partner);
         let entry_chunks =
@@ -811,7 +820,7 @@ impl DemSystem {
                                 velocities.linear(i) - velocities.linear(j),
                                 ri,
                                 rj,
-                                p.inverse_mass[i] + p.inverse_mass[j],
+                                film_rate[i] + film_rate[j],
                                 film_dt,
                             );
                             if force != Vec3::zeros() {
@@ -857,7 +866,7 @@ impl DemSystem {
                             vi - velocities.linear(j),
                             ri,
                             rj,
-                            inverse_mass_sum,
+                            film_rate[i] + film_rate[j],
                             film_dt,
                         );
                     }
@@ -895,7 +904,7 @@ impl DemSystem {
                                 vi,
                                 ri,
                                 f64::INFINITY,
-                                p.inverse_mass[i],
+                                film_rate[i],
                                 film_dt,
                             );
                         }

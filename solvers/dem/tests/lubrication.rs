@@ -253,3 +253,162 @@ fn a_bounce_through_the_film_has_the_thin_film_restitution() {
         );
     }
 }
+
+/// An empty scene with `walls` and the stiff film of
+/// [`stiff_film_stops_the_sphere_without_rebound`], no gravity.
+fn stiff_film_scene(walls: Vec<PlaneWall>) -> DemSystem {
+    let domain = Domain {
+        dimension: Dimension::Three,
+        lower: Vec3::new(-0.01, -0.01, 0.0),
+        upper: Vec3::new(0.01, 0.01, 0.01),
+        periodic: [false; 3],
+        gravity: Vec3::zeros(),
+    };
+    let law = ContactLaw {
+        normal: NormalStiffness::from_restitution(0.9, CONTACT_TIME, NormalCalibration::Exact),
+        tangential_ratio: 0.2,
+        friction: 0.0,
+        rolling_friction: 0.0,
+    };
+    let mut system = DemSystem::new(domain, law, walls, 0.2 * RADIUS);
+    system.lubrication = Some(Lubrication {
+        viscosity: 10.0,
+        roughness: 1e-4,
+        range: 0.5,
+    });
+    system
+}
+
+/// A grain of the tests below at `position`, moving at `velocity`.
+fn grain(position: Vec3, velocity: Vec3, fixed: bool) -> NewParticle {
+    NewParticle {
+        position,
+        velocity,
+        angular_velocity: Vec3::zeros(),
+        radius: RADIUS,
+        density: DENSITY,
+        fixed,
+    }
+}
+
+/// One grain between a floor and a ceiling, both at surface gap `gap`,
+/// moving along z at `speed`.
+fn grain_between_walls(gap: f64, speed: f64) -> DemSystem {
+    let wall = |name: &str, z: f64, normal: Vec3| PlaneWall {
+        name: name.into(),
+        point: Vec3::new(0.0, 0.0, z),
+        normal,
+        friction: 0.0,
+        remove_at: None,
+    };
+    let height = 2.0 * (RADIUS + gap);
+    let mut system = stiff_film_scene(vec![
+        wall("floor", 0.0, Vec3::z()),
+        wall("ceiling", height, -Vec3::z()),
+    ]);
+    system.add_particles(&[grain(
+        Vec3::new(0.0, 0.0, RADIUS + gap),
+        Vec3::new(0.0, 0.0, speed),
+        false,
+    )]);
+    system
+}
+
+/// A grain between two walls at gaps of the roughness length, where the
+/// two films' damping rate `c Δt / m` is 0.1 to 1000 times a step. Each
+/// film made implicit on its own pair flipped the velocity at every step
+/// without decay once that rate passed 1; made implicit together, the
+/// velocity keeps its sign and falls at every step by the exact implicit
+/// factor of the two films, `1 / (1 + Δt (c₁ + c₂) / m)`, within 1 %
+/// (the gaps change a little as the grain moves).
+#[test]
+fn a_grain_between_two_walls_slows_at_every_step_whatever_the_film_rate() {
+    let eta = 1e-4 * RADIUS;
+    let gap = eta;
+    let c = damping_per_mass(10.0) / (gap + eta); // each film, over m
+    println!("c dt / m | step factor | implicit pair of films");
+    for rate in [0.1, 1.0, 10.0, 100.0, 1000.0] {
+        let dt = rate / c;
+        // Slow enough to move a tenth of the gap in all.
+        let speed = 0.1 * gap / dt;
+        let mut system = grain_between_walls(gap, -speed);
+        let mut previous = -speed;
+        for step in 0..50 {
+            system.step(dt);
+            let v = system.particles.velocity[0].z;
+            assert!(
+                v <= 0.0 && v.abs() <= previous.abs(),
+                "rate {rate}, step {step}: {previous:e} -> {v:e}"
+            );
+            if step > 0 && previous.abs() > 1e-250 {
+                let z = system.particles.position[0].z;
+                let below = damping_per_mass(10.0) / (z - RADIUS + eta);
+                let above = damping_per_mass(10.0) / (2.0 * gap + RADIUS - z + eta);
+                let exact = 1.0 / (1.0 + dt * (below + above));
+                let factor = v / previous;
+                if step == 1 {
+                    println!("{rate:8} | {factor:.5e} | {exact:.5e}");
+                }
+                assert!(
+                    (factor - exact).abs() < 0.01 * exact,
+                    "rate {rate}, step {step}: factor {factor} against {exact}"
+                );
+            }
+            previous = v;
+        }
+    }
+}
+
+/// A grain caged by eight fixed grains at the corners of a cube around
+/// it, every gap at the roughness length: eight films, whose normals add
+/// up to `Σ n nᵀ = 8/3 I`. Each film made implicit on its own pair
+/// multiplied the grain's velocity by `1 − 8/3 = −5/3` per step once the
+/// films' rate `c Δt / m` was large; made implicit together the velocity
+/// keeps its sign and shrinks at every step, at rates from 0.1 to 1000 per
+/// step, and at the largest rate by the factor of the Jacobi scaling,
+/// `1 − (8/3) x / (1 + 8x)` (about 2/3), within 1 %.
+#[test]
+fn a_grain_caged_by_eight_films_slows_at_every_step_whatever_the_film_rate() {
+    let eta = 1e-4 * RADIUS;
+    let gap = eta;
+    let c = damping_per_mass(10.0) / (gap + eta);
+    let centre = Vec3::new(0.0, 0.0, 0.005);
+    let reach = (2.0 * RADIUS + gap) / 3f64.sqrt();
+    for rate in [0.1, 1.0, 10.0, 100.0, 1000.0] {
+        let dt = rate / c;
+        let speed = 0.05 * gap / dt;
+        let mut system = stiff_film_scene(Vec::new());
+        let mut grains = vec![grain(centre, Vec3::new(0.0, 0.0, speed), false)];
+        for corner in 0..8 {
+            let sign = |bit: usize| if corner >> bit & 1 == 0 { -1.0 } else { 1.0 };
+            let offset = reach * Vec3::new(sign(0), sign(1), sign(2));
+            grains.push(grain(centre + offset, Vec3::zeros(), true));
+        }
+        system.add_particles(&grains);
+        let caged = |s: &DemSystem| s.index_of(0).expect("the caged grain");
+        let mut previous = speed;
+        let mut factor = 0.0;
+        for step in 0..20 {
+            system.step(dt);
+            let v = system.particles.velocity[caged(&system)].z;
+            assert!(
+                v >= 0.0 && v <= previous,
+                "rate {rate}, step {step}: {previous:e} -> {v:e}"
+            );
+            factor = v / previous;
+            previous = v;
+        }
+        println!(
+            "c dt / m = {rate}: step factor {factor:.4}, speed after 20 steps {:.3e} of the start",
+            previous / speed
+        );
+        if rate == 1000.0 {
+            let x = rate;
+            let jacobi = 1.0 - 8.0 / 3.0 * x / (1.0 + 8.0 * x);
+            assert!(
+                (factor - jacobi).abs() < 0.01 * jacobi,
+                "{factor} against {jacobi}"
+            );
+        }
+    }
+}
