@@ -8,7 +8,8 @@ either format a run writes:
 - VTK (the default): `fields.pvd` / `particles.pvd` and the files they list
   (`.vti`, `.vtr`, `.vtp`, or the `.pvti`/`.pvtr`/`.pvtp` of a run on
   several ranks and their pieces), read by the small VTK XML reader below
-  (binary base64 arrays with a UInt32 header, as grainflow writes them).
+  (raw appended arrays, each behind a UInt64 byte count, as grainflow
+  writes them).
 
 Both give the same Python objects:
 
@@ -30,7 +31,6 @@ usage: read_output.py RUN_DIR            prints a summary of each frame
                                          sample of solvers/io/examples/
                                          hdf5_sample.rs); exits 1 if not
 """
-import base64
 import os
 import sys
 import xml.etree.ElementTree as ET
@@ -118,13 +118,25 @@ def pvd_frames(index):
             for d in root.iter("DataSet")]
 
 
-def _data_array(element):
-    """A binary (base64, UInt32 byte count first) DataArray as numpy."""
-    raw = base64.b64decode("".join(element.text.split()))
-    size = int(np.frombuffer(raw[:4], "<u4")[0])
-    values = np.frombuffer(raw[4:4 + size], _TYPES[element.get("type")])
-    components = int(element.get("NumberOfComponents", "1"))
-    return values.reshape(-1, components) if components > 1 else values
+def _parse_vtk(path):
+    """The XML root of a VTK file with raw appended data, and a function
+    that reads one of its DataArray elements as numpy."""
+    with open(path, "rb") as f:
+        content = f.read()
+    start = content.find(b'<AppendedData encoding="raw">')
+    if start < 0:  # an index (.pvd, .pvti, ...): XML only
+        return ET.fromstring(content), None
+    root = ET.fromstring(content[:start] + b"</VTKFile>")
+    block = content[content.index(b"_", start) + 1:]
+
+    def data_array(element):
+        offset = int(element.get("offset"))
+        size = int(np.frombuffer(block[offset:offset + 8], "<u8")[0])
+        values = np.frombuffer(block[offset + 8:offset + 8 + size], _TYPES[element.get("type")])
+        components = int(element.get("NumberOfComponents", "1"))
+        return values.reshape(-1, components) if components > 1 else values
+
+    return root, data_array
 
 
 def _pieces(path):
@@ -142,7 +154,7 @@ def _extent(text):
 
 
 def _read_vtk_fields(time, path):
-    root = ET.parse(path).getroot()
+    root, _ = _parse_vtk(path)
     dataset = root[0]
     lower, upper = _extent(dataset.get("WholeExtent"))
     cells = [u - l for l, u in zip(lower, upper)]
@@ -152,7 +164,8 @@ def _read_vtk_fields(time, path):
         spacing = [float(v) for v in dataset.get("Spacing").split()]
         faces = [origin[a] + spacing[a] * np.arange(cells[a] + 1) for a in range(3)]
     for piece_path in _pieces(path):
-        piece = ET.parse(piece_path).getroot()[0].find("Piece")
+        piece_root, _data_array = _parse_vtk(piece_path)
+        piece = piece_root[0].find("Piece")
         start, end = _extent(piece.get("Extent"))
         n = [e - s for s, e in zip(start, end)]
         coordinates = piece.find("Coordinates")
@@ -173,7 +186,8 @@ def _read_vtk_fields(time, path):
 def _read_vtk_particles(time, path):
     arrays = {}
     for piece_path in _pieces(path):
-        piece = ET.parse(piece_path).getroot().find("PolyData/Piece")
+        root, _data_array = _parse_vtk(piece_path)
+        piece = root.find("PolyData/Piece")
         found = {"position": _data_array(piece.find("Points/DataArray"))}
         for item in piece.find("PointData").findall("DataArray"):
             found[item.get("Name")] = _data_array(item)

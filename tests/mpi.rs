@@ -488,8 +488,9 @@ fn read_velocity(out: &Path, frame: usize) -> BTreeMap<[usize; 3], [f64; 3]> {
     };
     let mut cells = BTreeMap::new();
     for file in files {
-        let text = std::fs::read_to_string(&file).unwrap();
-        let extent: Vec<usize> = text
+        let frame = grainflow_io::read_vtk(&std::fs::read(&file).unwrap()).unwrap();
+        let extent: Vec<usize> = frame
+            .xml
             .split("<Piece Extent=\"")
             .nth(1)
             .unwrap()
@@ -499,22 +500,7 @@ fn read_velocity(out: &Path, frame: usize) -> BTreeMap<[usize; 3], [f64; 3]> {
             .split_whitespace()
             .map(|v| v.parse().unwrap())
             .collect();
-        let payload = text
-            .split("Name=\"velocity\"")
-            .nth(1)
-            .unwrap()
-            .split_once('>')
-            .unwrap()
-            .1
-            .split('<')
-            .next()
-            .unwrap()
-            .trim();
-        let bytes = decode_base64(payload);
-        let values: Vec<f64> = bytes[4..]
-            .chunks_exact(8)
-            .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
-            .collect();
+        let values = frame.arrays["velocity"].f64s();
         let n = [
             extent[1] - extent[0],
             extent[3] - extent[2],
@@ -533,32 +519,6 @@ fn read_velocity(out: &Path, frame: usize) -> BTreeMap<[usize; 3], [f64; 3]> {
         }
     }
     cells
-}
-
-fn decode_base64(text: &str) -> Vec<u8> {
-    let value = |c: u8| match c {
-        b'A'..=b'Z' => c - b'A',
-        b'a'..=b'z' => c - b'a' + 26,
-        b'0'..=b'9' => c - b'0' + 52,
-        b'+' => 62,
-        _ => 63,
-    };
-    let mut bytes = Vec::new();
-    for chunk in text.as_bytes().chunks(4) {
-        let digits: Vec<u8> = chunk
-            .iter()
-            .filter(|&&c| c != b'=')
-            .map(|&c| value(c))
-            .collect();
-        let word = digits
-            .iter()
-            .enumerate()
-            .fold(0u32, |w, (k, &d)| w | (u32::from(d) << (18 - 6 * k)));
-        for k in 0..digits.len().saturating_sub(1) {
-            bytes.push((word >> (16 - 8 * k)) as u8);
-        }
-    }
-    bytes
 }
 
 /// Largest deviation of two velocity fields over every cell and component,

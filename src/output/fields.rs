@@ -6,6 +6,7 @@
 use crate::case::Case;
 use grainflow_fluid::{FlowSolver, Grid};
 use grainflow_io::{write_field_pieces_index, CellLayout, FieldFrame, FieldPiece, PvdIndex};
+use rayon::prelude::*;
 use std::path::Path;
 
 /// Cell-centred velocity (mean of a cell's two faces along each axis),
@@ -20,44 +21,60 @@ pub fn cell_fields(
     let dim = grid.dim();
     let velocity = &solver.velocity;
     let cells = grid.cell_block();
-    let mut cell_velocity = Vec::new();
-    let mut pressure = Vec::new();
-    let mut vorticity = Vec::new();
+    let [nx, ny, nz] = [0, 1, 2].map(|a| cells.end[a] - cells.start[a]);
+    let mut cell_velocity = vec![[0.0; 3]; nx * ny * nz];
+    let mut pressure = vec![0.0; nx * ny * nz];
+    let mut vorticity = vec![[0.0; 3]; nx * ny * nz];
     let line = grid.line_axis();
-    grid.for_each(&cells, |index, point| {
-        let mut u = [0.0; 3];
-        for a in 0..dim {
-            u[a] = 0.5 * (velocity[a][index - grid.stride(a)] + velocity[a][index]);
-        }
-        cell_velocity.push(u);
-        pressure.push(density * solver.pressure[index]);
-        // ω_c = ∂u_b/∂x_a − ∂u_a/∂x_b on the four edges of the cell along c;
-        // each difference spans the distance between the centres on either
-        // side of its edge (edge `e` along the line axis lies on face `e`).
-        let curl = |a: usize, b: usize| {
-            let (sa, sb) = (grid.stride(a), grid.stride(b));
-            let mut sum = 0.0;
-            for shift_a in [1, 0] {
-                for shift_b in [1, 0] {
-                    let edge = index - shift_a * sa - shift_b * sb;
-                    let mut edge_line = point[line];
-                    if a == line {
-                        edge_line -= shift_a;
-                    }
-                    if b == line {
-                        edge_line -= shift_b;
-                    }
-                    sum += (velocity[b][edge + sa] - velocity[b][edge]) / grid.gap(a, edge_line)
-                        - (velocity[a][edge + sb] - velocity[a][edge]) / grid.gap(b, edge_line);
-                }
+    // One row of cells along x per task, in the order of `Grid::for_each`;
+    // each cell is computed alone, whatever the number of threads.
+    let rows = cell_velocity
+        .par_chunks_mut(nx)
+        .zip(pressure.par_chunks_mut(nx))
+        .zip(vorticity.par_chunks_mut(nx))
+        .enumerate()
+        .with_min_len(8);
+    rows.for_each(|(row, ((velocity_row, pressure_row), vorticity_row))| {
+        let (j, k) = (cells.start[1] + row % ny, cells.start[2] + row / ny);
+        let first = grid.index(0, j, k);
+        for (local, i) in (cells.start[0]..cells.end[0]).enumerate() {
+            let (index, point) = (first + i, [i, j, k]);
+            let mut u = [0.0; 3];
+            for a in 0..dim {
+                u[a] = 0.5 * (velocity[a][index - grid.stride(a)] + velocity[a][index]);
             }
-            0.25 * sum
-        };
-        vorticity.push(if dim == 3 {
-            [curl(1, 2), curl(2, 0), curl(0, 1)]
-        } else {
-            [0.0, 0.0, curl(0, 1)]
-        });
+            velocity_row[local] = u;
+            pressure_row[local] = density * solver.pressure[index];
+            // ω_c = ∂u_b/∂x_a − ∂u_a/∂x_b on the four edges of the cell along
+            // c; each difference spans the distance between the centres on
+            // either side of its edge (edge `e` along the line axis lies on
+            // face `e`).
+            let curl = |a: usize, b: usize| {
+                let (sa, sb) = (grid.stride(a), grid.stride(b));
+                let mut sum = 0.0;
+                for shift_a in [1, 0] {
+                    for shift_b in [1, 0] {
+                        let edge = index - shift_a * sa - shift_b * sb;
+                        let mut edge_line = point[line];
+                        if a == line {
+                            edge_line -= shift_a;
+                        }
+                        if b == line {
+                            edge_line -= shift_b;
+                        }
+                        sum += (velocity[b][edge + sa] - velocity[b][edge])
+                            / grid.gap(a, edge_line)
+                            - (velocity[a][edge + sb] - velocity[a][edge]) / grid.gap(b, edge_line);
+                    }
+                }
+                0.25 * sum
+            };
+            vorticity_row[local] = if dim == 3 {
+                [curl(1, 2), curl(2, 0), curl(0, 1)]
+            } else {
+                [0.0, 0.0, curl(0, 1)]
+            };
+        }
     });
     (cell_velocity, pressure, vorticity)
 }

@@ -9,6 +9,7 @@ pub mod csv;
 #[cfg(feature = "hdf5")]
 pub mod hdf5;
 pub mod vtk;
+pub mod vtk_reader;
 pub mod whole;
 
 pub use csv::CsvSeries;
@@ -16,4 +17,5 @@ pub use vtk::{
     write_field_pieces_index, write_particle_pieces_index, CellLayout, FieldFrame, FieldPiece,
     ParticleFrame, PvdIndex,
 };
+pub use vtk_reader::{read_vtk, RawArray, VtkFile};
 pub use whole::{temporary_path, write_whole, write_whole_bytes, TEMPORARY_SUFFIX};

@@ -3,8 +3,11 @@
 //! on a grid stretched along an axis, and the `.pvd` collection that lets
 //! ParaView open any of them as one time series.
 //!
-//! Arrays are written in binary (base64, little-endian, with a UInt32 byte
-//! count header), which ParaView reads directly; one vertex per particle.
+//! Arrays are written as raw appended data, ParaView's own default: the XML
+//! declares each array with its offset, and the bytes follow the XML in one
+//! `<AppendedData encoding="raw">` block (little-endian, each array behind
+//! its byte count as a UInt64). No encoding to pay, and a quarter fewer
+//! bytes than base64 text. One vertex per particle.
 //!
 //! Every file here is written whole ([`crate::whole`]): under a temporary
 //! name, then renamed, so that a run killed while writing leaves the
@@ -28,11 +31,14 @@ pub struct ParticleFrame<'a> {
 impl ParticleFrame<'_> {
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let n = self.radius.len();
+        let connectivity: Vec<i64> = (0..n as i64).collect();
+        let offsets: Vec<i64> = (1..=n as i64).collect();
         write_whole(path, |out| {
+            let mut data = Appended::default();
             writeln!(out, r#"<?xml version="1.0"?>"#)?;
             writeln!(
                 out,
-                r#"<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
+                r#"<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
             )?;
             writeln!(out, "<PolyData>")?;
             writeln!(
@@ -40,58 +46,23 @@ impl ParticleFrame<'_> {
                 r#"<Piece NumberOfPoints="{n}" NumberOfVerts="{n}" NumberOfLines="0" NumberOfStrips="0" NumberOfPolys="0">"#
             )?;
             writeln!(out, "<PointData Scalars=\"radius\" Vectors=\"velocity\">")?;
-            write_array(out, "radius", "Float64", 1, &to_bytes_f64(self.radius))?;
-            write_array(
-                out,
-                "id",
-                "UInt64",
-                1,
-                &self
-                    .id
-                    .iter()
-                    .flat_map(|v| v.to_le_bytes())
-                    .collect::<Vec<_>>(),
-            )?;
-            write_array(out, "fixed", "UInt8", 1, self.fixed)?;
-            write_array(
-                out,
-                "velocity",
-                "Float64",
-                3,
-                &to_bytes_f64(self.velocity.as_flattened()),
-            )?;
-            write_array(
-                out,
-                "angular_velocity",
-                "Float64",
-                3,
-                &to_bytes_f64(self.angular_velocity.as_flattened()),
-            )?;
-            write_array(
-                out,
-                "force",
-                "Float64",
-                3,
-                &to_bytes_f64(self.force.as_flattened()),
-            )?;
+            data.declare(out, "radius", 1, Array::F64(self.radius))?;
+            data.declare(out, "id", 1, Array::U64(self.id))?;
+            data.declare(out, "fixed", 1, Array::U8(self.fixed))?;
+            data.declare(out, "velocity", 3, Array::F64(self.velocity.as_flattened()))?;
+            let spin = Array::F64(self.angular_velocity.as_flattened());
+            data.declare(out, "angular_velocity", 3, spin)?;
+            data.declare(out, "force", 3, Array::F64(self.force.as_flattened()))?;
             writeln!(out, "</PointData>")?;
             writeln!(out, "<Points>")?;
-            write_array(
-                out,
-                "position",
-                "Float64",
-                3,
-                &to_bytes_f64(self.position.as_flattened()),
-            )?;
+            data.declare(out, "position", 3, Array::F64(self.position.as_flattened()))?;
             writeln!(out, "</Points>")?;
             writeln!(out, "<Verts>")?;
-            let connectivity: Vec<u8> = (0..n as i64).flat_map(|k| k.to_le_bytes()).collect();
-            let offsets: Vec<u8> = (1..=n as i64).flat_map(|k| k.to_le_bytes()).collect();
-            write_array(out, "connectivity", "Int64", 1, &connectivity)?;
-            write_array(out, "offsets", "Int64", 1, &offsets)?;
+            data.declare(out, "connectivity", 1, Array::I64(&connectivity))?;
+            data.declare(out, "offsets", 1, Array::I64(&offsets))?;
             writeln!(out, "</Verts>")?;
-            writeln!(out, "</Piece>\n</PolyData>\n</VTKFile>")?;
-            Ok(())
+            writeln!(out, "</Piece>\n</PolyData>")?;
+            data.finish(out)
         })
     }
 }
@@ -104,7 +75,7 @@ pub fn write_particle_pieces_index(path: &Path, pieces: &[String]) -> std::io::R
         writeln!(out, r#"<?xml version="1.0"?>"#)?;
         writeln!(
             out,
-            r#"<VTKFile type="PPolyData" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
+            r#"<VTKFile type="PPolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
         )?;
         writeln!(out, r#"<PPolyData GhostLevel="0">"#)?;
         writeln!(out, r#"<PPointData Scalars="radius" Vectors="velocity">"#)?;
@@ -174,6 +145,7 @@ pub struct FieldFrame<'a> {
 impl FieldFrame<'_> {
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         write_whole(path, |out| {
+            let mut data = Appended::default();
             writeln!(out, r#"<?xml version="1.0"?>"#)?;
             let extent = extent_text(self.offset, self.cells);
             let kind = match self.layout {
@@ -182,7 +154,7 @@ impl FieldFrame<'_> {
             };
             writeln!(
                 out,
-                r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
+                r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
             )?;
             match &self.layout {
                 CellLayout::Uniform { origin, spacing } => {
@@ -200,27 +172,21 @@ impl FieldFrame<'_> {
                     writeln!(out, "<Coordinates>")?;
                     for (axis, name) in ["x", "y", "z"].iter().enumerate() {
                         debug_assert_eq!(faces[axis].len(), self.cells[axis] + 1);
-                        write_array(out, name, "Float64", 1, &to_bytes_f64(faces[axis]))?;
+                        data.declare(out, name, 1, Array::F64(faces[axis]))?;
                     }
                     writeln!(out, "</Coordinates>")?;
                 }
             }
             writeln!(out, "<CellData>")?;
             for (name, values) in self.scalars {
-                write_array(out, name, "Float64", 1, &to_bytes_f64(values))?;
+                data.declare(out, name, 1, Array::F64(values))?;
             }
             for (name, values) in self.vectors {
-                write_array(
-                    out,
-                    name,
-                    "Float64",
-                    3,
-                    &to_bytes_f64(values.as_flattened()),
-                )?;
+                data.declare(out, name, 3, Array::F64(values.as_flattened()))?;
             }
             writeln!(out, "</CellData>")?;
-            writeln!(out, "</Piece>\n</{kind}>\n</VTKFile>")?;
-            Ok(())
+            writeln!(out, "</Piece>\n</{kind}>")?;
+            data.finish(out)
         })
     }
 }
@@ -260,7 +226,7 @@ pub fn write_field_pieces_index(
         };
         writeln!(
             out,
-            r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt32">"#
+            r#"<VTKFile type="{kind}" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
         )?;
         match layout {
             CellLayout::Uniform { origin, spacing } => {
@@ -309,62 +275,101 @@ pub fn write_field_pieces_index(
     })
 }
 
-fn to_bytes_f64(values: &[f64]) -> Vec<u8> {
-    let mut bytes = Vec::with_capacity(8 * values.len());
-    for v in values {
-        bytes.extend_from_slice(&v.to_le_bytes());
-    }
-    bytes
+/// One array's values, in the type VTK names.
+#[derive(Clone, Copy)]
+enum Array<'a> {
+    F64(&'a [f64]),
+    U64(&'a [u64]),
+    I64(&'a [i64]),
+    U8(&'a [u8]),
 }
 
-fn write_array(
-    out: &mut impl Write,
-    name: &str,
-    kind: &str,
-    components: usize,
-    bytes: &[u8],
-) -> std::io::Result<()> {
-    let mut block = Vec::with_capacity(bytes.len() + 4);
-    block.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
-    block.extend_from_slice(bytes);
-    writeln!(
-        out,
-        r#"<DataArray type="{kind}" Name="{name}" NumberOfComponents="{components}" format="binary">"#
-    )?;
-    out.write_all(base64(&block).as_bytes())?;
-    writeln!(out, "\n</DataArray>")
+impl Array<'_> {
+    fn vtk_type(&self) -> &'static str {
+        match self {
+            Array::F64(_) => "Float64",
+            Array::U64(_) => "UInt64",
+            Array::I64(_) => "Int64",
+            Array::U8(_) => "UInt8",
+        }
+    }
+
+    fn byte_count(&self) -> u64 {
+        let (count, size) = match self {
+            Array::F64(v) => (v.len(), 8),
+            Array::U64(v) => (v.len(), 8),
+            Array::I64(v) => (v.len(), 8),
+            Array::U8(v) => (v.len(), 1),
+        };
+        (count * size) as u64
+    }
+
+    /// The values as little-endian bytes, a block at a time.
+    fn write_bytes(&self, out: &mut impl Write) -> std::io::Result<()> {
+        const BLOCK: usize = 1024;
+        let mut buffer = Vec::with_capacity(8 * BLOCK);
+        macro_rules! blocks {
+            ($values:expr) => {
+                for block in $values.chunks(BLOCK) {
+                    buffer.clear();
+                    for v in block {
+                        buffer.extend_from_slice(&v.to_le_bytes());
+                    }
+                    out.write_all(&buffer)?;
+                }
+            };
+        }
+        match self {
+            Array::F64(v) => blocks!(v),
+            Array::U64(v) => blocks!(v),
+            Array::I64(v) => blocks!(v),
+            Array::U8(v) => out.write_all(v)?,
+        }
+        Ok(())
+    }
 }
 
-/// Standard base64 with padding (RFC 4648).
-pub fn base64(bytes: &[u8]) -> String {
-    const TABLE: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut encoded = Vec::with_capacity(bytes.len().div_ceil(3) * 4);
-    let whole = bytes.chunks_exact(3);
-    let rest = whole.remainder();
-    for chunk in whole {
-        let n = (u32::from(chunk[0]) << 16) | (u32::from(chunk[1]) << 8) | u32::from(chunk[2]);
-        encoded.extend_from_slice(&[
-            TABLE[(n >> 18) as usize & 63],
-            TABLE[(n >> 12) as usize & 63],
-            TABLE[(n >> 6) as usize & 63],
-            TABLE[n as usize & 63],
-        ]);
+/// The arrays of one file: declared in its XML with their offsets, then
+/// written after it as one block of raw appended data.
+#[derive(Default)]
+struct Appended<'a> {
+    arrays: Vec<Array<'a>>,
+    /// Offset of the next array in the block: the byte counts and values
+    /// of those before it.
+    offset: u64,
+}
+
+impl<'a> Appended<'a> {
+    /// Writes the array's `<DataArray>` element and keeps its values for
+    /// [`Appended::finish`].
+    fn declare(
+        &mut self,
+        out: &mut impl Write,
+        name: &str,
+        components: usize,
+        values: Array<'a>,
+    ) -> std::io::Result<()> {
+        writeln!(
+            out,
+            r#"<DataArray type="{}" Name="{name}" NumberOfComponents="{components}" format="appended" offset="{}"/>"#,
+            values.vtk_type(),
+            self.offset
+        )?;
+        self.offset += 8 + values.byte_count();
+        self.arrays.push(values);
+        Ok(())
     }
-    if !rest.is_empty() {
-        let b = [rest[0], *rest.get(1).unwrap_or(&0)];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8);
-        encoded.extend_from_slice(&[
-            TABLE[(n >> 18) as usize & 63],
-            TABLE[(n >> 12) as usize & 63],
-            if rest.len() > 1 {
-                TABLE[(n >> 6) as usize & 63]
-            } else {
-                b'='
-            },
-            b'=',
-        ]);
+
+    /// The appended block (`_`, then each array's byte count as a UInt64
+    /// and its values) and the end of the file.
+    fn finish(self, out: &mut impl Write) -> std::io::Result<()> {
+        write!(out, "<AppendedData encoding=\"raw\">\n_")?;
+        for array in &self.arrays {
+            out.write_all(&array.byte_count().to_le_bytes())?;
+            array.write_bytes(out)?;
+        }
+        writeln!(out, "\n</AppendedData>\n</VTKFile>")
     }
-    String::from_utf8(encoded).expect("the base64 alphabet is ASCII")
 }
 
 /// A `.pvd` collection: one dataset per output time, rewritten whole after
@@ -412,21 +417,5 @@ impl PvdIndex {
             writeln!(out, "</Collection>\n</VTKFile>")?;
             Ok(())
         })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::base64;
-
-    #[test]
-    fn base64_matches_rfc4648_vectors() {
-        assert_eq!(base64(b""), "");
-        assert_eq!(base64(b"f"), "Zg==");
-        assert_eq!(base64(b"fo"), "Zm8=");
-        assert_eq!(base64(b"foo"), "Zm9v");
-        assert_eq!(base64(b"foob"), "Zm9vYg==");
-        assert_eq!(base64(b"fooba"), "Zm9vYmE=");
-        assert_eq!(base64(b"foobar"), "Zm9vYmFy");
     }
 }
