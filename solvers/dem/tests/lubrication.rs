@@ -47,19 +47,6 @@ fn approach_with_contact_gap(
     roughness: f64,
     contact_gap: f64,
 ) -> DemSystem {
-    let domain = Domain {
-        dimension: Dimension::Three,
-        lower: Vec3::new(-0.01, -0.01, 0.0),
-        upper: Vec3::new(0.01, 0.01, 0.01),
-        periodic: [false; 3],
-        gravity: Vec3::zeros(),
-    };
-    let law = ContactLaw {
-        normal: NormalStiffness::from_restitution(0.9, CONTACT_TIME, NormalCalibration::Exact),
-        tangential_ratio: 0.2,
-        friction: 0.0,
-        rolling_friction: 0.0,
-    };
     let floor = PlaneWall {
         name: "floor".into(),
         point: Vec3::zeros(),
@@ -67,13 +54,8 @@ fn approach_with_contact_gap(
         friction: 0.0,
         remove_at: None,
     };
-    let mut system = DemSystem::new(domain, law, vec![floor], 0.2 * RADIUS);
+    let mut system = film_scene(vec![floor], viscosity, roughness);
     system.contact_gap = contact_gap;
-    system.lubrication = Some(Lubrication {
-        viscosity,
-        roughness,
-        range: 0.5,
-    });
     system.add_particles(&[NewParticle {
         position: Vec3::new(0.0, 0.0, 1.5 * RADIUS + contact_gap - 1e-12),
         velocity: Vec3::new(0.0, 0.0, -speed),
@@ -254,9 +236,9 @@ fn a_bounce_through_the_film_has_the_thin_film_restitution() {
     }
 }
 
-/// An empty scene with `walls` and the stiff film of
-/// [`stiff_film_stops_the_sphere_without_rebound`], no gravity.
-fn stiff_film_scene(walls: Vec<PlaneWall>) -> DemSystem {
+/// An empty scene with `walls`, a film of `viscosity` (Pa s) and
+/// `roughness` (η/R), no gravity.
+fn film_scene(walls: Vec<PlaneWall>, viscosity: f64, roughness: f64) -> DemSystem {
     let domain = Domain {
         dimension: Dimension::Three,
         lower: Vec3::new(-0.01, -0.01, 0.0),
@@ -272,11 +254,17 @@ fn stiff_film_scene(walls: Vec<PlaneWall>) -> DemSystem {
     };
     let mut system = DemSystem::new(domain, law, walls, 0.2 * RADIUS);
     system.lubrication = Some(Lubrication {
-        viscosity: 10.0,
-        roughness: 1e-4,
+        viscosity,
+        roughness,
         range: 0.5,
     });
     system
+}
+
+/// [`film_scene`] with the stiff film of
+/// [`stiff_film_stops_the_sphere_without_rebound`].
+fn stiff_film_scene(walls: Vec<PlaneWall>) -> DemSystem {
+    film_scene(walls, 10.0, 1e-4)
 }
 
 /// A grain of the tests below at `position`, moving at `velocity`.

@@ -9,10 +9,9 @@
 //! after 0.1 s (U = 0.05 m/s, ω = 10 rad/s). The derivative over the moving
 //! volume leaves what the grid itself does not keep invariant.
 
-use grainflow_core::{Communicator, Dimension, Domain, Vec3};
-use grainflow_dem::particles::NewParticle;
-use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
-use grainflow_fluid::{Boundaries, FlowSolver, Grid};
+mod common;
+
+use common::PeriodicSphere;
 use grainflow_ibm::{
     CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
 };
@@ -23,35 +22,16 @@ const DIAMETER: f64 = 0.01;
 /// box of 4 D of water, spinning at `spin` rad/s about z; grain and fluid
 /// drift together at `drift` m/s along x. No gravity.
 fn spinning_sphere(drift: f64, spin: f64, coupling: Coupling) -> CoupledSystem {
-    let extent = [4.0 * DIAMETER; 3];
     let cells = std::env::var("GALILEAN_CELLS").map_or(32, |v| v.parse().unwrap());
-    let grid = Grid::new(Dimension::Three, [cells; 3], [0.0; 3], extent);
-    let mut flow =
-        FlowSolver::new(grid, Boundaries::periodic(), 1e-6, Communicator::serial()).unwrap();
-    flow.set_velocity(|component, _| if component == 0 { drift } else { 0.0 });
-    let domain = Domain {
-        dimension: Dimension::Three,
-        lower: Vec3::zeros(),
-        upper: Vec3::from(extent),
-        periodic: [true; 3],
-        gravity: Vec3::zeros(),
-    };
-    let law = ContactLaw {
-        normal: NormalStiffness::from_restitution(0.9, 1e-3, NormalCalibration::Exact),
-        tangential_ratio: 0.2,
-        friction: 0.25,
-        rolling_friction: 0.0,
-    };
-    let mut dem = DemSystem::new(domain, law, Vec::new(), 0.1 * DIAMETER);
-    dem.add_particles(&[NewParticle {
-        position: Vec3::from(extent) * 0.5,
-        velocity: Vec3::new(drift, 0.0, 0.0),
-        angular_velocity: Vec3::new(0.0, 0.0, spin),
-        radius: 0.5 * DIAMETER,
+    PeriodicSphere {
+        diameter: DIAMETER,
+        cells,
+        viscosity: 1e-6,
         density: 2000.0,
-        fixed: false,
-    }]);
-    CoupledSystem::new(flow, dem, 1000.0, coupling, 1e-4)
+        drift,
+        spin,
+    }
+    .build(coupling)
 }
 
 /// The grain's velocity across the drift after 20 steps of 5 ms.

@@ -10,14 +10,12 @@
 //! over `8π μ R³ ω`. The box is triply periodic and 4 D wide: the images'
 //! rotlets change the torque by about `(R / L)³`, 0.2 %.
 
-use grainflow_core::{Communicator, Dimension, Domain, Vec3};
-use grainflow_dem::particles::NewParticle;
-use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
-use grainflow_fluid::{Boundaries, FlowSolver, Grid};
+mod common;
+
+use common::{PeriodicSphere, FLUID_DENSITY};
 use grainflow_ibm::{CoupledSystem, Coupling};
 
 const DIAMETER: f64 = 0.01;
-const FLUID_DENSITY: f64 = 1000.0;
 const KINEMATIC_VISCOSITY: f64 = 1e-3;
 const DENSITY_RATIO: f64 = 1000.0;
 
@@ -25,38 +23,15 @@ const DENSITY_RATIO: f64 = 1000.0;
 /// `resolution`, spinning at 1 rad/s about z (rotational Reynolds number
 /// ω R² / ν = 0.025) in fluid at rest.
 fn spinning_sphere(resolution: usize, coupling: Coupling) -> CoupledSystem {
-    let extent = [4.0 * DIAMETER; 3];
-    let grid = Grid::new(Dimension::Three, [4 * resolution; 3], [0.0; 3], extent);
-    let flow = FlowSolver::new(
-        grid,
-        Boundaries::periodic(),
-        KINEMATIC_VISCOSITY,
-        Communicator::serial(),
-    )
-    .unwrap();
-    let domain = Domain {
-        dimension: Dimension::Three,
-        lower: Vec3::zeros(),
-        upper: Vec3::from(extent),
-        periodic: [true; 3],
-        gravity: Vec3::zeros(),
-    };
-    let law = ContactLaw {
-        normal: NormalStiffness::from_restitution(0.9, 1e-3, NormalCalibration::Exact),
-        tangential_ratio: 0.2,
-        friction: 0.25,
-        rolling_friction: 0.0,
-    };
-    let mut dem = DemSystem::new(domain, law, Vec::new(), 0.1 * DIAMETER);
-    dem.add_particles(&[NewParticle {
-        position: Vec3::from(extent) * 0.5,
-        velocity: Vec3::zeros(),
-        angular_velocity: Vec3::new(0.0, 0.0, 1.0),
-        radius: 0.5 * DIAMETER,
+    PeriodicSphere {
+        diameter: DIAMETER,
+        cells: 4 * resolution,
+        viscosity: KINEMATIC_VISCOSITY,
         density: DENSITY_RATIO * FLUID_DENSITY,
-        fixed: false,
-    }]);
-    CoupledSystem::new(flow, dem, FLUID_DENSITY, coupling, 1e-4)
+        drift: 0.0,
+        spin: 1.0,
+    }
+    .build(coupling)
 }
 
 /// The decay rate of the spin between t = 0.1 s (four R²/ν) and 0.3 s,
