@@ -17,6 +17,7 @@
 //! opens (ParaView, h5py), since the default build needs no system library.
 
 pub mod case_changes;
+pub mod extent;
 
 use grainflow_core::{Communicator, State};
 use serde::{Deserialize, Serialize};
@@ -44,6 +45,11 @@ pub struct Manifest {
     pub reason: String,
     /// The resolved case of the run that wrote it.
     pub case: String,
+    /// What each rank's state holds ([`extent`]): a resume on another
+    /// number of ranks reads only the states a rank needs (empty in
+    /// checkpoints that predate it: then every state).
+    #[serde(default)]
+    pub extents: Vec<extent::Extent>,
 }
 
 /// Why a checkpoint cannot be read.
@@ -238,6 +244,7 @@ mod tests {
             steps,
             reason: "schedule".into(),
             case: String::new(),
+            extents: Vec::new(),
         }
     }
 

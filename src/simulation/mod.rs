@@ -15,6 +15,7 @@ pub mod stop;
 pub mod time_loop;
 
 use crate::case::Case;
+use crate::checkpoint::extent::states_to_read;
 use crate::checkpoint::{self, case_changes};
 use crate::output::writers::{Writers, WritersRecord};
 use crate::output::RunDirectory;
@@ -194,9 +195,11 @@ fn run_here(
             let mut states = if manifest.ranks == communicator.size() {
                 vec![checkpoint::read_state(path, communicator.rank()).map_err(|e| e.0)?]
             } else {
-                // Another number of ranks: every rank reads every state
-                // and keeps its share.
-                (0..manifest.ranks)
+                // Another number of ranks: each rank reads the states that
+                // hold its share (and the old root's), and keeps its share.
+                let needed = model.extents().1;
+                states_to_read(manifest.ranks, &manifest.extents, &needed)
+                    .into_iter()
                     .map(|rank| checkpoint::read_state(path, rank).map_err(|e| e.0))
                     .collect::<Result<Vec<_>, _>>()?
             };

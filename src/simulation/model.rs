@@ -7,6 +7,7 @@ use super::coupled::CoupledModel;
 use super::dry::DryModel;
 use super::fluid::FluidModel;
 use crate::case::Case;
+use crate::checkpoint::extent::Extent;
 use crate::RunError;
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_dem::DemSystem;
@@ -118,6 +119,22 @@ impl Model {
             Model::Fluid(_) => None,
             Model::Coupled(m) => Some(&m.system.dem),
         }
+    }
+
+    /// The flow, if the scene has a fluid.
+    pub fn flow(&self) -> Option<&FlowSolver> {
+        match self {
+            Model::Dry(_) => None,
+            Model::Fluid(m) => Some(&m.solver),
+            Model::Coupled(m) => Some(&m.system.flow),
+        }
+    }
+
+    /// What this rank's saved state holds, and what it needs to take its
+    /// share on a resume on another number of ranks.
+    pub fn extents(&self) -> (Extent, Extent) {
+        let (grains, flow) = (self.grains(), self.flow());
+        (Extent::held(grains, flow), Extent::needed(grains, flow))
     }
 
     pub fn has_flow(&self) -> bool {
