@@ -1,0 +1,286 @@
+//! The tables of a case that describe the grains, their contacts, the
+//! walls and the coupling with a fluid.
+
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticlesSection {
+    /// Grain density [kg/m³].
+    pub density: f64,
+    /// Mean radius [m].
+    pub radius: f64,
+    /// Relative half-width of the uniform radius distribution (0.1 = ±10 %).
+    #[serde(default)]
+    pub radius_spread: f64,
+    /// Seed of the random generator (placement, radii).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Ids of particles written to `tracked.csv`.
+    #[serde(default)]
+    pub tracked: Vec<u64>,
+    /// Generators, applied in order; ids follow the order of creation.
+    #[serde(default)]
+    pub block: Vec<BlockSection>,
+    /// Grains poured during the run, batch after batch, each released
+    /// just above the deposit (dry scenes with soft contact).
+    #[serde(default)]
+    pub pour: Vec<PourSection>,
+}
+
+/// A pour: batches of grains on a jittered lattice, the first at t = 0 and
+/// then every `interval`, each lifted along −gravity so that its lowest
+/// grain is `gap` above the highest mobile grain. Grains land from a
+/// small height whatever the height the deposit has reached, as in a
+/// filling that follows the free surface.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PourSection {
+    /// The batch's box at its lowest position (a batch is never placed
+    /// below it).
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    /// Lattice spacing of a batch [m].
+    pub spacing: f64,
+    /// Random displacement as a fraction of each site's free room.
+    #[serde(default)]
+    pub jitter: f64,
+    /// Grains to pour in all (the last batch keeps its lowest sites).
+    pub count: usize,
+    /// Time between two batches [s].
+    pub interval: f64,
+    /// Gap between the highest mobile grain and a new batch [m].
+    #[serde(default)]
+    pub gap: f64,
+    /// A batch also waits until the rms speed of the previous batch's
+    /// grains is below this [m/s] (it has landed); no wait if absent.
+    #[serde(default)]
+    pub settled_speed: Option<f64>,
+    #[serde(default)]
+    pub velocity: Vec<f64>,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum BlockSection {
+    /// Simple cubic (square) lattice filling a box.
+    Lattice {
+        lower: Vec<f64>,
+        upper: Vec<f64>,
+        /// Lattice spacing [m].
+        spacing: f64,
+        /// Spacing between layers along the last axis (y in 2D, z in 3D)
+        /// [m]; default `spacing`. Sparse layers rain down one after the
+        /// other, like a poured fill.
+        #[serde(default)]
+        layer_spacing: Option<f64>,
+        /// Random displacement as a fraction of each site's free room.
+        #[serde(default)]
+        jitter: f64,
+        #[serde(default)]
+        fixed: bool,
+        #[serde(default)]
+        velocity: Vec<f64>,
+    },
+    /// Random non-overlapping placement (a sedimentation starts from it).
+    Random {
+        lower: Vec<f64>,
+        upper: Vec<f64>,
+        count: usize,
+        #[serde(default)]
+        fixed: bool,
+        #[serde(default)]
+        velocity: Vec<f64>,
+    },
+    /// Particles given one by one.
+    Explicit {
+        positions: Vec<Vec<f64>>,
+        #[serde(default)]
+        velocities: Vec<Vec<f64>>,
+        #[serde(default)]
+        angular_velocities: Vec<Vec<f64>>,
+        #[serde(default)]
+        radii: Vec<f64>,
+        #[serde(default)]
+        fixed: bool,
+    },
+    /// Particles read from a CSV file with the header `x,y,z,radius`
+    /// (2D: `x,y,radius`), optionally followed by velocity columns
+    /// `vx,vy[,vz]`. A relative path is relative to the case file.
+    File {
+        path: String,
+        #[serde(default)]
+        fixed: bool,
+    },
+    /// Independent binary collisions, one pair per impact parameter
+    /// Ψ1 = v_t / v_n from 0 to `psi_max`: particle 2k moves towards the
+    /// resting particle 2k + 1 with normal speed `impact_speed`.
+    CollisionPairs {
+        count: usize,
+        impact_speed: f64,
+        psi_max: f64,
+        /// Initial gap between the surfaces of a pair [m].
+        #[serde(default)]
+        gap: f64,
+    },
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSection {
+    /// "soft" (the DEM of Izard et al. 2014), or hard contact: "cocd"
+    /// (convex optimization contact dynamics) or "nscd" (non-smooth
+    /// contact dynamics), Martin et al. 2022. The rest of a case is the same
+    /// for the three.
+    pub model: String,
+    /// Normal restitution e_n (soft: with contact_time; nscd: Newton's
+    /// restitution, default 0; cocd is inelastic).
+    #[serde(default)]
+    pub restitution: Option<f64>,
+    /// Soft: contact time t_c [s] (eq. 17–18) ...
+    #[serde(default)]
+    pub contact_time: Option<f64>,
+    /// ... turned into k_n, γ_n by "exact" (restitution exactly e_n with the
+    /// no-attraction clamp, the default) or "paper" (eq. 17–18 as printed).
+    #[serde(default)]
+    pub calibration: Option<String>,
+    /// Soft: or the same k_n [N/m] and γ_n [N s/m] for every pair.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Soft: k_t / k_n (default 0.2).
+    #[serde(default)]
+    pub tangential_ratio: Option<f64>,
+    /// Coulomb coefficient between particles.
+    pub friction: f64,
+    /// Soft: rolling resistance μ_r (torque μ_r R* F_n against rolling; 0: none).
+    #[serde(default)]
+    pub rolling_friction: f64,
+    /// Coulomb coefficient with walls (default: `friction`).
+    #[serde(default)]
+    pub wall_friction: Option<f64>,
+    /// Verlet skin [m] (default: 0.1 mean diameter).
+    #[serde(default)]
+    pub skin: Option<f64>,
+    /// Hard: the solver tolerance ε (cocd: the interior point's relative
+    /// gap and feasibility, default 1e-8; nscd: the residual of the contact
+    /// law at which Gauss–Seidel stops, default 1e-6).
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+    /// Hard: interior-point iterations (default 200) or Gauss–Seidel
+    /// sweeps (default 5000) allowed per step.
+    #[serde(default)]
+    pub max_iterations: Option<u32>,
+    /// Hard: candidate threshold D [m]: pairs closer than this enter the
+    /// step's problem (default 0.1 mean diameter; widened to what the
+    /// fastest grain closes in a step).
+    #[serde(default)]
+    pub threshold: Option<f64>,
+    /// cocd: "interior_point" (grainflow's, on the normal equations, where
+    /// the cones are linear: 2D discs; the default) or "clarabel" (the
+    /// reference; always used for 3D frictional contacts).
+    #[serde(default)]
+    pub conic_solver: Option<String>,
+}
+
+impl ContactSection {
+    /// Whether the model is hard contact (cocd or nscd).
+    pub fn is_hard(&self) -> bool {
+        self.model == "cocd" || self.model == "nscd"
+    }
+
+    pub fn calibration(&self) -> &str {
+        self.calibration.as_deref().unwrap_or("exact")
+    }
+
+    pub fn tangential_ratio(&self) -> f64 {
+        self.tangential_ratio.unwrap_or(0.2)
+    }
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSection {
+    #[serde(default)]
+    pub name: Option<String>,
+    /// A point of the plane [m].
+    pub point: Vec<f64>,
+    /// Normal pointing towards the particles (normalised on reading).
+    pub normal: Vec<f64>,
+    /// Coulomb coefficient (default: `contact.wall_friction`).
+    #[serde(default)]
+    pub friction: Option<f64>,
+    /// Time [s] at which the wall is removed.
+    #[serde(default)]
+    pub remove_at: Option<f64>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CouplingSection {
+    /// "inner_fluid_momentum" (default: the rate of change of the fluid
+    /// momentum inside each grain enters its load; any density ratio) or
+    /// "rigid_inner_fluid" (eq. 5–6 of the paper; unstable as ρ_p/ρ → 1).
+    #[serde(default = "default_formulation")]
+    pub formulation: String,
+    /// Gap between surfaces, in fluid cells, at which grains start touching
+    /// (each other or a wall); 0, the paper's choice, unless set.
+    #[serde(default = "default_contact_gap")]
+    pub contact_gap: f64,
+    /// The step [s] at which the direct forcing relaxes each grain's
+    /// transition layer as eq. 7 does; with it, the layer is relaxed at
+    /// the same rate whatever the fluid step (`1 − (1 − α)^{Δt/forcing_step}`
+    /// per stage), so a grain's apparent size does not change when the
+    /// step does. Unset: eq. 7 at every step.
+    #[serde(default)]
+    pub forcing_step: Option<f64>,
+    /// The first layer of fluid cells along the domain's walls: "free"
+    /// (default: the moving grains do not force it; it holds the film of
+    /// eq. 19, which the flow does not resolve; glued grains still do) or
+    /// "forced" (the paper's forcing, which reaches the walls and seals
+    /// them under a grain at contact).
+    #[serde(default = "default_wall_layer")]
+    pub wall_layer: String,
+}
+
+impl Default for CouplingSection {
+    fn default() -> Self {
+        CouplingSection {
+            formulation: default_formulation(),
+            contact_gap: default_contact_gap(),
+            forcing_step: None,
+            wall_layer: default_wall_layer(),
+        }
+    }
+}
+
+fn default_wall_layer() -> String {
+    "free".into()
+}
+
+fn default_contact_gap() -> f64 {
+    0.0
+}
+
+fn default_formulation() -> String {
+    "inner_fluid_momentum".into()
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LubricationSection {
+    /// Roughness length over the smaller radius of a pair, η/R (eq. 19).
+    pub roughness: f64,
+    /// Largest gap at which the force acts, over the smaller radius.
+    #[serde(default = "default_lubrication_range")]
+    pub range: f64,
+}
+
+fn default_lubrication_range() -> f64 {
+    0.5
+}
