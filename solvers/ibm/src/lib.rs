@@ -16,6 +16,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod coupled;
+mod faces;
 pub mod forcing;
 pub mod settling;
 pub mod solid_fraction;

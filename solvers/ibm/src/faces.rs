@@ -1,0 +1,220 @@
+//! The faces of one velocity component within a body's support, row by
+//! row along x, with the body's solid fraction on each (eq. 8–10).
+//!
+//! A stage makes them once, while the particles stand still, and every
+//! pass of the immersed boundaries reads them: the inner momentum before
+//! and after the stage, the forcing's sums over the bodies, its loads and
+//! the grid volumes. Each row holds the faces where the support sphere
+//! crosses it, stored one after the other, so a pass reads the fractions
+//! and the grid's faces in the same order, row by row, and takes the
+//! offset `r` of a face from the centre as the row's first offset plus
+//! `i Δx` along x: no coordinate is recomputed and no fraction (the
+//! exponential of eq. 8, the costly part) is made twice.
+
+use std::ops::Range;
+
+use grainflow_core::Vec3;
+use grainflow_fluid::{Block, Grid, Location};
+
+use crate::forcing::WallLayer;
+use crate::solid_fraction::{row_fractions, support};
+
+/// A run of consecutive faces along x.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Row {
+    /// Flat index of the row's first face.
+    pub first: usize,
+    /// Offset of the first face from the body's centre; face `i` of the
+    /// row lies at `offset + i Δx x̂`.
+    pub offset: Vec3,
+    /// Where the row's fractions start in [`FaceRows::alpha`].
+    start: usize,
+    /// Faces in the row.
+    pub len: usize,
+}
+
+/// A body's faces of one component within its support, with their solid
+/// fractions.
+#[derive(Clone, Debug)]
+pub(crate) struct FaceRows {
+    /// The box of faces (within the component's unknowns) that holds the
+    /// support.
+    pub stencil: Block,
+    /// Rows per plane of the slowest axis: the stencil's extent along y in
+    /// 3D (where z is the slowest), 1 in 2D (where y is).
+    rows_per_plane: usize,
+    /// One row per line of the stencil along x, the planes of the slowest
+    /// axis in order (rows the support misses are empty).
+    rows: Vec<Row>,
+    /// The fractions of all rows, one after the other.
+    alpha: Vec<f64>,
+    /// `Δx`, the distance between the faces of a row.
+    pub step: f64,
+    /// `Σ α` over the faces.
+    pub sum: f64,
+}
+
+impl FaceRows {
+    /// The faces of `component` in `block` within the support of a body at
+    /// `centre` of `radius` (eq. 8 with `Δ = width`), their fractions zero
+    /// on the faces of `free_layers`.
+    pub fn new(
+        width: f64,
+        grid: &Grid,
+        block: &Block,
+        component: usize,
+        centre: Vec3,
+        radius: f64,
+        free_layers: &[WallLayer],
+    ) -> FaceRows {
+        let dim = grid.dim();
+        let reach = support(radius, width);
+        let location = Location::Face(component);
+        let mut stencil = *block;
+        for axis in 0..dim {
+            let range = face_range(grid, component, axis, centre[axis], reach, block);
+            stencil.start[axis] = range.start;
+            stencil.end[axis] = range.end;
+        }
+        // Only the layers the support reaches: none, for a grain away from
+        // the walls.
+        let layers: Vec<&WallLayer> = free_layers
+            .iter()
+            .filter(|layer| layer.within(centre[layer.axis], reach))
+            .collect();
+        let extent = [0, 1, 2].map(|a| stencil.end[a] - stencil.start[a]);
+        let mut rows = Vec::with_capacity(extent[1] * extent[2]);
+        let mut alpha = Vec::new();
+        for k in stencil.start[2]..stencil.end[2] {
+            for j in stencil.start[1]..stencil.end[1] {
+                let point = [0, j, k];
+                let mut offset = Vec3::zeros();
+                for axis in 1..dim {
+                    offset[axis] = grid.coordinate(location, axis, point[axis]) - centre[axis];
+                }
+                // The faces of the row within the support; beyond it the
+                // fraction is zero (eq. 8 cut at `TAIL`), so none is lost.
+                let across = offset.y * offset.y + offset.z * offset.z;
+                let faces = if across > reach * reach {
+                    stencil.start[0]..stencil.start[0]
+                } else {
+                    let half = (reach * reach - across).sqrt();
+                    face_range(grid, component, 0, centre.x, half, &stencil)
+                };
+                offset.x = grid.coordinate(location, 0, faces.start) - centre.x;
+                let start = alpha.len();
+                let len = faces.len();
+                alpha.resize(start + len, 0.0);
+                let values = &mut alpha[start..];
+                row_fractions(offset.into(), grid.spacing[0], radius, width, values);
+                for layer in &layers {
+                    layer.clear_row(grid, component, faces.clone(), point, values);
+                }
+                rows.push(Row {
+                    first: grid.index(faces.start, j, k),
+                    offset,
+                    start,
+                    len,
+                });
+            }
+        }
+        let sum = alpha.iter().sum();
+        FaceRows {
+            stencil,
+            rows_per_plane: (1..dim - 1).map(|a| extent[a]).product(),
+            rows,
+            alpha,
+            step: grid.spacing[0],
+            sum,
+        }
+    }
+
+    /// Whether the body has no face of this component here.
+    pub fn is_empty(&self) -> bool {
+        (0..3).any(|a| self.stencil.end[a] <= self.stencil.start[a])
+    }
+
+    /// The rows of the planes `planes` (padded indices along the slowest
+    /// active axis of a `dim`-dimensional grid).
+    pub fn rows_in(&self, dim: usize, planes: Range<usize>) -> &[Row] {
+        let slow = dim - 1;
+        let (low, high) = (self.stencil.start[slow], self.stencil.end[slow]);
+        let first = planes.start.clamp(low, high) - low;
+        let last = planes.end.clamp(low, high) - low;
+        &self.rows[first * self.rows_per_plane..last * self.rows_per_plane]
+    }
+
+    /// The fractions of `row`.
+    #[inline]
+    pub fn alpha(&self, row: &Row) -> &[f64] {
+        &self.alpha[row.start..row.start + row.len]
+    }
+
+    /// `(Σ q, Σ q r)` over the faces, `q` a scalar on each face given row
+    /// by row: `row_sums(row, α)` returns `(Σ_i q_i, Σ_i i q_i)` over the
+    /// row's faces `i`, whose offsets are `row.offset + i Δx x̂`.
+    pub fn moments(&self, mut row_sums: impl FnMut(&Row, &[f64]) -> (f64, f64)) -> (f64, Vec3) {
+        let mut sum = 0.0;
+        let mut moment = Vec3::zeros();
+        for row in &self.rows {
+            if row.len == 0 {
+                continue;
+            }
+            let (plain, along) = row_sums(row, self.alpha(row));
+            sum += plain;
+            moment += row.offset * plain;
+            moment.x += self.step * along;
+        }
+        (sum, moment)
+    }
+}
+
+/// Padded indices along `axis` of the faces of `component` within
+/// `reach` of the coordinate `centre`, clipped to `block`.
+fn face_range(
+    grid: &Grid,
+    component: usize,
+    axis: usize,
+    centre: f64,
+    reach: f64,
+    block: &Block,
+) -> Range<usize> {
+    let (h, ghost) = (grid.spacing[axis], grid.ghost(axis) as f64);
+    let offset = if axis == component { 1.0 } else { 0.5 };
+    // Padded index of coordinate x: (x − lower)/h + ghost − offset.
+    let index_of = |x: f64| (x - grid.lower[axis]) / h + ghost - offset;
+    let first = index_of(centre - reach).ceil().max(0.0) as usize;
+    let last = index_of(centre + reach).floor();
+    let start = first.max(block.start[axis]);
+    let end = if last < 0.0 {
+        start
+    } else {
+        (last as usize + 1).min(block.end[axis])
+    };
+    start..end.max(start)
+}
+
+impl WallLayer {
+    /// Sets to zero the fractions `alpha` of the faces `faces` (padded
+    /// indices along x) of the row of `component` through `point` (its y
+    /// and z) that lie in the layer.
+    fn clear_row(
+        &self,
+        grid: &Grid,
+        component: usize,
+        faces: Range<usize>,
+        point: [usize; 3],
+        alpha: &mut [f64],
+    ) {
+        let location = Location::Face(component);
+        if self.axis == 0 {
+            for (i, value) in faces.zip(alpha.iter_mut()) {
+                if self.holds(grid.coordinate(location, 0, i)) {
+                    *value = 0.0;
+                }
+            }
+        } else if self.holds(grid.coordinate(location, self.axis, point[self.axis])) {
+            alpha.fill(0.0);
+        }
+    }
+}
