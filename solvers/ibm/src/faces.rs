@@ -40,11 +40,11 @@ pub(crate) struct FaceRows {
     /// The box of faces (within the component's unknowns) that holds the
     /// support.
     pub stencil: Block,
-    /// Rows per plane of the slowest axis: the stencil's extent along y in
-    /// 3D (where z is the slowest), 1 in 2D (where y is).
-    rows_per_plane: usize,
-    /// One row per line of the stencil along x, the planes of the slowest
-    /// axis in order (rows the support misses are empty).
+    /// Where the rows of each plane of the stencil along the slowest axis
+    /// start in `rows`, and their end.
+    plane_rows: Vec<usize>,
+    /// The lines of the stencil along x that cross the support, the planes
+    /// of the slowest axis in order.
     rows: Vec<Row>,
     /// The fractions of all rows, one after the other.
     alpha: Vec<f64>,
@@ -83,8 +83,11 @@ impl FaceRows {
             .filter(|layer| layer.within(centre[layer.axis], reach))
             .collect();
         let extent = [0, 1, 2].map(|a| stencil.end[a] - stencil.start[a]);
+        let slow = dim - 1;
         let mut rows = Vec::with_capacity(extent[1] * extent[2]);
-        let mut alpha = Vec::new();
+        let mut plane_rows = Vec::with_capacity(extent[slow] + 1);
+        plane_rows.push(0);
+        let mut alpha = Vec::with_capacity(extent.iter().product());
         for k in stencil.start[2]..stencil.end[2] {
             for j in stencil.start[1]..stencil.end[1] {
                 let point = [0, j, k];
@@ -101,6 +104,12 @@ impl FaceRows {
                     let half = (reach * reach - across).sqrt();
                     face_range(grid, component, 0, centre.x, half, &stencil)
                 };
+                if faces.is_empty() {
+                    if slow == 1 {
+                        plane_rows.push(rows.len());
+                    }
+                    continue;
+                }
                 offset.x = grid.coordinate(location, 0, faces.start) - centre.x;
                 let start = alpha.len();
                 let len = faces.len();
@@ -116,12 +125,18 @@ impl FaceRows {
                     start,
                     len,
                 });
+                if slow == 1 {
+                    plane_rows.push(rows.len());
+                }
+            }
+            if slow == 2 {
+                plane_rows.push(rows.len());
             }
         }
         let sum = alpha.iter().sum();
         FaceRows {
             stencil,
-            rows_per_plane: (1..dim - 1).map(|a| extent[a]).product(),
+            plane_rows,
             rows,
             alpha,
             step: grid.spacing[0],
@@ -141,7 +156,7 @@ impl FaceRows {
         let (low, high) = (self.stencil.start[slow], self.stencil.end[slow]);
         let first = planes.start.clamp(low, high) - low;
         let last = planes.end.clamp(low, high) - low;
-        &self.rows[first * self.rows_per_plane..last * self.rows_per_plane]
+        &self.rows[self.plane_rows[first]..self.plane_rows[last]]
     }
 
     /// The fractions of `row`.
@@ -157,9 +172,6 @@ impl FaceRows {
         let mut sum = 0.0;
         let mut moment = Vec3::zeros();
         for row in &self.rows {
-            if row.len == 0 {
-                continue;
-            }
             let (plain, along) = row_sums(row, self.alpha(row));
             sum += plain;
             moment += row.offset * plain;

@@ -367,12 +367,15 @@ impl ImmersedBoundaries {
                     for row in faces.rows_in(dim, layer..layer + 1) {
                         let (base, slope) = body.rigid_along(row, component, faces.step);
                         let at = row.first - first;
-                        let total = &mut total[at..at + row.len];
-                        let target = &mut target[at..at + row.len];
-                        for (i, alpha) in faces.alpha(row).iter().enumerate() {
+                        let sums = total[at..at + row.len]
+                            .iter_mut()
+                            .zip(&mut target[at..at + row.len]);
+                        for (i, (alpha, (total, target))) in
+                            faces.alpha(row).iter().zip(sums).enumerate()
+                        {
                             let beta = forced(*alpha);
-                            total[i] += beta;
-                            target[i] += beta * (base + i as f64 * slope);
+                            *total += beta;
+                            *target += beta * (base + i as f64 * slope);
                         }
                     }
                 }
@@ -411,9 +414,10 @@ impl ImmersedBoundaries {
                         &total[component][faces],
                     );
                     let (mut sum, mut along) = (0.0, 0.0);
-                    for (i, alpha) in alpha.iter().enumerate() {
-                        let weight = forced(*alpha) / total[i].max(1.0);
-                        let q = weight * (base + i as f64 * slope - velocity[i]);
+                    let faces = alpha.iter().zip(velocity.iter().zip(total));
+                    for (i, (alpha, (v, total))) in faces.enumerate() {
+                        let weight = forced(*alpha) / total.max(1.0);
+                        let q = weight * (base + i as f64 * slope - v);
                         sum += q;
                         along += i as f64 * q;
                     }
