@@ -88,13 +88,21 @@ impl FaceRows {
         let mut plane_rows = Vec::with_capacity(extent[slow] + 1);
         plane_rows.push(0);
         let mut alpha = Vec::with_capacity(extent.iter().product());
-        for k in stencil.start[2]..stencil.end[2] {
-            for j in stencil.start[1]..stencil.end[1] {
+        // The offsets along y and z of the stencil's lines (zero along an
+        // inactive z).
+        let line_offsets = |axis: usize| -> Vec<f64> {
+            (stencil.start[axis]..stencil.end[axis])
+                .map(|i| match axis < dim {
+                    true => grid.coordinate(location, axis, i) - centre[axis],
+                    false => 0.0,
+                })
+                .collect()
+        };
+        let (across_y, across_z) = (line_offsets(1), line_offsets(2));
+        for (k, &z) in (stencil.start[2]..).zip(&across_z) {
+            for (j, &y) in (stencil.start[1]..).zip(&across_y) {
                 let point = [0, j, k];
-                let mut offset = Vec3::zeros();
-                for axis in 1..dim {
-                    offset[axis] = grid.coordinate(location, axis, point[axis]) - centre[axis];
-                }
+                let mut offset = Vec3::new(0.0, y, z);
                 // The faces of the row within the support; beyond it the
                 // fraction is zero (eq. 8 cut at `TAIL`), so none is lost.
                 let across = offset.y * offset.y + offset.z * offset.z;

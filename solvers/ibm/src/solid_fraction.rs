@@ -54,7 +54,7 @@ pub fn row_fractions(first: [f64; 3], step: f64, radius: f64, width: f64, out: &
 }
 
 /// Faces per group in [`row_fractions`].
-const LANES: usize = 8;
+const LANES: usize = 4;
 
 /// Eq. 8–10 at the squared distance `squared` from the centre, `l1` the
 /// offset's `|x| + |y| + |z|`. Without branches, so that
