@@ -17,7 +17,7 @@ use grainflow_core::Vec3;
 use grainflow_fluid::{Block, Grid, Location};
 
 use crate::forcing::WallLayer;
-use crate::solid_fraction::{row_fractions, support};
+use crate::solid_fraction::{face_fractions, support};
 
 /// A run of consecutive faces along x.
 #[derive(Clone, Copy, Debug)]
@@ -87,7 +87,14 @@ impl FaceRows {
         let mut rows = Vec::with_capacity(extent[1] * extent[2]);
         let mut plane_rows = Vec::with_capacity(extent[slow] + 1);
         plane_rows.push(0);
-        let mut alpha = Vec::with_capacity(extent.iter().product());
+        // Each face's offset: x, and y² + z² and |y| + |z| of its row, for
+        // the fractions made all at once below.
+        let capacity = extent.iter().product();
+        let (mut x, mut across, mut across_l1) = (
+            Vec::with_capacity(capacity),
+            Vec::with_capacity(capacity),
+            Vec::with_capacity(capacity),
+        );
         // The offsets along y and z of the stencil's lines (zero along an
         // inactive z).
         let line_offsets = |axis: usize| -> Vec<f64> {
@@ -101,15 +108,14 @@ impl FaceRows {
         let (across_y, across_z) = (line_offsets(1), line_offsets(2));
         for (k, &z) in (stencil.start[2]..).zip(&across_z) {
             for (j, &y) in (stencil.start[1]..).zip(&across_y) {
-                let point = [0, j, k];
                 let mut offset = Vec3::new(0.0, y, z);
                 // The faces of the row within the support; beyond it the
                 // fraction is zero (eq. 8 cut at `TAIL`), so none is lost.
-                let across = offset.y * offset.y + offset.z * offset.z;
-                let faces = if across > reach * reach {
+                let across_squared = offset.y * offset.y + offset.z * offset.z;
+                let faces = if across_squared > reach * reach {
                     stencil.start[0]..stencil.start[0]
                 } else {
-                    let half = (reach * reach - across).sqrt();
+                    let half = (reach * reach - across_squared).sqrt();
                     face_range(grid, component, 0, centre.x, half, &stencil)
                 };
                 if faces.is_empty() {
@@ -119,14 +125,11 @@ impl FaceRows {
                     continue;
                 }
                 offset.x = grid.coordinate(location, 0, faces.start) - centre.x;
-                let start = alpha.len();
+                let start = x.len();
                 let len = faces.len();
-                alpha.resize(start + len, 0.0);
-                let values = &mut alpha[start..];
-                row_fractions(offset.into(), grid.spacing[0], radius, width, values);
-                for layer in &layers {
-                    layer.clear_row(grid, component, faces.clone(), point, values);
-                }
+                x.extend((0..len).map(|i| offset.x + i as f64 * grid.spacing[0]));
+                across.resize(start + len, across_squared);
+                across_l1.resize(start + len, offset.y.abs() + offset.z.abs());
                 rows.push(Row {
                     first: grid.index(faces.start, j, k),
                     offset,
@@ -139,6 +142,14 @@ impl FaceRows {
             }
             if slow == 2 {
                 plane_rows.push(rows.len());
+            }
+        }
+        let mut alpha = vec![0.0; x.len()];
+        face_fractions(&x, &across, &across_l1, radius, width, &mut alpha);
+        for layer in &layers {
+            for row in &rows {
+                let faces = &mut alpha[row.start..row.start + row.len];
+                layer.clear_row(grid, component, row.first, faces);
             }
         }
         let sum = alpha.iter().sum();
@@ -215,20 +226,15 @@ fn face_range(
 }
 
 impl WallLayer {
-    /// Sets to zero the fractions `alpha` of the faces `faces` (padded
-    /// indices along x) of the row of `component` through `point` (its y
-    /// and z) that lie in the layer.
-    fn clear_row(
-        &self,
-        grid: &Grid,
-        component: usize,
-        faces: Range<usize>,
-        point: [usize; 3],
-        alpha: &mut [f64],
-    ) {
+    /// Sets to zero the fractions `alpha` of the row of faces of
+    /// `component` that starts at the flat index `first` that lie in the
+    /// layer.
+    fn clear_row(&self, grid: &Grid, component: usize, first: usize, alpha: &mut [f64]) {
         let location = Location::Face(component);
+        let (line, plane) = (grid.stride(1), grid.stride(2));
+        let point = [first % line, first % plane / line, first / plane];
         if self.axis == 0 {
-            for (i, value) in faces.zip(alpha.iter_mut()) {
+            for (i, value) in (point[0]..).zip(alpha.iter_mut()) {
                 if self.holds(grid.coordinate(location, 0, i)) {
                     *value = 0.0;
                 }

@@ -360,9 +360,11 @@ impl ImmersedBoundaries {
         let mut touched: Vec<Option<Block>> = vec![None; dim];
         for component in 0..dim {
             touched[component] = touched_block(bodies, component);
+            let reaching = bodies_by_plane(bodies, component, slow, grid.padded()[slow]);
             let fill_plane = |layer: usize, total: &mut [f64], target: &mut [f64]| {
                 let first = layer * plane;
-                for body in &bodies.list {
+                for &body in &reaching[layer] {
+                    let body = &bodies.list[body];
                     let faces = &body.faces[component];
                     for row in faces.rows_in(dim, layer..layer + 1) {
                         let (base, slope) = body.rigid_along(row, component, faces.step);
@@ -585,6 +587,27 @@ fn touched_block(bodies: &Bodies, component: usize) -> Option<Block> {
         });
     }
     touched
+}
+
+/// For each plane of the slowest axis (`planes` of them), the bodies
+/// whose faces of `component` reach it, in list order: a plane's sums
+/// visit only those.
+fn bodies_by_plane(
+    bodies: &Bodies,
+    component: usize,
+    slow: usize,
+    planes: usize,
+) -> Vec<Vec<usize>> {
+    let mut reaching = vec![Vec::new(); planes];
+    for (index, body) in bodies.list.iter().enumerate() {
+        let faces = &body.faces[component];
+        if !faces.is_empty() {
+            for plane in faces.stencil.start[slow]..faces.stencil.end[slow] {
+                reaching[plane].push(index);
+            }
+        }
+    }
+    reaching
 }
 
 /// `V += (Σ β_p U_p − Σ β_p V) / max(1, Σ β_p)` (eq. 7 with the weights

@@ -34,31 +34,28 @@ pub fn solid_fraction(offset: [f64; 3], radius: f64, width: f64) -> f64 {
     fraction_at(squared, l1, radius, width)
 }
 
-/// [`solid_fraction`] along a row of faces: `out[i]` at the offset
-/// `(x0 + i step, y, z)` from the centre, `[x0, y, z] = first`. The
-/// immersed boundaries make every face's fraction here, once per stage:
-/// the faces go in groups of [`LANES`] of fixed length, which the compiler
-/// turns into vector instructions (the rows are short, 5 to 20 faces).
-pub fn row_fractions(first: [f64; 3], step: f64, radius: f64, width: f64, out: &mut [f64]) {
-    let [x0, y, z] = first;
-    let across = y * y + z * z;
-    let across_l1 = y.abs() + z.abs();
-    for (group, chunk) in out.chunks_mut(LANES).enumerate() {
-        let mut values = [0.0; LANES];
-        for (lane, value) in values.iter_mut().enumerate() {
-            let x = x0 + (group * LANES + lane) as f64 * step;
-            *value = fraction_at(x * x + across, x.abs() + across_l1, radius, width);
-        }
-        chunk.copy_from_slice(&values[..chunk.len()]);
+/// [`solid_fraction`] on many faces at once: `out[f]` at the offset
+/// `(x[f], y, z)` from the centre with `across[f] = y² + z²` and
+/// `across_l1[f] = |y| + |z|`. The immersed boundaries make every face's
+/// fraction here, once per stage, in one loop over a body's faces that
+/// the compiler turns into vector instructions.
+pub fn face_fractions(
+    x: &[f64],
+    across: &[f64],
+    across_l1: &[f64],
+    radius: f64,
+    width: f64,
+    out: &mut [f64],
+) {
+    let faces = out.iter_mut().zip(x).zip(across.iter().zip(across_l1));
+    for ((alpha, x), (across, across_l1)) in faces {
+        *alpha = fraction_at(x * x + across, x.abs() + across_l1, radius, width);
     }
 }
 
-/// Faces per group in [`row_fractions`].
-const LANES: usize = 4;
-
 /// Eq. 8–10 at the squared distance `squared` from the centre, `l1` the
 /// offset's `|x| + |y| + |z|`. Without branches, so that
-/// [`row_fractions`] runs on vector instructions, and with one division
+/// [`face_fractions`] runs on vector instructions, and with one division
 /// before the last: with `d` the distance, `λ = l1/d` and `σ = (0.455 d² − 0.065 l1²)/d²`, so
 ///
 /// ```text
@@ -83,7 +80,7 @@ fn fraction_at(squared: f64, l1: f64, radius: f64, width: f64) -> f64 {
 
 /// `e^x` to within 2 units in the last place for `|x| ≤ 700`, without
 /// branches or calls (libm's `exp` is a call, which keeps the loop of
-/// [`row_fractions`] on scalars): `x = k ln 2 + r` with `|r| ≤ ln 2 / 2`,
+/// [`face_fractions`] on scalars): `x = k ln 2 + r` with `|r| ≤ ln 2 / 2`,
 /// `e^r` by its Taylor series to `r^13` (remainder below 1e-17), times
 /// `2^k` made from its bits.
 #[inline(always)]
@@ -172,16 +169,19 @@ mod tests {
         assert!(worst < 4.0 * f64::EPSILON, "{worst:e}");
     }
 
-    /// The row form equals the face-by-face form to round-off.
+    /// The form for many faces equals the face-by-face form to round-off.
     #[test]
-    fn a_row_is_its_faces() {
+    fn many_faces_are_each_face() {
         let (r, w, h) = (1.0, 0.1, 0.07);
-        let first = [-1.3, 0.4, -0.2];
-        let mut row = [0.0; 37];
-        row_fractions(first, h, r, w, &mut row);
-        for (i, alpha) in row.iter().enumerate() {
-            let face = solid_fraction([first[0] + i as f64 * h, first[1], first[2]], r, w);
-            assert!((alpha - face).abs() <= 4.0 * f64::EPSILON * face, "{i}");
+        let (y, z) = (0.4f64, -0.2f64);
+        let x: Vec<f64> = (0..37).map(|i| -1.3 + i as f64 * h).collect();
+        let mut alpha = vec![0.0; x.len()];
+        let across = vec![y * y + z * z; x.len()];
+        let across_l1 = vec![y.abs() + z.abs(); x.len()];
+        face_fractions(&x, &across, &across_l1, r, w, &mut alpha);
+        for (alpha, x) in alpha.iter().zip(&x) {
+            let face = solid_fraction([*x, y, z], r, w);
+            assert!((alpha - face).abs() <= 4.0 * f64::EPSILON * face, "{x}");
         }
     }
 
