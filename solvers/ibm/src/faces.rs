@@ -72,10 +72,12 @@ impl FaceRows {
         let location = Location::Face(component);
         let mut stencil = *block;
         for axis in 0..dim {
-            let range = face_range(grid, component, axis, centre[axis], reach, block);
+            let index = FaceIndex::new(grid, component, axis);
+            let range = index.range(centre[axis], reach, block.start[axis]..block.end[axis]);
             stencil.start[axis] = range.start;
             stencil.end[axis] = range.end;
         }
+        let along_x = FaceIndex::new(grid, component, 0);
         // Only the layers the support reaches: none, for a grain away from
         // the walls.
         let layers: Vec<&WallLayer> = free_layers
@@ -116,7 +118,7 @@ impl FaceRows {
                     stencil.start[0]..stencil.start[0]
                 } else {
                     let half = (reach * reach - across_squared).sqrt();
-                    face_range(grid, component, 0, centre.x, half, &stencil)
+                    along_x.range(centre.x, half, stencil.start[0]..stencil.end[0])
                 };
                 if faces.is_empty() {
                     if slow == 1 {
@@ -200,29 +202,40 @@ impl FaceRows {
     }
 }
 
-/// Padded indices along `axis` of the faces of `component` within
-/// `reach` of the coordinate `centre`, clipped to `block`.
-fn face_range(
-    grid: &Grid,
-    component: usize,
-    axis: usize,
-    centre: f64,
-    reach: f64,
-    block: &Block,
-) -> Range<usize> {
-    let (h, ghost) = (grid.spacing[axis], grid.ghost(axis) as f64);
-    let offset = if axis == component { 1.0 } else { 0.5 };
-    // Padded index of coordinate x: (x − lower)/h + ghost − offset.
-    let index_of = |x: f64| (x - grid.lower[axis]) / h + ghost - offset;
-    let first = index_of(centre - reach).ceil().max(0.0) as usize;
-    let last = index_of(centre + reach).floor();
-    let start = first.max(block.start[axis]);
-    let end = if last < 0.0 {
-        start
-    } else {
-        (last as usize + 1).min(block.end[axis])
-    };
-    start..end.max(start)
+/// The padded index along one axis of the faces of one component at a
+/// coordinate: `(x − lower)/h + ghost − offset`, `offset` 1 along the
+/// component and ½ across it.
+struct FaceIndex {
+    lower: f64,
+    inverse_spacing: f64,
+    shift: f64,
+}
+
+impl FaceIndex {
+    fn new(grid: &Grid, component: usize, axis: usize) -> Self {
+        let offset = if axis == component { 1.0 } else { 0.5 };
+        FaceIndex {
+            lower: grid.lower[axis],
+            inverse_spacing: 1.0 / grid.spacing[axis],
+            shift: grid.ghost(axis) as f64 - offset,
+        }
+    }
+
+    /// The faces within `reach` of the coordinate `centre`, clipped to
+    /// `within`. (A face at the support's edge by round-off has a zero
+    /// fraction, so the rounding here loses none.)
+    fn range(&self, centre: f64, reach: f64, within: Range<usize>) -> Range<usize> {
+        let index_of = |x: f64| (x - self.lower) * self.inverse_spacing + self.shift;
+        let first = index_of(centre - reach).ceil().max(0.0) as usize;
+        let last = index_of(centre + reach).floor();
+        let start = first.max(within.start);
+        let end = if last < 0.0 {
+            start
+        } else {
+            (last as usize + 1).min(within.end)
+        };
+        start..end.max(start)
+    }
 }
 
 impl WallLayer {
