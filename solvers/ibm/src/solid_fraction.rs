@@ -78,14 +78,14 @@ fn fraction_at(squared: f64, l1: f64, radius: f64, width: f64) -> f64 {
     }
 }
 
-/// `e^x` to within 2 units in the last place for `|x| ≤ 700`, without
+/// `e^x` to a few units in the last place for `|x| ≤ 700`, without
 /// branches or calls (libm's `exp` is a call, which keeps the loop of
 /// [`face_fractions`] on scalars): `x = k ln 2 + r` with `|r| ≤ ln 2 / 2`,
 /// `e^r` by its Taylor series to `r^13` (remainder below 1e-17), times
 /// `2^k` made from its bits.
 #[inline(always)]
 fn exp(x: f64) -> f64 {
-    const LN2_HI: f64 = 6.931_471_803_691_238_2e-1;
+    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
     const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
     // 1.5 × 2^52: adding it rounds to an integer, held in the low bits.
     const SHIFT: f64 = 6_755_399_441_055_744.0;
