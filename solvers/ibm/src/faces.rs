@@ -237,23 +237,3 @@ impl FaceIndex {
         start..end.max(start)
     }
 }
-
-impl WallLayer {
-    /// Sets to zero the fractions `alpha` of the row of faces of
-    /// `component` that starts at the flat index `first` that lie in the
-    /// layer.
-    fn clear_row(&self, grid: &Grid, component: usize, first: usize, alpha: &mut [f64]) {
-        let location = Location::Face(component);
-        let (line, plane) = (grid.stride(1), grid.stride(2));
-        let point = [first % line, first % plane / line, first / plane];
-        if self.axis == 0 {
-            for (i, value) in (point[0]..).zip(alpha.iter_mut()) {
-                if self.holds(grid.coordinate(location, 0, i)) {
-                    *value = 0.0;
-                }
-            }
-        } else if self.holds(grid.coordinate(location, self.axis, point[self.axis])) {
-            alpha.fill(0.0);
-        }
-    }
-}

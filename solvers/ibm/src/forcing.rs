@@ -46,12 +46,14 @@
 //! (`DemSystem::sum_onto_owners`).
 
 use grainflow_core::{Dimension, Vec3};
-use grainflow_dem::{DemSystem, Particles};
-use grainflow_fluid::{Block, Boundaries, BoundaryCondition, Grid, Location};
+use grainflow_dem::Particles;
+use grainflow_fluid::{Block, Grid, Location};
 use rayon::prelude::*;
 
 use crate::faces::{FaceRows, Row};
+pub use crate::loads::{vectors_on_owners, Loads};
 use crate::solid_fraction::{solid_fraction, support, transition_width};
+pub use crate::wall_layer::WallLayer;
 
 /// How far from a subdomain's faces the DEM must keep ghosts for the
 /// immersed boundaries of grains of radius up to `max_radius` on `grid`:
@@ -61,114 +63,6 @@ pub fn ghost_reach(grid: &Grid, max_radius: f64) -> f64 {
     let dim = grid.dim();
     let widest = grid.spacing[..dim].iter().copied().fold(0.0, f64::max);
     support(max_radius, transition_width(&grid.spacing[..dim])) + widest
-}
-
-/// Force and torque per local particle (owned, then ghosts), per unit
-/// fluid density.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Loads {
-    pub force: Vec<Vec3>,
-    pub torque: Vec<Vec3>,
-}
-
-impl Loads {
-    fn zeros(count: usize) -> Self {
-        Loads {
-            force: vec![Vec3::zeros(); count],
-            torque: vec![Vec3::zeros(); count],
-        }
-    }
-
-    /// The loads on `dem`'s owned particles from loads on every local one:
-    /// each ghost's share goes to its owner (on this rank for a periodic
-    /// image, on another for another rank's grain; collective).
-    pub fn summed_on_owners(&self, dem: &DemSystem) -> Loads {
-        let pairs: Vec<Vec3> = self
-            .force
-            .iter()
-            .zip(&self.torque)
-            .flat_map(|(&f, &t)| [f, t])
-            .collect();
-        let summed = vectors_on_owners(dem, &pairs, 2);
-        let (force, torque) = summed.chunks_exact(2).map(|v| (v[0], v[1])).unzip();
-        Loads { force, torque }
-    }
-}
-
-/// `width` vectors per local particle (owned, then ghosts), summed onto the
-/// owned particles: each ghost's share goes to its owner (collective).
-pub fn vectors_on_owners(dem: &DemSystem, local: &[Vec3], width: usize) -> Vec<Vec3> {
-    let mut values: Vec<f64> = local.iter().flat_map(|v| [v.x, v.y, v.z]).collect();
-    dem.sum_onto_owners(&mut values, 3 * width);
-    values[..3 * width * dem.particles.n_owned]
-        .chunks_exact(3)
-        .map(|v| Vec3::new(v[0], v[1], v[2]))
-        .collect()
-}
-
-/// The first layer of cells along a wall of the flow domain, whose faces
-/// the grains do not force: the tangential components at the cells'
-/// centres, half a cell off the wall, and the normal component on their
-/// far face, a cell off (the normal component on the wall is not an
-/// unknown).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WallLayer {
-    /// The axis normal to the wall.
-    pub axis: usize,
-    /// The wall's coordinate along `axis` (m).
-    pub wall: f64,
-    /// +1 for a lower wall (the fluid on its upper side), −1 for an upper one.
-    pub inward: f64,
-    /// The layer's depth: one cell along `axis` (m).
-    pub depth: f64,
-}
-
-impl WallLayer {
-    /// The first layer of cells along every wall of the domain
-    /// `lower`–`upper` (no-slip, free-slip or moving: every face but the
-    /// periodic and open ones), on `grid`, a rank's share of it.
-    pub fn along_walls(
-        grid: &Grid,
-        boundaries: &Boundaries,
-        lower: [f64; 3],
-        upper: [f64; 3],
-    ) -> Vec<WallLayer> {
-        let mut layers = Vec::new();
-        for axis in 0..grid.dim() {
-            for (side, wall, inward) in [(0, lower[axis], 1.0), (1, upper[axis], -1.0)] {
-                let is_wall = matches!(
-                    boundaries.faces[axis][side],
-                    BoundaryCondition::NoSlip
-                        | BoundaryCondition::FreeSlip
-                        | BoundaryCondition::MovingWall(_)
-                );
-                if is_wall {
-                    layers.push(WallLayer {
-                        axis,
-                        wall,
-                        inward,
-                        depth: grid.spacing[axis],
-                    });
-                }
-            }
-        }
-        layers
-    }
-
-    /// Whether the coordinate `x` along the axis lies in the layer (its
-    /// far face included, to round-off).
-    #[inline]
-    pub(crate) fn holds(&self, x: f64) -> bool {
-        let distance = self.inward * (x - self.wall);
-        distance > 0.0 && self.within(x, 0.0)
-    }
-
-    /// Whether the coordinate `x` along the axis lies within `reach` of
-    /// the layer or in it (its far face included, to round-off).
-    #[inline]
-    pub(crate) fn within(&self, x: f64, reach: f64) -> bool {
-        self.inward * (x - self.wall) - reach <= self.depth * (1.0 + 1e-9)
-    }
 }
 
 /// One particle (owned or a ghost) as the grid sees it.
