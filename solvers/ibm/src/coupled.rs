@@ -211,13 +211,13 @@ impl CoupledSystem {
             // The particles stand still until the DEM runs; their ghosts
             // take their latest motion.
             self.dem.refresh_ghosts();
-            let bodies = self
-                .immersed
-                .bodies(&self.dem.particles, &self.flow.grid, &unknowns);
-            let before = self
-                .immersed
-                .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies)
-                .summed_on_owners(&self.dem);
+            let (bodies, before) = self.immersed.bodies_with_inner_momentum(
+                &self.dem.particles,
+                &self.flow.grid,
+                &unknowns,
+                &self.flow.velocity,
+            );
+            let before = before.summed_on_owners(&self.dem);
             let (moved_from, moved_over) = self.inner_momentum_moved_from(&unknowns, stage_dt);
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);

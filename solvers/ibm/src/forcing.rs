@@ -45,14 +45,15 @@
 //! ghosts' shares are added to their owners by the DEM
 //! (`DemSystem::sum_onto_owners`).
 
-use std::ops::Range;
-
 use grainflow_core::{Dimension, Vec3};
-use grainflow_dem::{DemSystem, Particles};
-use grainflow_fluid::{Block, Boundaries, BoundaryCondition, Grid, Location};
+use grainflow_dem::Particles;
+use grainflow_fluid::{Block, Grid, Location};
 use rayon::prelude::*;
 
+use crate::faces::{FaceRows, Row};
+pub use crate::loads::{vectors_on_owners, Loads};
 use crate::solid_fraction::{solid_fraction, support, transition_width};
+pub use crate::wall_layer::WallLayer;
 
 /// How far from a subdomain's faces the DEM must keep ghosts for the
 /// immersed boundaries of grains of radius up to `max_radius` on `grid`:
@@ -64,142 +65,6 @@ pub fn ghost_reach(grid: &Grid, max_radius: f64) -> f64 {
     support(max_radius, transition_width(&grid.spacing[..dim])) + widest
 }
 
-/// Force and torque per local particle (owned, then ghosts), per unit
-/// fluid density.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Loads {
-    pub force: Vec<Vec3>,
-    pub torque: Vec<Vec3>,
-}
-
-impl Loads {
-    fn zeros(count: usize) -> Self {
-        Loads {
-            force: vec![Vec3::zeros(); count],
-            torque: vec![Vec3::zeros(); count],
-        }
-    }
-
-    /// The loads on `dem`'s owned particles from loads on every local one:
-    /// each ghost's share goes to its owner (on this rank for a periodic
-    /// image, on another for another rank's grain; collective).
-    pub fn summed_on_owners(&self, dem: &DemSystem) -> Loads {
-        let pairs: Vec<Vec3> = self
-            .force
-            .iter()
-            .zip(&self.torque)
-            .flat_map(|(&f, &t)| [f, t])
-            .collect();
-        let summed = vectors_on_owners(dem, &pairs, 2);
-        let (force, torque) = summed.chunks_exact(2).map(|v| (v[0], v[1])).unzip();
-        Loads { force, torque }
-    }
-}
-
-/// `width` vectors per local particle (owned, then ghosts), summed onto the
-/// owned particles: each ghost's share goes to its owner (collective).
-pub fn vectors_on_owners(dem: &DemSystem, local: &[Vec3], width: usize) -> Vec<Vec3> {
-    let mut values: Vec<f64> = local.iter().flat_map(|v| [v.x, v.y, v.z]).collect();
-    dem.sum_onto_owners(&mut values, 3 * width);
-    values[..3 * width * dem.particles.n_owned]
-        .chunks_exact(3)
-        .map(|v| Vec3::new(v[0], v[1], v[2]))
-        .collect()
-}
-
-/// The first layer of cells along a wall of the flow domain, whose faces
-/// the grains do not force: the tangential components at the cells'
-/// centres, half a cell off the wall, and the normal component on their
-/// far face, a cell off (the normal component on the wall is not an
-/// unknown).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WallLayer {
-    /// The axis normal to the wall.
-    pub axis: usize,
-    /// The wall's coordinate along `axis` (m).
-    pub wall: f64,
-    /// +1 for a lower wall (the fluid on its upper side), −1 for an upper one.
-    pub inward: f64,
-    /// The layer's depth: one cell along `axis` (m).
-    pub depth: f64,
-}
-
-impl WallLayer {
-    /// The first layer of cells along every wall of the domain
-    /// `lower`–`upper` (no-slip, free-slip or moving: every face but the
-    /// periodic and open ones), on `grid`, a rank's share of it.
-    pub fn along_walls(
-        grid: &Grid,
-        boundaries: &Boundaries,
-        lower: [f64; 3],
-        upper: [f64; 3],
-    ) -> Vec<WallLayer> {
-        let mut layers = Vec::new();
-        for axis in 0..grid.dim() {
-            for (side, wall, inward) in [(0, lower[axis], 1.0), (1, upper[axis], -1.0)] {
-                let is_wall = matches!(
-                    boundaries.faces[axis][side],
-                    BoundaryCondition::NoSlip
-                        | BoundaryCondition::FreeSlip
-                        | BoundaryCondition::MovingWall(_)
-                );
-                if is_wall {
-                    layers.push(WallLayer {
-                        axis,
-                        wall,
-                        inward,
-                        depth: grid.spacing[axis],
-                    });
-                }
-            }
-        }
-        layers
-    }
-
-    /// Whether the coordinate `x` along the axis lies in the layer (its
-    /// far face included, to round-off).
-    #[inline]
-    fn holds(&self, x: f64) -> bool {
-        let distance = self.inward * (x - self.wall);
-        distance > 0.0 && self.within(x, 0.0)
-    }
-
-    /// Sets to zero the fractions of `fractions` (faces of `component`) that
-    /// lie in the layer: whole planes of the stencil across its axis.
-    fn clear(&self, grid: &Grid, component: usize, fractions: &mut FaceFractions) {
-        let stencil = fractions.stencil;
-        let extent = [0, 1, 2].map(|a| stencil.end[a] - stencil.start[a]);
-        // Strides of the stencil's points in the order of `Grid::for_each`.
-        let stride = [1, extent[0], extent[0] * extent[1]];
-        // The two axes along the plane.
-        let (a, b) = match self.axis {
-            0 => (1, 2),
-            1 => (0, 2),
-            _ => (0, 1),
-        };
-        let location = Location::Face(component);
-        for plane in 0..extent[self.axis] {
-            let index = stencil.start[self.axis] + plane;
-            if !self.holds(grid.coordinate(location, self.axis, index)) {
-                continue;
-            }
-            for p in 0..extent[a] {
-                for q in 0..extent[b] {
-                    fractions.alpha[plane * stride[self.axis] + p * stride[a] + q * stride[b]] =
-                        0.0;
-                }
-            }
-        }
-    }
-
-    /// Whether the coordinate `x` along the axis lies within `reach` of
-    /// the layer or in it (its far face included, to round-off).
-    #[inline]
-    fn within(&self, x: f64, reach: f64) -> bool {
-        self.inward * (x - self.wall) - reach <= self.depth * (1.0 + 1e-9)
-    }
-}
-
 /// One particle (owned or a ghost) as the grid sees it.
 #[derive(Clone, Debug)]
 struct Body {
@@ -209,19 +74,11 @@ struct Body {
     velocity: Vec3,
     angular_velocity: Vec3,
     radius: f64,
-    /// Its solid fraction on the faces of each velocity component, made
-    /// once per stage: the forcing, the loads and the inner momentum all
-    /// read it (the tanh of eq. 8 is the costly part of each).
-    fractions: Vec<FaceFractions>,
-}
-
-/// The solid fraction of one body on the faces of one component: `alpha`
-/// over the box `stencil` (the faces within the body's support), in the
-/// order of [`Grid::for_each`].
-#[derive(Clone, Debug)]
-struct FaceFractions {
-    stencil: Block,
-    alpha: Vec<f64>,
+    /// Its faces of each velocity component with their solid fractions,
+    /// made once per stage: the forcing, the loads, the inner momentum
+    /// and the grid volumes all read them (the exponential of eq. 8 is
+    /// the costly part of each face).
+    faces: Vec<FaceRows>,
 }
 
 impl Body {
@@ -229,6 +86,52 @@ impl Body {
     #[inline]
     fn velocity_at(&self, offset: &Vec3) -> Vec3 {
         self.velocity + self.angular_velocity.cross(offset)
+    }
+
+    /// The `component` of the rigid velocity along `row` of faces `step`
+    /// apart: `base + i slope` at its face `i` (`ω × x̂ = (0, ω_z, −ω_y)`).
+    #[inline]
+    fn rigid_along(&self, row: &Row, component: usize, step: f64) -> (f64, f64) {
+        let w = self.angular_velocity;
+        let slope = [0.0, w.z, -w.y][component] * step;
+        (self.velocity_at(&row.offset)[component], slope)
+    }
+
+    /// `∫ α u dV` and `∫ r × α u dV` over the body's faces of the face
+    /// field `velocity`, cells of volume `volume`.
+    fn inner_momentum(&self, velocity: &[Vec<f64>], volume: f64) -> (Vec3, Vec3) {
+        let (momentum, angular) = self.moments(|component, _, row, alpha| {
+            let velocity = &velocity[component][row.first..row.first + row.len];
+            let (mut sum, mut along) = (0.0, 0.0);
+            for (i, (alpha, v)) in alpha.iter().zip(velocity).enumerate() {
+                let q = alpha * v;
+                sum += q;
+                along += i as f64 * q;
+            }
+            (sum, along)
+        });
+        (momentum * volume, angular * volume)
+    }
+
+    /// `(Σ q, Σ r × q)` over the body's faces of every component, `q` the
+    /// vector along the component whose row sums `(Σ_i q_i, Σ_i i q_i)`
+    /// are `row_sums(component, faces, row, α)`: the force and torque of a
+    /// face field on the body.
+    fn moments(
+        &self,
+        mut row_sums: impl FnMut(usize, &FaceRows, &Row, &[f64]) -> (f64, f64),
+    ) -> (Vec3, Vec3) {
+        let mut force = Vec3::zeros();
+        let mut torque = Vec3::zeros();
+        for (component, faces) in self.faces.iter().enumerate() {
+            let (sum, moment) = faces.moments(|row, alpha| row_sums(component, faces, row, alpha));
+            force[component] += sum;
+            // Σ r × (q e_c) = (Σ q r) × e_c.
+            let mut axis = Vec3::zeros();
+            axis[component] = 1.0;
+            torque += moment.cross(&axis);
+        }
+        (force, torque)
     }
 }
 
@@ -292,12 +195,8 @@ impl ImmersedBoundaries {
         let volume = grid.cell_volume();
         let mut volumes = vec![Vec3::zeros(); bodies.count];
         for body in &bodies.list {
-            for (component, fractions) in body.fractions.iter().enumerate() {
-                volumes[body.particle][component] += fractions
-                    .alpha
-                    .iter()
-                    .map(|alpha| alpha * volume)
-                    .sum::<f64>();
+            for (component, faces) in body.faces.iter().enumerate() {
+                volumes[body.particle][component] += faces.sum * volume;
             }
         }
         volumes
@@ -311,13 +210,34 @@ impl ImmersedBoundaries {
         let per_body: Vec<(Vec3, Vec3)> = bodies
             .list
             .par_iter()
-            .map(|body| {
-                moments(grid, body, |component, index, _, alpha| {
-                    alpha * velocity[component][index] * volume
-                })
-            })
+            .map(|body| body.inner_momentum(velocity, volume))
             .collect();
         self.gather(bodies, &per_body)
+    }
+
+    /// [`ImmersedBoundaries::bodies`] and their
+    /// [`ImmersedBoundaries::inner_momentum`] in `velocity`, each body's
+    /// momentum measured as soon as its fractions are made (while they are
+    /// in cache: one pass over them the fewer).
+    pub fn bodies_with_inner_momentum(
+        &self,
+        particles: &Particles,
+        grid: &Grid,
+        unknowns: &[Block],
+        velocity: &[Vec<f64>],
+    ) -> (Bodies, Loads) {
+        let volume = grid.cell_volume();
+        let mut bodies = self.local_bodies(particles, grid);
+        let per_body: Vec<(Vec3, Vec3)> = bodies
+            .list
+            .par_iter_mut()
+            .map(|body| {
+                body.faces = self.body_faces(particles, grid, unknowns, body);
+                body.inner_momentum(velocity, volume)
+            })
+            .collect();
+        let momentum = self.gather(&bodies, &per_body);
+        (bodies, momentum)
     }
 
     /// Applies the direct forcing of a stage of length `stage_dt` of a step
@@ -355,40 +275,34 @@ impl ImmersedBoundaries {
             .map_or(1.0, |reference| step_dt / reference);
         let forced = |alpha: f64| forced_fraction(alpha, exponent);
 
-        // 1. Fractions and rigid velocities of all bodies on the faces. The
-        // planes of the slowest axis are shared among threads; each face
-        // sums its bodies in list order, whatever the number of threads.
+        // 1. Σ β_p and Σ β_p U_p on the faces. The planes of the slowest
+        // axis are shared among threads; each face sums its bodies in list
+        // order, whatever the number of threads.
         let slow = dim - 1;
         let plane = grid.stride(slow);
         let mut touched: Vec<Option<Block>> = vec![None; dim];
         for component in 0..dim {
-            for body in &bodies.list {
-                let stencil = body.fractions[component].stencil;
-                if (0..dim).any(|a| stencil.end[a] <= stencil.start[a]) {
-                    continue;
-                }
-                touched[component] = Some(match touched[component] {
-                    None => stencil,
-                    Some(union) => Block {
-                        start: [0, 1, 2].map(|a| union.start[a].min(stencil.start[a])),
-                        end: [0, 1, 2].map(|a| union.end[a].max(stencil.end[a])),
-                    },
-                });
-            }
+            touched[component] = touched_block(bodies, component);
+            let reaching = bodies_by_plane(bodies, component, slow, grid.padded()[slow]);
             let fill_plane = |layer: usize, total: &mut [f64], target: &mut [f64]| {
                 let first = layer * plane;
-                for body in &bodies.list {
-                    visit_faces(
-                        grid,
-                        body,
-                        component,
-                        layer..layer + 1,
-                        |index, r, alpha| {
-                            let beta = forced(alpha);
-                            total[index - first] += beta;
-                            target[index - first] += beta * body.velocity_at(&r)[component];
-                        },
-                    );
+                for &body in &reaching[layer] {
+                    let body = &bodies.list[body];
+                    let faces = &body.faces[component];
+                    for row in faces.rows_in(dim, layer..layer + 1) {
+                        let (base, slope) = body.rigid_along(row, component, faces.step);
+                        let at = row.first - first;
+                        let sums = total[at..at + row.len]
+                            .iter_mut()
+                            .zip(&mut target[at..at + row.len]);
+                        for (i, (alpha, (total, target))) in
+                            faces.alpha(row).iter().zip(sums).enumerate()
+                        {
+                            let beta = forced(*alpha);
+                            *total += beta;
+                            *target += beta * (base + i as f64 * slope);
+                        }
+                    }
                 }
             };
             let (total, target) = (
@@ -409,33 +323,46 @@ impl ImmersedBoundaries {
             }
         }
 
-        // 2. Loads, from the velocity before the forcing.
+        // 2. Loads, from the velocity before the forcing: the particle
+        // receives −f, the opposite of what it gives.
         let total = &self.total_fraction;
+        let scale = -volume / stage_dt;
         let per_body: Vec<(Vec3, Vec3)> = bodies
             .list
             .par_iter()
             .map(|body| {
-                // The particle receives −f: the opposite of what it gives.
-                moments(grid, body, |component, index, r, alpha| {
-                    let weight = forced(alpha) / total[component][index].max(1.0);
-                    let slip = body.velocity_at(&r)[component] - velocity[component][index];
-                    -weight * slip / stage_dt * volume
-                })
+                let (force, torque) = body.moments(|component, faces, row, alpha| {
+                    let (base, slope) = body.rigid_along(row, component, faces.step);
+                    let faces = row.first..row.first + row.len;
+                    let (velocity, total) = (
+                        &velocity[component][faces.clone()],
+                        &total[component][faces],
+                    );
+                    let (mut sum, mut along) = (0.0, 0.0);
+                    let faces = alpha.iter().zip(velocity.iter().zip(total));
+                    for (i, (alpha, (v, total))) in faces.enumerate() {
+                        let weight = forced(*alpha) / total.max(1.0);
+                        let q = weight * (base + i as f64 * slope - v);
+                        sum += q;
+                        along += i as f64 * q;
+                    }
+                    (sum, along)
+                });
+                (force * scale, torque * scale)
             })
             .collect();
 
         // 3. The forcing, V += Σ w_p (U_p − V), and the scratch cleared.
         for component in 0..dim {
-            let Some(block) = touched[component] else {
-                continue;
-            };
-            let total = &self.total_fraction[component];
-            let target = &self.solid_velocity[component];
-            grid.par_update(&block, &mut velocity[component], |index, v| {
-                v + (target[index] - total[index] * v) / total[index].max(1.0)
-            });
-            grid.par_update(&block, &mut self.total_fraction[component], |_, _| 0.0);
-            grid.par_update(&block, &mut self.solid_velocity[component], |_, _| 0.0);
+            if let Some(block) = touched[component] {
+                force_block(
+                    grid,
+                    &block,
+                    &mut velocity[component],
+                    &mut self.total_fraction[component],
+                    &mut self.solid_velocity[component],
+                );
+            }
         }
         self.gather(bodies, &per_body)
     }
@@ -478,30 +405,41 @@ impl ImmersedBoundaries {
     /// `unknowns`.
     pub fn bodies(&self, particles: &Particles, grid: &Grid, unknowns: &[Block]) -> Bodies {
         let mut bodies = self.local_bodies(particles, grid);
-        let width = self.width;
-        let free_wall_layers = &self.free_wall_layers;
-        bodies.list.par_iter_mut().for_each(|body| {
-            // Glued grains are the wall's roughness: they keep forcing it.
-            let layers: &[WallLayer] = if particles.inverse_mass[body.particle] > 0.0 {
-                free_wall_layers
-            } else {
-                &[]
-            };
-            body.fractions = (0..grid.dim())
-                .map(|component| {
-                    face_fractions(
-                        width,
-                        grid,
-                        &unknowns[component],
-                        component,
-                        body.centre,
-                        body.radius,
-                        layers,
-                    )
-                })
-                .collect();
-        });
         bodies
+            .list
+            .par_iter_mut()
+            .for_each(|body| body.faces = self.body_faces(particles, grid, unknowns, body));
+        bodies
+    }
+
+    /// The faces of each velocity component within the support of `body`,
+    /// with their fractions.
+    fn body_faces(
+        &self,
+        particles: &Particles,
+        grid: &Grid,
+        unknowns: &[Block],
+        body: &Body,
+    ) -> Vec<FaceRows> {
+        // Glued grains are the wall's roughness: they keep forcing it.
+        let layers: &[WallLayer] = if particles.inverse_mass[body.particle] > 0.0 {
+            &self.free_wall_layers
+        } else {
+            &[]
+        };
+        (0..grid.dim())
+            .map(|component| {
+                FaceRows::new(
+                    self.width,
+                    grid,
+                    &unknowns[component],
+                    component,
+                    body.centre,
+                    body.radius,
+                    layers,
+                )
+            })
+            .collect()
     }
 
     /// The local particles (owned, then ghosts: periodic images and other
@@ -526,7 +464,7 @@ impl ImmersedBoundaries {
                 velocity: particles.velocity[p],
                 angular_velocity: particles.angular_velocity[p],
                 radius: particles.radius[p],
-                fractions: Vec::new(),
+                faces: Vec::new(),
             })
             .collect();
         Bodies {
@@ -565,116 +503,98 @@ fn forced_fraction(alpha: f64, exponent: f64) -> f64 {
     }
 }
 
-/// `(Σ q, Σ r × q)` over the faces of every component where `body` is
-/// present, `q` the vector with `value(component, index, r, α)` along the
-/// component: the force and torque of a face field on the body.
-fn moments(
-    grid: &Grid,
-    body: &Body,
-    mut value: impl FnMut(usize, usize, Vec3, f64) -> f64,
-) -> (Vec3, Vec3) {
-    let mut sum = Vec3::zeros();
-    let mut moment = Vec3::zeros();
-    for component in 0..grid.dim() {
-        visit_faces(grid, body, component, ALL_PLANES, |index, r, alpha| {
-            let mut q = Vec3::zeros();
-            q[component] = value(component, index, r, alpha);
-            sum += q;
-            moment += r.cross(&q);
+/// The smallest block that holds the faces of `component` of every body.
+fn touched_block(bodies: &Bodies, component: usize) -> Option<Block> {
+    let mut touched: Option<Block> = None;
+    for body in &bodies.list {
+        let faces = &body.faces[component];
+        if faces.is_empty() {
+            continue;
+        }
+        let stencil = faces.stencil;
+        touched = Some(match touched {
+            None => stencil,
+            Some(union) => Block {
+                start: [0, 1, 2].map(|a| union.start[a].min(stencil.start[a])),
+                end: [0, 1, 2].map(|a| union.end[a].max(stencil.end[a])),
+            },
         });
     }
-    (sum, moment)
+    touched
 }
 
-/// Every plane of the slowest axis.
-const ALL_PLANES: Range<usize> = 0..usize::MAX;
-
-/// Calls `visit(index, r, α)` for every face of `component` where `body`
-/// has a positive solid fraction, within `planes` (padded indices along
-/// the slowest active axis); `r` is the face's offset from the centre.
-fn visit_faces(
-    grid: &Grid,
-    body: &Body,
+/// For each plane of the slowest axis (`planes` of them), the bodies
+/// whose faces of `component` reach it, in list order: a plane's sums
+/// visit only those.
+fn bodies_by_plane(
+    bodies: &Bodies,
     component: usize,
-    planes: Range<usize>,
-    mut visit: impl FnMut(usize, Vec3, f64),
-) {
-    let dim = grid.dim();
-    let slow = dim - 1;
-    let fractions = &body.fractions[component];
-    let mut stencil = fractions.stencil;
-    let first = planes.start.max(stencil.start[slow]);
-    let last = planes.end.min(stencil.end[slow]);
-    if first >= last {
-        return;
-    }
-    let plane_faces: usize = (0..slow)
-        .map(|a| stencil.end[a] - stencil.start[a])
-        .product();
-    let mut k = (first - stencil.start[slow]) * plane_faces;
-    stencil.start[slow] = first;
-    stencil.end[slow] = last;
-    let location = Location::Face(component);
-    grid.for_each(&stencil, |index, point| {
-        let alpha = fractions.alpha[k];
-        k += 1;
-        if alpha > 0.0 {
-            let mut r = Vec3::zeros();
-            for axis in 0..dim {
-                r[axis] = grid.coordinate(location, axis, point[axis]) - body.centre[axis];
+    slow: usize,
+    planes: usize,
+) -> Vec<Vec<usize>> {
+    let mut reaching = vec![Vec::new(); planes];
+    for (index, body) in bodies.list.iter().enumerate() {
+        let faces = &body.faces[component];
+        if !faces.is_empty() {
+            for plane in faces.stencil.start[slow]..faces.stencil.end[slow] {
+                reaching[plane].push(index);
             }
-            visit(index, r, alpha);
         }
-    });
+    }
+    reaching
 }
 
-/// The solid fraction of a body at `centre` of `radius` on the faces of
-/// `component` in `block` within its support, zero on the faces of
-/// `free_layers`.
-fn face_fractions(
-    width: f64,
+/// `V += (Σ β_p U_p − Σ β_p V) / max(1, Σ β_p)` (eq. 7 with the weights
+/// of overlapping bodies) on the faces of `block`, and the two sums set
+/// back to zero there: one pass over the three fields, the planes of the
+/// slowest axis shared among threads (each face computed alone).
+fn force_block(
     grid: &Grid,
     block: &Block,
-    component: usize,
-    centre: Vec3,
-    radius: f64,
-    free_layers: &[WallLayer],
-) -> FaceFractions {
-    let reach = support(radius, width);
-    let mut stencil = *block;
-    for axis in 0..grid.dim() {
-        let (h, ghost) = (grid.spacing[axis], grid.ghost(axis) as f64);
-        let offset = if axis == component { 1.0 } else { 0.5 };
-        // Padded index of coordinate x: (x − lower)/h + ghost − offset.
-        let index_of = |x: f64| (x - grid.lower[axis]) / h + ghost - offset;
-        let first = index_of(centre[axis] - reach).ceil().max(0.0) as usize;
-        let last = index_of(centre[axis] + reach).floor();
-        stencil.start[axis] = first.max(block.start[axis]);
-        stencil.end[axis] = if last < 0.0 {
-            stencil.start[axis]
-        } else {
-            (last as usize + 1).min(block.end[axis])
-        };
-        stencil.end[axis] = stencil.end[axis].max(stencil.start[axis]);
-    }
-    let location = Location::Face(component);
-    let mut alpha = Vec::with_capacity((0..3).map(|a| stencil.end[a] - stencil.start[a]).product());
-    grid.for_each(&stencil, |_, point| {
-        let mut r = [0.0; 3];
-        for axis in 0..grid.dim() {
-            r[axis] = grid.coordinate(location, axis, point[axis]) - centre[axis];
+    velocity: &mut [f64],
+    total: &mut [f64],
+    target: &mut [f64],
+) {
+    let slow = grid.dim() - 1;
+    let plane = grid.stride(slow);
+    let mut inner = *block;
+    inner.start[slow] = 0;
+    inner.end[slow] = 1;
+    let rows = |velocity: &mut [f64], total: &mut [f64], target: &mut [f64]| {
+        for k in inner.start[2]..inner.end[2] {
+            for j in inner.start[1]..inner.end[1] {
+                let faces = grid.index(inner.start[0], j, k)..grid.index(inner.end[0], j, k);
+                let rows = velocity[faces.clone()]
+                    .iter_mut()
+                    .zip(&mut total[faces.clone()])
+                    .zip(&mut target[faces]);
+                for ((v, total), target) in rows {
+                    *v += (*target - *total * *v) / total.max(1.0);
+                    *total = 0.0;
+                    *target = 0.0;
+                }
+            }
         }
-        alpha.push(solid_fraction(r, radius, width));
-    });
-    let mut fractions = FaceFractions { stencil, alpha };
-    // Only the layers the support reaches are cleared: none, for a grain
-    // away from the walls. Kept out of the loop above, whose speed the
-    // immersed boundaries go with.
-    for layer in free_layers
-        .iter()
-        .filter(|layer| layer.within(centre[layer.axis], reach))
-    {
-        layer.clear(grid, component, &mut fractions);
+    };
+    let planes = block.start[slow] * plane..block.end[slow] * plane;
+    let (velocity, total, target) = (
+        &mut velocity[planes.clone()],
+        &mut total[planes.clone()],
+        &mut target[planes],
+    );
+    if rayon::current_num_threads() == 1 {
+        let planes = velocity
+            .chunks_mut(plane)
+            .zip(total.chunks_mut(plane))
+            .zip(target.chunks_mut(plane));
+        for ((velocity, total), target) in planes {
+            rows(velocity, total, target);
+        }
+    } else {
+        velocity
+            .par_chunks_mut(plane)
+            .zip(total.par_chunks_mut(plane))
+            .zip(target.par_chunks_mut(plane))
+            .for_each(|((velocity, total), target)| rows(velocity, total, target));
     }
-    fractions
 }

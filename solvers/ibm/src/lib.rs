@@ -16,9 +16,12 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod coupled;
+mod faces;
 pub mod forcing;
+mod loads;
 pub mod settling;
 pub mod solid_fraction;
+mod wall_layer;
 
 pub use coupled::{
     particle_volume, CoupledReport, CoupledSystem, Coupling, Timings,
