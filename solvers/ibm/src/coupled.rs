@@ -309,7 +309,7 @@ impl CoupledSystem {
     /// particle, and its length; before the first stage, `I` on the faces
     /// the particle would have stood on one stage of `stage_dt` earlier at
     /// its present velocity. Collective.
-    fn inner_momentum_moved_from(&self, unknowns: &[Block], stage_dt: f64) -> (Loads, f64) {
+    fn inner_momentum_moved_from(&mut self, unknowns: &[Block], stage_dt: f64) -> (Loads, f64) {
         if let Some(previous) = self.previous_stage_dt {
             let p = &self.dem.particles;
             let n = p.n_owned;

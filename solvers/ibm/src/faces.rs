@@ -186,6 +186,47 @@ impl FaceRows {
         &self.alpha[row.start..row.start + row.len]
     }
 
+    /// Adds the fractions of the rows of plane `layer` (padded index along
+    /// the slowest active axis of a `dim`-dimensional grid) to `totals`,
+    /// the faces of that plane from flat index `first`.
+    pub fn add_plane_to(&self, dim: usize, layer: usize, totals: &mut [f64], first: usize) {
+        for row in self.rows_in(dim, layer..layer + 1) {
+            let at = row.first - first;
+            for (total, alpha) in totals[at..at + row.len].iter_mut().zip(self.alpha(row)) {
+                *total += alpha;
+            }
+        }
+    }
+
+    /// Sets `totals` back to zero on the faces of the rows of plane
+    /// `layer` (as [`FaceRows::add_plane_to`] numbers them).
+    pub fn clear_plane_of(&self, dim: usize, layer: usize, totals: &mut [f64], first: usize) {
+        for row in self.rows_in(dim, layer..layer + 1) {
+            let at = row.first - first;
+            totals[at..at + row.len].fill(0.0);
+        }
+    }
+
+    /// Divides each fraction by the total of all bodies' on its face,
+    /// `totals[face]`, where that exceeds one: the body's share of a face
+    /// that several supports cover.
+    pub fn share(&mut self, totals: &[f64]) {
+        let mut changed = false;
+        for row in &self.rows {
+            let faces = &totals[row.first..row.first + row.len];
+            let alpha = &mut self.alpha[row.start..row.start + row.len];
+            for (alpha, &total) in alpha.iter_mut().zip(faces) {
+                if total > 1.0 {
+                    *alpha /= total;
+                    changed = true;
+                }
+            }
+        }
+        if changed {
+            self.sum = self.alpha.iter().sum();
+        }
+    }
+
     /// `(Σ q, Σ q r)` over the faces, `q` a scalar on each face given row
     /// by row: `row_sums(row, α)` returns `(Σ_i q_i, Σ_i i q_i)` over the
     /// row's faces `i`, whose offsets are `row.offset + i Δx x̂`.

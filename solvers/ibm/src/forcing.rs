@@ -52,6 +52,7 @@ use rayon::prelude::*;
 
 use crate::faces::{FaceRows, Row};
 pub use crate::loads::{vectors_on_owners, Loads};
+use crate::overlaps::pressed_bodies;
 use crate::solid_fraction::{solid_fraction, support, transition_width};
 pub use crate::wall_layer::WallLayer;
 
@@ -67,18 +68,18 @@ pub fn ghost_reach(grid: &Grid, max_radius: f64) -> f64 {
 
 /// One particle (owned or a ghost) as the grid sees it.
 #[derive(Clone, Debug)]
-struct Body {
+pub(crate) struct Body {
     /// Local index of the particle.
     particle: usize,
-    centre: Vec3,
+    pub(crate) centre: Vec3,
     velocity: Vec3,
     angular_velocity: Vec3,
-    radius: f64,
+    pub(crate) radius: f64,
     /// Its faces of each velocity component with their solid fractions,
     /// made once per stage: the forcing, the loads, the inner momentum
     /// and the grid volumes all read them (the exponential of eq. 8 is
     /// the costly part of each face).
-    faces: Vec<FaceRows>,
+    pub(crate) faces: Vec<FaceRows>,
 }
 
 impl Body {
@@ -142,7 +143,7 @@ impl Body {
 pub struct Bodies {
     /// Local particles (the loads have one entry each).
     count: usize,
-    list: Vec<Body>,
+    pub(crate) list: Vec<Body>,
 }
 
 /// The immersed spheres' action on the flow of one subdomain.
@@ -160,7 +161,7 @@ pub struct ImmersedBoundaries {
     dimension: Dimension,
     /// `Σ_p α_p` on the faces of each component (zero outside the stencils
     /// between stages).
-    total_fraction: Vec<Vec<f64>>,
+    pub(crate) total_fraction: Vec<Vec<f64>>,
     /// `Σ_p α_p U_p` on the faces of each component.
     solid_velocity: Vec<Vec<f64>>,
 }
@@ -220,7 +221,7 @@ impl ImmersedBoundaries {
     /// momentum measured as soon as its fractions are made (while they are
     /// in cache: one pass over them the fewer).
     pub fn bodies_with_inner_momentum(
-        &self,
+        &mut self,
         particles: &Particles,
         grid: &Grid,
         unknowns: &[Block],
@@ -228,12 +229,25 @@ impl ImmersedBoundaries {
     ) -> (Bodies, Loads) {
         let volume = grid.cell_volume();
         let mut bodies = self.local_bodies(particles, grid);
-        let per_body: Vec<(Vec3, Vec3)> = bodies
+        // Grains pressed into others take their shares of the faces first
+        // (`overlaps.rs`): they are measured after.
+        let pressed = pressed_bodies(&bodies);
+        let per_body: Vec<Option<(Vec3, Vec3)>> = bodies
             .list
             .par_iter_mut()
-            .map(|body| {
+            .zip(&pressed)
+            .map(|(body, &pressed)| {
                 body.faces = self.body_faces(particles, grid, unknowns, body);
-                body.inner_momentum(velocity, volume)
+                (!pressed).then(|| body.inner_momentum(velocity, volume))
+            })
+            .collect();
+        self.share_overlaps(grid, &mut bodies, &pressed);
+        let per_body: Vec<(Vec3, Vec3)> = bodies
+            .list
+            .par_iter()
+            .zip(per_body)
+            .map(|(body, measured)| {
+                measured.unwrap_or_else(|| body.inner_momentum(velocity, volume))
             })
             .collect();
         let momentum = self.gather(&bodies, &per_body);
@@ -403,12 +417,16 @@ impl ImmersedBoundaries {
     /// The local particles whose support reaches the cells of `grid`, with
     /// their solid fractions on the faces of the velocity unknowns
     /// `unknowns`.
-    pub fn bodies(&self, particles: &Particles, grid: &Grid, unknowns: &[Block]) -> Bodies {
+    /// Where supports overlap, each fraction is the body's share of the
+    /// face (`overlaps.rs`).
+    pub fn bodies(&mut self, particles: &Particles, grid: &Grid, unknowns: &[Block]) -> Bodies {
         let mut bodies = self.local_bodies(particles, grid);
         bodies
             .list
             .par_iter_mut()
             .for_each(|body| body.faces = self.body_faces(particles, grid, unknowns, body));
+        let pressed = pressed_bodies(&bodies);
+        self.share_overlaps(grid, &mut bodies, &pressed);
         bodies
     }
 
@@ -526,7 +544,7 @@ fn touched_block(bodies: &Bodies, component: usize) -> Option<Block> {
 /// For each plane of the slowest axis (`planes` of them), the bodies
 /// whose faces of `component` reach it, in list order: a plane's sums
 /// visit only those.
-fn bodies_by_plane(
+pub(crate) fn bodies_by_plane(
     bodies: &Bodies,
     component: usize,
     slow: usize,

@@ -19,6 +19,7 @@ pub mod coupled;
 mod faces;
 pub mod forcing;
 mod loads;
+mod overlaps;
 pub mod settling;
 pub mod solid_fraction;
 mod wall_layer;
