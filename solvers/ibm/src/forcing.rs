@@ -231,7 +231,7 @@ impl ImmersedBoundaries {
         let mut bodies = self.local_bodies(particles, grid);
         // Grains pressed into others take their shares of the faces first
         // (`overlaps.rs`): they are measured after.
-        let pressed = pressed_bodies(&bodies);
+        let pressed = pressed_bodies(&bodies, self.width);
         let per_body: Vec<Option<(Vec3, Vec3)>> = bodies
             .list
             .par_iter_mut()
@@ -425,7 +425,7 @@ impl ImmersedBoundaries {
             .list
             .par_iter_mut()
             .for_each(|body| body.faces = self.body_faces(particles, grid, unknowns, body));
-        let pressed = pressed_bodies(&bodies);
+        let pressed = pressed_bodies(&bodies, self.width);
         self.share_overlaps(grid, &mut bodies, &pressed);
         bodies
     }

@@ -2,8 +2,9 @@
 //!
 //! Where grains press into each other (a soft contact's overlap, a grain
 //! on glued ones), their solid fractions on the faces between them add up
-//! to more than one (merely touching, the two layers add up to one at
-//! most: `tests/overlapping_grains.rs`). The
+//! to more than one; so they do, by up to 2e-4, where grains merely touch
+//! along a direction oblique to the grid (the width of eq. 9–10 depends on
+//! the direction, so the two tanh layers do not add up to one exactly). The
 //! forcing of eq. 7 weights each grain's share of the face by
 //! `α_p / max(1, Σ_q α_q)`; the inner momentum `∫ α_p u dV` and the grid
 //! volume `∫ α_p dV` counted the same fluid in both grains. So once a
@@ -22,6 +23,7 @@ use grainflow_fluid::Grid;
 use rayon::prelude::*;
 
 use crate::forcing::{bodies_by_plane, Bodies, ImmersedBoundaries};
+use crate::solid_fraction::support;
 
 impl ImmersedBoundaries {
     /// Replaces the fractions of the `pressed` bodies ([`pressed_bodies`])
@@ -83,26 +85,25 @@ impl ImmersedBoundaries {
     }
 }
 
-/// The bodies that press into another: only where two spheres overlap can
-/// their fractions add up to more than one (`s_p + s_q ≥ 0` for the
-/// signed distances to two surfaces that do not overlap, and eq. 8 is
-/// `½ (1 − tanh)` of them). Sorted along x and swept, each pair compared
-/// once.
-pub(crate) fn pressed_bodies(bodies: &Bodies) -> Vec<bool> {
+/// The bodies whose support overlaps another's: only where two fractions
+/// are both non-zero can they add up to more than one. Sorted along x and
+/// swept, each pair compared once.
+pub(crate) fn pressed_bodies(bodies: &Bodies, width: f64) -> Vec<bool> {
     let list = &bodies.list;
     let mut pressed = vec![false; list.len()];
     let mut order: Vec<usize> = (0..list.len()).collect();
     order.sort_by(|&a, &b| {
-        let low = |k: usize| list[k].centre.x - list[k].radius;
+        let low = |k: usize| list[k].centre.x - support(list[k].radius, width);
         low(a).total_cmp(&low(b))
     });
     for (at, &p) in order.iter().enumerate() {
-        let (centre, radius) = (list[p].centre, list[p].radius);
+        let (centre, reach_p) = (list[p].centre, support(list[p].radius, width));
         for &q in &order[at + 1..] {
-            if list[q].centre.x - list[q].radius >= centre.x + radius {
+            let reach_q = support(list[q].radius, width);
+            if list[q].centre.x - reach_q >= centre.x + reach_p {
                 break;
             }
-            let reach = radius + list[q].radius;
+            let reach = reach_p + reach_q;
             if (list[q].centre - centre).norm_squared() < reach * reach {
                 pressed[p] = true;
                 pressed[q] = true;
