@@ -197,7 +197,7 @@ fn run_here(
             } else {
                 // Another number of ranks: each rank reads the states that
                 // hold its share (and the old root's), and keeps its share.
-                let needed = model.extents().1;
+                let needed = model.needed_extent();
                 states_to_read(manifest.ranks, &manifest.extents, &needed)
                     .into_iter()
                     .map(|rank| checkpoint::read_state(path, rank).map_err(|e| e.0))

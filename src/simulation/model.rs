@@ -130,11 +130,15 @@ impl Model {
         }
     }
 
-    /// What this rank's saved state holds, and what it needs to take its
-    /// share on a resume on another number of ranks.
-    pub fn extents(&self) -> (Extent, Extent) {
-        let (grains, flow) = (self.grains(), self.flow());
-        (Extent::held(grains, flow), Extent::needed(grains, flow))
+    /// What this rank's saved state holds.
+    pub fn held_extent(&self) -> Extent {
+        Extent::held(self.grains(), self.flow())
+    }
+
+    /// What this rank needs to take its share on a resume on another
+    /// number of ranks.
+    pub fn needed_extent(&self) -> Extent {
+        Extent::needed(self.grains(), self.flow())
     }
 
     pub fn has_flow(&self) -> bool {

@@ -215,7 +215,7 @@ fn write_checkpoint(
     model.save_state(&mut state);
     state.put_value("writers", &writers.record());
     state.put_value("schedule", schedule);
-    let extents = model.extents().0.gather(communicator).unwrap_or_default();
+    let extents = model.held_extent().gather(communicator).unwrap_or_default();
     let manifest = Manifest {
         grainflow_version: env!("CARGO_PKG_VERSION").to_string(),
         state_format: grainflow_core::state::FORMAT_VERSION,

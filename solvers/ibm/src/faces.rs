@@ -186,24 +186,21 @@ impl FaceRows {
         &self.alpha[row.start..row.start + row.len]
     }
 
-    /// Adds the fractions of the rows of plane `layer` (padded index along
-    /// the slowest active axis of a `dim`-dimensional grid) to `totals`,
-    /// the faces of that plane from flat index `first`.
-    pub fn add_plane_to(&self, dim: usize, layer: usize, totals: &mut [f64], first: usize) {
+    /// Hands `visit` each row of plane `layer` (padded index along the
+    /// slowest active axis of a `dim`-dimensional grid): the row's slice of
+    /// `field`, a face field of that plane from flat index `first`, and
+    /// the row's fractions.
+    pub fn visit_plane(
+        &self,
+        dim: usize,
+        layer: usize,
+        field: &mut [f64],
+        first: usize,
+        mut visit: impl FnMut(&mut [f64], &[f64]),
+    ) {
         for row in self.rows_in(dim, layer..layer + 1) {
             let at = row.first - first;
-            for (total, alpha) in totals[at..at + row.len].iter_mut().zip(self.alpha(row)) {
-                *total += alpha;
-            }
-        }
-    }
-
-    /// Sets `totals` back to zero on the faces of the rows of plane
-    /// `layer` (as [`FaceRows::add_plane_to`] numbers them).
-    pub fn clear_plane_of(&self, dim: usize, layer: usize, totals: &mut [f64], first: usize) {
-        for row in self.rows_in(dim, layer..layer + 1) {
-            let at = row.first - first;
-            totals[at..at + row.len].fill(0.0);
+            visit(&mut field[at..at + row.len], self.alpha(row));
         }
     }
 

@@ -63,7 +63,12 @@ impl ImmersedBoundaries {
             let list = &bodies.list;
             each_plane(
                 &|body, layer, totals| {
-                    list[body].faces[component].add_plane_to(dim, layer, totals, layer * plane)
+                    let faces = &list[body].faces[component];
+                    faces.visit_plane(dim, layer, totals, layer * plane, |totals, alpha| {
+                        for (total, alpha) in totals.iter_mut().zip(alpha) {
+                            *total += alpha;
+                        }
+                    })
                 },
                 &mut self.total_fraction[component],
             );
@@ -77,7 +82,10 @@ impl ImmersedBoundaries {
             let list = &bodies.list;
             each_plane(
                 &|body, layer, totals| {
-                    list[body].faces[component].clear_plane_of(dim, layer, totals, layer * plane)
+                    let faces = &list[body].faces[component];
+                    faces.visit_plane(dim, layer, totals, layer * plane, |totals, _| {
+                        totals.fill(0.0)
+                    })
                 },
                 &mut self.total_fraction[component],
             );

@@ -21,8 +21,8 @@ const DENSITY_RATIO: f64 = 1000.0;
 
 /// The sphere at the centre of a periodic box of 4 D at D/Δx =
 /// `resolution`, spinning at 1 rad/s about z (rotational Reynolds number
-/// ω R² / ν = 0.025) in fluid at rest.
-fn spinning_sphere(resolution: usize, coupling: Coupling) -> CoupledSystem {
+/// ω R² / ν = 0.025) in fluid at rest, with the default load.
+fn spinning_sphere(resolution: usize) -> CoupledSystem {
     PeriodicSphere {
         diameter: DIAMETER,
         cells: 4 * resolution,
@@ -31,7 +31,7 @@ fn spinning_sphere(resolution: usize, coupling: Coupling) -> CoupledSystem {
         drift: 0.0,
         spin: 1.0,
     }
-    .build(coupling)
+    .build(Coupling::InnerFluidMomentum)
 }
 
 /// The decay rate of the spin between t = 0.1 s (four R²/ν) and 0.3 s,
@@ -39,7 +39,7 @@ fn spinning_sphere(resolution: usize, coupling: Coupling) -> CoupledSystem {
 /// D/Δx = `resolution`, steps of `dt` and the forcing step
 /// `forcing_step` (`None`: eq. 7 at every stage).
 fn torque_over_stokes(resolution: usize, dt: f64, forcing_step: Option<f64>) -> f64 {
-    let mut system = spinning_sphere(resolution, Coupling::InnerFluidMomentum);
+    let mut system = spinning_sphere(resolution);
     system.immersed.forcing_step = forcing_step;
     let spin_at = |system: &mut CoupledSystem, time: f64| {
         while system.dem.time < time - 0.5 * dt {
