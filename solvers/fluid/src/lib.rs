@@ -15,7 +15,9 @@
 //!   through pencils), their transforms
 //!   by rustfft/rustdct or, with the cargo feature `fftw`, by FFTW (module
 //!   `fftw`: one plan per axis over all its lines);
-//! - [`navier_stokes`]: the time step.
+//! - [`navier_stokes`]: the time step;
+//! - [`axisymmetric`]: the same scheme in (r, z) for scenes symmetric about
+//!   an axis, at the cost of a 2D grid.
 //!
 //! A flow is a [`Grid`] (cells and corners of the subdomain), its
 //! [`Boundaries`] (per face: periodic, no-slip, free-slip, moving wall) and
@@ -47,6 +49,7 @@
 // reads closer to the maths than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
+pub mod axisymmetric;
 pub mod boundary;
 pub mod error;
 #[cfg(feature = "fftw")]
