@@ -513,7 +513,7 @@ impl ImmersedBoundaries {
 /// The fraction `1 − (1 − α)^exponent` of the way to the rigid velocity
 /// that a stage moves a face of solid fraction `α` (eq. 7 at exponent 1).
 #[inline]
-fn forced_fraction(alpha: f64, exponent: f64) -> f64 {
+pub(crate) fn forced_fraction(alpha: f64, exponent: f64) -> f64 {
     if exponent == 1.0 || alpha >= 1.0 {
         alpha.min(1.0)
     } else {

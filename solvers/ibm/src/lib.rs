@@ -8,6 +8,7 @@
 //! - [`coupled`]: the coupled step — forcing at every Runge–Kutta stage,
 //!   the DEM sub-cycled within each stage with the hydrodynamic loads held
 //!   fixed, contacts and lubrication from the DEM;
+//! - [`axisymmetric`]: the same for grains on the axis of an (r, z) flow;
 //! - [`settling`]: what a settling sphere should do (Schiller–Naumann
 //!   terminal velocity, the early-time fit of its velocity from rest).
 
@@ -15,6 +16,7 @@
 // reads closer to the maths than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
+pub mod axisymmetric;
 pub mod coupled;
 mod faces;
 pub mod forcing;
