@@ -10,6 +10,8 @@
 //! | `Neumann`       | REDFT10 (DCT-II) | REDFT01 (DCT-III) | `2n`   |
 //! | `DirichletCell` | RODFT10 (DST-II) | RODFT01 (DST-III) | `2n`   |
 //! | `DirichletFace` | RODFT00 (DST-I)  | RODFT00          | `2(n+1)` |
+//! | `DirichletNeumann` | RODFT11 (DST-IV) | RODFT11        | `2n`     |
+//! | `NeumannDirichlet` | REDFT11 (DCT-IV) | REDFT11        | `2n`     |
 //!
 //! Entry `k` of each holds the same mode as the pure-Rust transform (R2HC
 //! uses the same halfcomplex order), up to a constant factor, so the
@@ -106,6 +108,16 @@ impl BatchTransform {
                 ffi::fftw_r2r_kind::FFTW_RODFT00,
                 ffi::fftw_r2r_kind::FFTW_RODFT00,
                 2 * (len + 1),
+            ),
+            TransformKind::DirichletNeumann => (
+                ffi::fftw_r2r_kind::FFTW_RODFT11,
+                ffi::fftw_r2r_kind::FFTW_RODFT11,
+                2 * len,
+            ),
+            TransformKind::NeumannDirichlet => (
+                ffi::fftw_r2r_kind::FFTW_REDFT11,
+                ffi::fftw_r2r_kind::FFTW_REDFT11,
+                2 * len,
             ),
         };
         let inner: usize = shape[..axis].iter().product();

@@ -13,6 +13,8 @@
 //! | `Neumann`       | `n` cells, ghost = first cell | DCT-II / DCT-III   | `π k / n`, k = 0..n    |
 //! | `DirichletCell` | `n` cells, ghost = −first cell | DST-II / DST-III  | `π (k+1) / n`          |
 //! | `DirichletFace` | `N` faces between two zero faces | DST-I           | `π (k+1) / (N+1)`      |
+//! | `DirichletNeumann` | `n` cells, ghost = −first below, = last above | DST-IV | `π (k+½) / n`    |
+//! | `NeumannDirichlet` | `n` cells, ghost = first below, = −last above | DCT-IV | `π (k+½) / n`    |
 //!
 //! The interface is narrow on purpose: plan once for a length, then apply
 //! forward or backward to many lines of a flat array along one axis.
@@ -22,7 +24,7 @@
 use std::f64::consts::PI;
 use std::sync::Arc;
 
-use rustdct::{DctPlanner, Dst1, TransformType2And3};
+use rustdct::{DctPlanner, Dst1, TransformType2And3, TransformType4};
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
@@ -47,6 +49,13 @@ pub enum TransformKind {
     /// Face unknowns strictly between two boundary faces where the value is
     /// zero: sine modes, DST-I.
     DirichletFace,
+    /// Cell-centred unknowns, zero on the lower face (odd ghost) and zero
+    /// gradient at the upper end (even ghost): quarter-wave sine modes,
+    /// DST-IV (a no-slip floor under a free-slip lid).
+    DirichletNeumann,
+    /// The mirror of [`TransformKind::DirichletNeumann`]: zero gradient
+    /// below, zero on the upper face; DCT-IV.
+    NeumannDirichlet,
 }
 
 #[derive(Clone)]
@@ -65,6 +74,27 @@ enum Plan {
         plan: Arc<dyn Dst1<f64>>,
         scratch: Vec<f64>,
     },
+    /// DST-IV or DCT-IV: each its own inverse up to the factor 2/n.
+    QuarterWave {
+        plan: Arc<dyn TransformType4<f64>>,
+        scratch: Vec<f64>,
+    },
+}
+
+impl TransformKind {
+    /// The DST-IV or DCT-IV of `line` (its own inverse up to 2/n).
+    fn quarter_wave(
+        self,
+        plan: &Arc<dyn TransformType4<f64>>,
+        line: &mut [f64],
+        scratch: &mut [f64],
+    ) {
+        if self == TransformKind::DirichletNeumann {
+            plan.process_dst4_with_scratch(line, scratch);
+        } else {
+            plan.process_dct4_with_scratch(line, scratch);
+        }
+    }
 }
 
 /// A planned transform of lines of length `len`.
@@ -111,6 +141,16 @@ impl AxisTransform {
                 let scratch = vec![0.0; plan.get_scratch_len()];
                 Plan::SineFace { plan, scratch }
             }
+            TransformKind::DirichletNeumann | TransformKind::NeumannDirichlet => {
+                let mut planner = DctPlanner::<f64>::new();
+                let plan = if kind == TransformKind::DirichletNeumann {
+                    planner.plan_dst4(len)
+                } else {
+                    planner.plan_dct4(len)
+                };
+                let scratch = vec![0.0; plan.get_scratch_len()];
+                Plan::QuarterWave { plan, scratch }
+            }
         };
         AxisTransform {
             kind,
@@ -145,6 +185,9 @@ impl AxisTransform {
                 TransformKind::Neumann => PI * k as f64 / n,
                 TransformKind::DirichletCell => PI * (k + 1) as f64 / n,
                 TransformKind::DirichletFace => PI * (k + 1) as f64 / (n + 1.0),
+                TransformKind::DirichletNeumann | TransformKind::NeumannDirichlet => {
+                    PI * (k as f64 + 0.5) / n
+                }
             })
             .collect()
     }
@@ -185,6 +228,7 @@ impl AxisTransform {
                 scratch.fill(0.0);
                 plan.process_dst1_with_scratch(line, scratch)
             }
+            Plan::QuarterWave { plan, scratch } => self.kind.quarter_wave(plan, line, scratch),
         }
     }
 
@@ -226,6 +270,11 @@ impl AxisTransform {
                 scratch.fill(0.0);
                 plan.process_dst1_with_scratch(line, scratch);
                 let scale = 2.0 / (n + 1) as f64;
+                line.iter_mut().for_each(|x| *x *= scale);
+            }
+            Plan::QuarterWave { plan, scratch } => {
+                self.kind.quarter_wave(plan, line, scratch);
+                let scale = 2.0 / n as f64;
                 line.iter_mut().for_each(|x| *x *= scale);
             }
         }
@@ -301,11 +350,13 @@ pub enum Direction {
 mod tests {
     use super::*;
 
-    const KINDS: [TransformKind; 4] = [
+    const KINDS: [TransformKind; 6] = [
         TransformKind::Periodic,
         TransformKind::Neumann,
         TransformKind::DirichletCell,
         TransformKind::DirichletFace,
+        TransformKind::DirichletNeumann,
+        TransformKind::NeumannDirichlet,
     ];
 
     fn sample(len: usize) -> Vec<f64> {
@@ -327,6 +378,10 @@ mod tests {
                 TransformKind::Neumann => f[inside],
                 TransformKind::DirichletCell => -f[inside],
                 TransformKind::DirichletFace => 0.0,
+                // Odd below and even above, or the reverse.
+                TransformKind::DirichletNeumann if j < 0 => -f[inside],
+                TransformKind::NeumannDirichlet if j >= 0 => -f[inside],
+                TransformKind::DirichletNeumann | TransformKind::NeumannDirichlet => f[inside],
             }
         };
         (0..n as isize)

@@ -63,7 +63,6 @@ impl AxisymmetricFlow {
                 "the viscosity must be positive and finite, got {viscosity}"
             )));
         }
-        walls.check_transformable()?;
         let solver = |field: RzField, radial: RadialOperator, singular: bool| {
             let rows = walls.z_unknowns(&grid, field);
             let transform = AxisTransform::new(walls.z_transform(field), rows.len());
@@ -340,6 +339,12 @@ impl AxisymmetricFlow {
             }
         }
         0.5 * volume * energy
+    }
+
+    /// The step at which the CFL number of the current velocity is `cfl`
+    /// (infinite for a fluid at rest between walls at rest).
+    pub fn time_step_for_cfl(&self, cfl: f64) -> f64 {
+        cfl / self.max_cfl(1.0)
     }
 
     /// `Δt (max |u_r|/Δr + max |u_z|/h)`, each speed over its local

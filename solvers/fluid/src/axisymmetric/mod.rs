@@ -26,7 +26,7 @@
 //! - [`flow`]: the time step.
 //!
 //! Limits of this version: one rank; no swirl; the body force along z
-//! (the axis) only; the same kind of wall at both ends along z.
+//! (the axis) only.
 
 pub mod flow;
 pub mod grid;

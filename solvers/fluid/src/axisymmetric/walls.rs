@@ -90,26 +90,15 @@ impl RzWalls {
         match field {
             RzField::Pressure => TransformKind::Neumann,
             RzField::Axial => TransformKind::DirichletFace,
-            // Mixed ends (no-slip and free slip) have no single family of
-            // modes: refused by `check_transformable`.
-            RzField::Radial => match self.ends[0] {
-                AxialEnd::FreeSlip => TransformKind::Neumann,
+            // u_r is tangential at the ends: odd across a no-slip end,
+            // even across a free-slip one.
+            RzField::Radial => match self.ends {
+                [AxialEnd::FreeSlip, AxialEnd::FreeSlip] => TransformKind::Neumann,
+                [AxialEnd::NoSlip, AxialEnd::FreeSlip] => TransformKind::DirichletNeumann,
+                [AxialEnd::FreeSlip, AxialEnd::NoSlip] => TransformKind::NeumannDirichlet,
                 _ => TransformKind::DirichletCell,
             },
         }
-    }
-
-    /// The two ends along z must close `u_r` the same way for one
-    /// transform to diagonalise them.
-    pub fn check_transformable(&self) -> Result<(), FluidError> {
-        if !self.periodic() && self.ends[0] != self.ends[1] {
-            return Err(FluidError::Unsupported(format!(
-                "an (r, z) domain needs the same kind of wall at both ends along z (no-slip or \
-                 free slip), got {:?} and {:?}",
-                self.ends[0], self.ends[1]
-            )));
-        }
-        Ok(())
     }
 
     /// Unknown z indices of a field: centres `1..=n_z`; faces `1..=n_z`
@@ -130,7 +119,7 @@ impl RzWalls {
             field[grid.index(0, k)] = field[grid.index(1, k)];
             field[grid.index(nr + 1, k)] = field[grid.index(nr, k)];
         }
-        self.fill_z_centre_ghosts(grid, field, 1.0);
+        self.fill_z_centre_ghosts(grid, field, [1.0; 2]);
     }
 
     /// Sets the ghosts of `u_r`: zero on the axis and the outer wall; along
@@ -142,10 +131,9 @@ impl RzWalls {
             radial[grid.index(nr, k)] = 0.0;
             radial[grid.index(nr + 1, k)] = -radial[grid.index(nr - 1, k)];
         }
-        let sign = match self.ends[0] {
-            AxialEnd::NoSlip => -1.0,
-            _ => 1.0,
-        };
+        let sign = self
+            .ends
+            .map(|end| if end == AxialEnd::NoSlip { -1.0 } else { 1.0 });
         self.fill_z_centre_ghosts(grid, radial, sign);
     }
 
@@ -178,16 +166,16 @@ impl RzWalls {
     }
 
     /// Ghost rows along z of a field at z centres: wrapped when periodic,
-    /// `sign ×` the first and last rows at walls.
-    fn fill_z_centre_ghosts(&self, grid: &RzGrid, field: &mut [f64], sign: f64) {
+    /// `sign[end] ×` the first and last rows at walls.
+    fn fill_z_centre_ghosts(&self, grid: &RzGrid, field: &mut [f64], sign: [f64; 2]) {
         let [nr, nz] = grid.cells;
         for i in 0..nr + 2 {
             if self.periodic() {
                 field[grid.index(i, 0)] = field[grid.index(i, nz)];
                 field[grid.index(i, nz + 1)] = field[grid.index(i, 1)];
             } else {
-                field[grid.index(i, 0)] = sign * field[grid.index(i, 1)];
-                field[grid.index(i, nz + 1)] = sign * field[grid.index(i, nz)];
+                field[grid.index(i, 0)] = sign[0] * field[grid.index(i, 1)];
+                field[grid.index(i, nz + 1)] = sign[1] * field[grid.index(i, nz)];
             }
         }
     }
