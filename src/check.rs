@@ -40,6 +40,9 @@ pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
 }
 
 pub fn report(case: &Case) -> Result<String, RunError> {
+    if case.domain.geometry == crate::case::Geometry::Axisymmetric {
+        return crate::check_axisymmetric::report(case, &memory_line(case));
+    }
     if !case.has_grains() {
         return fluid_report(case);
     }
@@ -410,8 +413,12 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
     let building = std::time::Instant::now();
     let (system, contact_time) = coupled_simulation::build(case).map_err(RunError::Case)?;
     let setup = building.elapsed().as_secs_f64();
-    let warning = coupled_simulation::check_dem_substep(&system, contact_time)?;
-    let density_warning = coupled_simulation::check_density_ratio(&system)?;
+    let warning = coupled_simulation::check_dem_substep(system.dem_dt, contact_time)?;
+    let density_warning = coupled_simulation::check_density_ratio(
+        system.smallest_density_ratio(),
+        system.coupling,
+        system.flow.grid.dim(),
+    )?;
     let f = case.fluid_section();
     let grid = &system.flow.grid;
     let dim = grid.dim();

@@ -34,7 +34,7 @@ use crate::case::{AnalysisSection, Case};
 use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::DemSystem;
 use grainflow_ibm::settling::{early_acceleration, schiller_naumann_reynolds};
-use grainflow_ibm::{particle_volume, CoupledReport, CoupledSystem};
+use grainflow_ibm::{particle_volume, CoupledReport};
 use serde_json::{json, Map, Value};
 
 /// What is recorded after a step.
@@ -80,17 +80,19 @@ pub struct SphereInFluid {
 }
 
 impl SphereInFluid {
-    pub fn new(case: &Case, system: &CoupledSystem) -> Self {
-        let gravity = system.dem.domain.gravity;
+    /// The analysis the case asks of particle 0 among the grains of `dem`
+    /// in a fluid of density `fluid_density`.
+    pub fn new(case: &Case, dem: &DemSystem, fluid_density: f64) -> Self {
+        let gravity = dem.domain.gravity;
         // Particle 0, wherever it is owned.
-        let p = &system.dem.particles;
-        let c = &system.dem.communicator;
-        let (radius, mass) = match system.dem.index_of(0) {
+        let p = &dem.particles;
+        let c = &dem.communicator;
+        let (radius, mass) = match dem.index_of(0) {
             Some(k) => (p.radius[k], p.mass[k]),
             None => (0.0, 0.0),
         };
         let (radius, mass) = (c.sum(radius), c.sum(mass));
-        let volume = particle_volume(system.dem.dimension(), radius);
+        let volume = particle_volume(dem.dimension(), radius);
         SphereInFluid {
             kind: match case.analysis {
                 Some(AnalysisSection::FallingSphere) => Kind::Falling,
@@ -103,12 +105,12 @@ impl SphereInFluid {
             fastest_rise_in_step: f64::NEG_INFINITY,
             fastest_rise_through_film_in_step: f64::NEG_INFINITY,
             density: mass / volume,
-            fluid_density: system.fluid_density,
+            fluid_density,
             viscosity: case.fluid_section().viscosity,
             diameter: 2.0 * radius,
             gravity: gravity.norm(),
             restitution: case.contact_section().restitution.unwrap_or(1.0),
-            three_d: system.dem.dimension() == Dimension::Three,
+            three_d: dem.dimension() == Dimension::Three,
         }
     }
 
@@ -154,11 +156,18 @@ impl SphereInFluid {
         }
     }
 
-    pub fn after_step(&mut self, system: &CoupledSystem, dt: f64, report: &Option<CoupledReport>) {
+    /// After a step of `dt` that ended at `time` (collective).
+    pub fn after_step(
+        &mut self,
+        time: f64,
+        dem: &DemSystem,
+        dt: f64,
+        report: &Option<CoupledReport>,
+    ) {
         if self.kind == Kind::None {
             return;
         }
-        let speed = self.speed(&system.dem);
+        let speed = self.speed(dem);
         let fastest_rise = std::mem::replace(&mut self.fastest_rise_in_step, f64::NEG_INFINITY);
         let fastest_rise_through_film = std::mem::replace(
             &mut self.fastest_rise_through_film_in_step,
@@ -168,7 +177,7 @@ impl SphereInFluid {
             self.initial_acceleration = Some(speed / dt);
         }
         self.history.push(Sample {
-            time: system.flow.time,
+            time,
             speed,
             contact: report
                 .as_ref()

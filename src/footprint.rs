@@ -88,13 +88,20 @@ impl Footprint {
                     blocks.chain(pours)
                 })
                 .collect();
-        let cells = case
-            .fluid
-            .as_ref()
-            .map_or(0.0, |f| f.cells[..dim].iter().map(|&n| n as f64).product());
-        let per_cell = bytes_per_cell(dim)
+        // An axisymmetric scene's fluid is its (r, z) grid: half the box's
+        // cells along x radially, none along y.
+        let axisymmetric = case.domain.geometry == crate::case::Geometry::Axisymmetric;
+        let cells = case.fluid.as_ref().map_or(0.0, |f| {
+            if axisymmetric {
+                (f.cells[0] / 2) as f64 * f.cells[2] as f64
+            } else {
+                f.cells[..dim].iter().map(|&n| n as f64).product()
+            }
+        });
+        let grid_dim = if axisymmetric { 2 } else { dim };
+        let per_cell = bytes_per_cell(grid_dim)
             + if case.particles.is_some() {
-                immersed_bytes_per_cell(dim)
+                immersed_bytes_per_cell(grid_dim)
             } else {
                 0
             };

@@ -9,9 +9,11 @@
 //! analyses on a schedule, and writes [`checkpoint`]s to resume from.
 
 pub mod analysis;
+pub mod axisymmetric_scene;
 pub mod bed_analysis;
 pub mod case;
 pub mod check;
+pub mod check_axisymmetric;
 pub mod checkpoint;
 pub mod cost_estimate;
 pub mod coupled_analysis;

@@ -16,6 +16,29 @@ pub struct DomainSection {
     /// Gravity vector [m/s²] (default: none).
     #[serde(default)]
     pub gravity: Vec<f64>,
+    /// "cartesian" (default) or "axisymmetric": the fluid of a 3D scene
+    /// solved in (r, z) about the axis x = y = 0, the box around the
+    /// cylinder of radius `upper[0]` (see `docs/axisymmetric.md`).
+    #[serde(default, skip_serializing_if = "Geometry::is_cartesian")]
+    pub geometry: Geometry,
+}
+
+/// The geometry of the fluid's grid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Geometry {
+    /// A staggered grid over the box.
+    #[default]
+    Cartesian,
+    /// Axisymmetric without swirl: the fluid in the meridian plane (r, z)
+    /// of the cylinder inscribed in the box, about the axis x = y = 0.
+    Axisymmetric,
+}
+
+impl Geometry {
+    pub fn is_cartesian(&self) -> bool {
+        *self == Geometry::Cartesian
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -72,6 +95,14 @@ pub struct StretchingSection {
     /// upper end of the axis, strictly increasing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub faces: Option<Vec<f64>>,
+    /// Axisymmetric scenes: uniform radial cells out to this radius [m],
+    /// then cells growing in arithmetic progression to the outer wall
+    /// (Izard et al. 2014, §3.1), with `core_cells`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub core_radius: Option<f64>,
+    /// Axisymmetric scenes: the number of uniform cells within `core_radius`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub core_cells: Option<usize>,
 }
 
 pub const CLUSTER_KINDS: &str = "\"both_walls\", \"lower_wall\" or \"upper_wall\"";

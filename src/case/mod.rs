@@ -101,6 +101,7 @@ impl ParallelSection {
 mod fluid_sections;
 mod grain_sections;
 mod run_sections;
+mod validate_axisymmetric;
 mod validate_fluid;
 mod validate_grains;
 
@@ -247,8 +248,20 @@ impl Case {
             }
             (None, None, Some(_)) => {}
         }
-        if let Some(fluid) = &self.fluid {
-            self.validate_fluid(fluid)?;
+        match (&self.fluid, self.domain.geometry) {
+            (Some(fluid), Geometry::Axisymmetric) => self.validate_axisymmetric(fluid)?,
+            (Some(fluid), Geometry::Cartesian) => {
+                self.refuse_axisymmetric_keys(fluid)?;
+                self.validate_fluid(fluid)?;
+            }
+            (None, Geometry::Axisymmetric) => {
+                return Err(invalid(
+                    "domain.geometry",
+                    "axisymmetric",
+                    "an axisymmetric scene is one of a fluid: it needs a [fluid] table",
+                ))
+            }
+            (None, Geometry::Cartesian) => {}
         }
         self.validate_coupling()?;
         self.validate_walls_time_output()

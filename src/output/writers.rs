@@ -266,6 +266,9 @@ impl Writers {
                 files.write(output.solver, output.density, &extra)?;
             }
         }
+        if let (Some(files), Some(rz)) = (&mut self.fields, model.axisymmetric()) {
+            files.write_rz(&mut rz.system)?;
+        }
         if let (Some(bed), Model::Coupled(coupled)) = (&mut self.bed, &*model) {
             bed.sample(&coupled.system)?;
         }

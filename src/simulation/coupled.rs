@@ -94,17 +94,14 @@ fn step_size(system: &CoupledSystem, case: &Case) -> f64 {
 /// (before anything is written); returns a warning past the accuracy limit.
 /// In a fluid the sub-step is set by `time.dt_over_contact_time` alone
 /// (`time.dt` is the fluid's step).
-pub fn check_dem_substep(
-    system: &CoupledSystem,
-    contact_time: f64,
-) -> Result<Option<String>, RunError> {
-    let ratio = system.dem_dt / contact_time;
+pub fn check_dem_substep(dem_dt: f64, contact_time: f64) -> Result<Option<String>, RunError> {
+    let ratio = dem_dt / contact_time;
     match stability::verdict(ratio) {
         TimeStepVerdict::Unstable => Err(RunError::Case(format!(
             "time.dt_over_contact_time = {ratio:.3}: the DEM sub-step {:.3e} s is past the \
              stability limit {} t_c of the explicit contact integration (t_c = {contact_time:.3e} \
              s); allowed: time.dt_over_contact_time ≤ {} (default 0.02)",
-            system.dem_dt,
+            dem_dt,
             stability::STABLE_DT_OVER_TC,
             stability::STABLE_DT_OVER_TC
         ))),
@@ -153,10 +150,14 @@ pub const INNER_FLUID_MOMENTUM_TESTED_DOWN_TO: [f64; 2] = [1.05, 0.5];
 /// ratio below [`RIGID_INNER_FLUID_FAILS_BELOW`]); returns a warning
 /// close to it, and for the load from the inner fluid momentum below the
 /// ratios it was tested at ([`INNER_FLUID_MOMENTUM_TESTED_DOWN_TO`]).
-pub fn check_density_ratio(system: &CoupledSystem) -> Result<Option<String>, RunError> {
-    let ratio = system.smallest_density_ratio();
-    if system.coupling == Coupling::InnerFluidMomentum {
-        let dim = system.flow.grid.dim();
+/// `ratio` is the smallest `ρ_p/ρ` of the scene's moving grains, `dim` its
+/// dimension.
+pub fn check_density_ratio(
+    ratio: f64,
+    coupling: Coupling,
+    dim: usize,
+) -> Result<Option<String>, RunError> {
+    if coupling == Coupling::InnerFluidMomentum {
         let tested = INNER_FLUID_MOMENTUM_TESTED_DOWN_TO[dim - 2];
         return Ok((ratio < tested).then(|| {
             format!(
@@ -217,8 +218,12 @@ impl CoupledModel {
         let (system, contact_time) =
             build_on(case, communicator.clone()).map_err(RunError::Case)?;
         let mut warnings = Vec::new();
-        warnings.extend(check_dem_substep(&system, contact_time)?);
-        warnings.extend(check_density_ratio(&system)?);
+        warnings.extend(check_dem_substep(system.dem_dt, contact_time)?);
+        warnings.extend(check_density_ratio(
+            system.smallest_density_ratio(),
+            system.coupling,
+            system.flow.grid.dim(),
+        )?);
         let dt = case
             .time
             .dt
@@ -260,7 +265,7 @@ impl CoupledModel {
                 Some(cells as f64 / ranks as f64),
             ));
         }
-        let analysis = SphereInFluid::new(case, &system);
+        let analysis = SphereInFluid::new(case, &system.dem, system.fluid_density);
         Ok(CoupledModel {
             system,
             analysis,
@@ -346,8 +351,9 @@ impl CoupledModel {
             self.grain_cfl_sum += speed * step_dt * (speed * layer_step / h);
             self.distance += speed * step_dt;
         }
+        let (time, dem) = (self.system.flow.time, &self.system.dem);
         self.analysis
-            .after_step(&self.system, step_dt, &self.last_report);
+            .after_step(time, dem, step_dt, &self.last_report);
         Ok(())
     }
 

@@ -5,6 +5,7 @@
 //! when told to ([`stop`]). A run resumes from a checkpoint of its own
 //! output folder ([`crate::checkpoint`]).
 
+pub mod axisymmetric;
 pub mod coupled;
 pub mod dry;
 pub mod dry_stepper;
@@ -126,6 +127,9 @@ pub(crate) fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
     };
     if case.has_grains() && scene::hard_contact(case).is_some() {
         return refuse("hard contact (contact.model = \"cocd\" or \"nscd\")");
+    }
+    if case.domain.geometry == crate::case::Geometry::Axisymmetric {
+        return refuse("an axisymmetric scene (domain.geometry = \"axisymmetric\")");
     }
     Ok(())
 }

@@ -3,10 +3,11 @@
 //! interface: advance one step, the time, what the writers record, the
 //! state to save and restore, and the summary at the end.
 
+use super::axisymmetric::AxisymmetricModel;
 use super::coupled::CoupledModel;
 use super::dry::DryModel;
 use super::fluid::FluidModel;
-use crate::case::Case;
+use crate::case::{Case, Geometry};
 use crate::checkpoint::extent::Extent;
 use crate::RunError;
 use grainflow_core::{Communicator, State, StateError};
@@ -26,13 +27,17 @@ pub enum Model {
     Dry(Box<DryModel>),
     Fluid(Box<FluidModel>),
     Coupled(Box<CoupledModel>),
+    /// Grains on the axis of an (r, z) fluid.
+    Axisymmetric(Box<AxisymmetricModel>),
 }
 
 impl Model {
     /// The scene of a validated case; refuses (before anything is written)
     /// what cannot run.
     pub fn build(case: &Case, communicator: Communicator) -> Result<Self, RunError> {
-        Ok(if !case.has_grains() {
+        Ok(if case.domain.geometry == Geometry::Axisymmetric {
+            Model::Axisymmetric(Box::new(AxisymmetricModel::build(case, communicator)?))
+        } else if !case.has_grains() {
             Model::Fluid(Box::new(FluidModel::build(case, communicator)?))
         } else if case.fluid.is_some() {
             Model::Coupled(Box::new(CoupledModel::build(case, communicator)?))
@@ -47,6 +52,7 @@ impl Model {
             Model::Dry(_) => "dry",
             Model::Fluid(_) => "fluid",
             Model::Coupled(_) => "coupled",
+            Model::Axisymmetric(_) => "axisymmetric",
         }
     }
 
@@ -56,6 +62,7 @@ impl Model {
             Model::Dry(m) => (&m.description, &m.warnings),
             Model::Fluid(m) => (&m.description, &m.warnings),
             Model::Coupled(m) => (&m.description, &m.warnings),
+            Model::Axisymmetric(m) => (&m.description, &m.warnings),
         }
     }
 
@@ -64,6 +71,7 @@ impl Model {
             Model::Dry(m) => m.system.time,
             Model::Fluid(m) => m.solver.time,
             Model::Coupled(m) => m.system.flow.time,
+            Model::Axisymmetric(m) => m.system.flow.time,
         }
     }
 
@@ -72,6 +80,7 @@ impl Model {
             Model::Dry(m) => m.system.steps,
             Model::Fluid(m) => m.steps(),
             Model::Coupled(m) => m.steps(),
+            Model::Axisymmetric(m) => m.steps(),
         }
     }
 
@@ -81,6 +90,7 @@ impl Model {
             Model::Dry(m) => m.dt(),
             Model::Fluid(m) => m.dt(),
             Model::Coupled(m) => m.dt(),
+            Model::Axisymmetric(m) => m.dt(),
         }
     }
 
@@ -91,6 +101,7 @@ impl Model {
             Model::Dry(m) => m.reached(end),
             Model::Fluid(m) => m.reached(end),
             Model::Coupled(m) => m.reached(end),
+            Model::Axisymmetric(m) => m.reached(end),
         }
     }
 
@@ -101,6 +112,7 @@ impl Model {
             Model::Dry(m) => m.advance(),
             Model::Fluid(m) => m.advance(case, end).map(|()| Vec::new()),
             Model::Coupled(m) => m.advance(case, end).map(|()| Vec::new()),
+            Model::Axisymmetric(m) => m.advance(case, end).map(|()| Vec::new()),
         }
     }
 
@@ -118,15 +130,25 @@ impl Model {
             Model::Dry(m) => Some(&m.system),
             Model::Fluid(_) => None,
             Model::Coupled(m) => Some(&m.system.dem),
+            Model::Axisymmetric(m) => Some(&m.system.dem),
         }
     }
 
-    /// The flow, if the scene has a fluid.
+    /// The Cartesian flow, if the scene has one (an axisymmetric scene's
+    /// is [`Model::axisymmetric`]).
     pub fn flow(&self) -> Option<&FlowSolver> {
         match self {
-            Model::Dry(_) => None,
+            Model::Dry(_) | Model::Axisymmetric(_) => None,
             Model::Fluid(m) => Some(&m.solver),
             Model::Coupled(m) => Some(&m.system.flow),
+        }
+    }
+
+    /// The (r, z) scene, if the scene is axisymmetric.
+    pub fn axisymmetric(&mut self) -> Option<&mut AxisymmetricModel> {
+        match self {
+            Model::Axisymmetric(m) => Some(m),
+            _ => None,
         }
     }
 
@@ -152,6 +174,7 @@ impl Model {
             Model::Dry(_) => None,
             Model::Fluid(m) => Some(m.series_row()),
             Model::Coupled(m) => Some(m.flow_row(dt)),
+            Model::Axisymmetric(m) => Some(m.flow_row(dt)),
         }
     }
 
@@ -160,7 +183,7 @@ impl Model {
     /// scene has a fluid.
     pub fn field_output(&mut self) -> Option<FieldOutput<'_>> {
         match self {
-            Model::Dry(_) => None,
+            Model::Dry(_) | Model::Axisymmetric(_) => None,
             Model::Fluid(m) => Some(FieldOutput {
                 density: m.density(),
                 solver: &mut m.solver,
@@ -192,6 +215,7 @@ impl Model {
             Model::Dry(m) => m.finish(out, failed),
             Model::Fluid(m) if !failed => Ok(m.metrics(case)),
             Model::Coupled(m) if !failed => Ok(m.metrics()),
+            Model::Axisymmetric(m) if !failed => Ok(m.metrics()),
             _ => Ok(Map::new()),
         }
     }
@@ -202,6 +226,7 @@ impl Model {
             Model::Dry(m) => m.summary(case, wall_seconds),
             Model::Fluid(m) => m.summary(wall_seconds),
             Model::Coupled(m) => m.summary(case, wall_seconds),
+            Model::Axisymmetric(m) => m.summary(case, wall_seconds),
         }
     }
 
@@ -211,6 +236,7 @@ impl Model {
             Model::Dry(m) => m.done_line(wall_seconds),
             Model::Fluid(m) => m.done_line(wall_seconds),
             Model::Coupled(m) => m.done_line(wall_seconds),
+            Model::Axisymmetric(m) => m.done_line(wall_seconds),
         }
     }
 
@@ -220,6 +246,7 @@ impl Model {
             Model::Dry(m) => m.save_state(state),
             Model::Fluid(m) => m.save_state(state),
             Model::Coupled(m) => m.save_state(state),
+            Model::Axisymmetric(m) => m.save_state(state),
         }
     }
 
@@ -231,6 +258,8 @@ impl Model {
             Model::Dry(m) => m.restore_redistributed(states),
             Model::Fluid(m) => m.restore_redistributed(states),
             Model::Coupled(m) => m.restore_redistributed(states),
+            // One rank only: the states are this rank's.
+            Model::Axisymmetric(m) => m.restore_state(&mut states[0]),
         }
     }
 
@@ -241,6 +270,7 @@ impl Model {
             Model::Dry(m) => m.restore_state(state),
             Model::Fluid(m) => m.restore_state(state),
             Model::Coupled(m) => m.restore_state(state),
+            Model::Axisymmetric(m) => m.restore_state(state),
         }
     }
 }

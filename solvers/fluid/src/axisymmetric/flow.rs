@@ -384,3 +384,35 @@ fn add_unknowns(grid: &RzGrid, solver: &RzDirectSolver, increment: &[f64], field
         }
     }
 }
+
+impl AxisymmetricFlow {
+    /// Saves what the next step reads: the velocity and pressure with their
+    /// ghosts and the time (the first stage takes no share of the previous
+    /// tendency, and the solvers are rebuilt from the case).
+    pub fn save_state(&self, state: &mut grainflow_core::State) {
+        state.put_f64s("rz_flow.radial", &self.radial);
+        state.put_f64s("rz_flow.axial", &self.axial);
+        state.put_f64s("rz_flow.pressure", &self.pressure);
+        state.put_f64("rz_flow.time", self.time);
+        state.put_usizes("rz_flow.cells", &self.grid.cells);
+    }
+
+    /// Takes back what [`AxisymmetricFlow::save_state`] saved, into a flow
+    /// built from the same case.
+    pub fn restore_state(
+        &mut self,
+        state: &mut grainflow_core::State,
+    ) -> Result<(), grainflow_core::StateError> {
+        let len = self.grid.len();
+        self.radial = state.take_f64s_of_len("rz_flow.radial", len)?;
+        self.axial = state.take_f64s_of_len("rz_flow.axial", len)?;
+        self.pressure = state.take_f64s_of_len("rz_flow.pressure", len)?;
+        self.time = state.take_f64("rz_flow.time")?;
+        if state.take_usizes("rz_flow.cells")?[..] != self.grid.cells {
+            return Err(grainflow_core::StateError(
+                "the saved (r, z) flow has another number of cells".into(),
+            ));
+        }
+        Ok(())
+    }
+}

@@ -179,3 +179,52 @@ fn lap(part: &mut f64, clock: Instant) -> Instant {
     *part += (now - clock).as_secs_f64();
     now
 }
+
+impl AxisymmetricCoupledSystem {
+    /// Saves what the next coupled step reads: the flow, the grains (with
+    /// what travels with them), the last stage's length and the timings.
+    pub fn save_state(&self, state: &mut grainflow_core::State) {
+        self.flow.save_state(state);
+        self.dem.save_state(state);
+        state.put_f64s("coupled.previous_stage_dt", self.previous_stage_dt.as_slice());
+        let t = &self.timings;
+        state.put_f64s("coupled.timings", &[t.flow, t.forcing, t.loads, t.dem]);
+    }
+
+    /// Takes back what [`AxisymmetricCoupledSystem::save_state`] saved, into
+    /// a system built from the same case.
+    pub fn restore_state(
+        &mut self,
+        state: &mut grainflow_core::State,
+    ) -> Result<(), grainflow_core::StateError> {
+        self.flow.restore_state(state)?;
+        self.dem.restore_state(state)?;
+        let previous = state.take_f64s("coupled.previous_stage_dt")?;
+        if previous.len() > 1 {
+            return Err(grainflow_core::StateError(
+                "coupled.previous_stage_dt holds at most one number".into(),
+            ));
+        }
+        self.previous_stage_dt = previous.first().copied();
+        let t = state.take_f64s_of_len("coupled.timings", 4)?;
+        self.timings = Timings {
+            flow: t[0],
+            forcing: t[1],
+            loads: t[2],
+            dem: t[3],
+        };
+        Ok(())
+    }
+
+    /// The smallest `ρ_p/ρ` among the moving grains (infinite if none).
+    pub fn smallest_density_ratio(&self) -> f64 {
+        let p = &self.dem.particles;
+        (0..p.n_owned)
+            .filter(|&k| p.inverse_mass[k] > 0.0)
+            .map(|k| {
+                let volume = particle_volume(grainflow_core::Dimension::Three, p.radius[k]);
+                p.mass[k] / volume / self.fluid_density
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+}
