@@ -21,14 +21,22 @@ pub fn radial_faces(case: &Case) -> Result<Vec<f64>, String> {
     let radius = case.domain.upper[0];
     let cells = f.cells[0] / 2;
     let Some(s) = &f.stretching else {
-        return Ok((0..=cells).map(|i| radius * i as f64 / cells as f64).collect());
+        return Ok((0..=cells)
+            .map(|i| radius * i as f64 / cells as f64)
+            .collect());
     };
     if let (Some(core_radius), Some(core_cells)) = (s.core_radius, s.core_cells) {
         return core_and_growth_faces(core_radius, core_cells, radius, cells)
             .map_err(|e| e.to_string());
     }
     if let Some(factor) = s.factor {
-        return Ok(clustered_faces(Clustering::Upper, factor, cells, 0.0, radius));
+        return Ok(clustered_faces(
+            Clustering::Upper,
+            factor,
+            cells,
+            0.0,
+            radius,
+        ));
     }
     match &s.faces {
         Some(faces) if faces.len() == cells + 1 => Ok(faces.clone()),
@@ -87,7 +95,10 @@ pub fn flow(case: &Case) -> Result<AxisymmetricFlow, String> {
 
 /// The coupled scene of a validated axisymmetric case with grains, on one
 /// rank, and its DEM sub-step's ratio to the shortest contact time.
-pub fn build(case: &Case, communicator: Communicator) -> Result<(AxisymmetricCoupledSystem, f64), String> {
+pub fn build(
+    case: &Case,
+    communicator: Communicator,
+) -> Result<(AxisymmetricCoupledSystem, f64), String> {
     if communicator.size() > 1 {
         return Err(format!(
             "an axisymmetric scene runs on one rank, not {}: run it without mpirun (its 2D grid \

@@ -68,7 +68,8 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
     if let Some(k) = moving.min_by(|&a, &b| p.mass[a].total_cmp(&p.mass[b])) {
         let (rho, mu) = (f.density, f.viscosity);
         let diameter = 2.0 * p.radius[k];
-        let rho_p = p.mass[k] / grainflow_ibm::particle_volume(grainflow_core::Dimension::Three, p.radius[k]);
+        let rho_p = p.mass[k]
+            / grainflow_ibm::particle_volume(grainflow_core::Dimension::Three, p.radius[k]);
         let g = system.dem.domain.gravity.norm();
         let _ = writeln!(
             out,
@@ -114,7 +115,9 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
     for w in warning.iter().chain(&density_warning) {
         let _ = writeln!(out, "{w}");
     }
-    let estimate = cost_estimate::probe(setup, steps, Evolution::Contacts, || system.step(dt).is_ok());
+    let estimate = cost_estimate::probe(setup, steps, Evolution::Contacts, || {
+        system.step(dt).is_ok()
+    });
     if let Some(estimate) = estimate {
         let what = if case.time.cfl.is_some() {
             "steps of time.dt (more where time.cfl shortens them)"

@@ -486,3 +486,16 @@ fn the_checkpoint_size_check_announces_is_what_a_run_writes() {
         );
     }
 }
+
+#[test]
+fn an_axisymmetric_scene_resumes_bit_for_bit() {
+    resumes_bit_for_bit(
+        "bouncing_sphere_axisymmetric.toml",
+        &[
+            "time.end=0.03",
+            "fluid.cells=[60,60,130]",
+            "output.fields=true",
+        ],
+        10,
+    );
+}

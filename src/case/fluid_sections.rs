@@ -18,7 +18,7 @@ pub struct DomainSection {
     pub gravity: Vec<f64>,
     /// "cartesian" (default) or "axisymmetric": the fluid of a 3D scene
     /// solved in (r, z) about the axis x = y = 0, the box around the
-    /// cylinder of radius `upper[0]` (see `docs/axisymmetric.md`).
+    /// cylinder of radius `upper[0]` (README, "Axisymmetric scenes").
     #[serde(default, skip_serializing_if = "Geometry::is_cartesian")]
     pub geometry: Geometry,
 }

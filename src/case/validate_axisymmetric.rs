@@ -50,7 +50,10 @@ impl Case {
                 "an axisymmetric scene takes gravity along the axis (z) only",
             ));
         }
-        if f.cells.len() != 3 || f.cells[0] != f.cells[1] || f.cells[0] % 2 != 0 || f.cells[0] < 4
+        if f.cells.len() != 3
+            || f.cells[0] != f.cells[1]
+            || !f.cells[0].is_multiple_of(2)
+            || f.cells[0] < 4
         {
             return Err(invalid(
                 "fluid.cells",
@@ -214,7 +217,13 @@ impl Case {
                        R)";
         match forms {
             (true, false, false) | (false, true, false) | (false, false, true) => {}
-            _ => return Err(invalid("fluid.stretching", "(incomplete or mixed)", allowed)),
+            _ => {
+                return Err(invalid(
+                    "fluid.stretching",
+                    "(incomplete or mixed)",
+                    allowed,
+                ))
+            }
         }
         if forms.1 && s.cluster.as_deref() != Some("upper_wall") {
             return Err(invalid(

@@ -208,9 +208,7 @@ impl FieldFiles {
 /// pressure [Pa], the vorticity `(0, ω_θ, 0)`, `ω_θ = ∂u_r/∂z − ∂u_z/∂r`
 /// (the curl on the cell's four corners, averaged to its centre), and the
 /// grains' solid fraction.
-fn rz_cell_fields(
-    system: &mut AxisymmetricCoupledSystem,
-) -> (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>, Vec<f64>) {
+fn rz_cell_fields(system: &mut AxisymmetricCoupledSystem) -> RzCellFields {
     system.flow.fill_velocity_ghosts();
     let flow = &system.flow;
     let grid = &flow.grid;
@@ -243,7 +241,20 @@ fn rz_cell_fields(
     let solid = system
         .immersed
         .cell_solid_fraction(grid, &system.dem.particles);
-    (velocity, pressure, vorticity, solid)
+    RzCellFields {
+        velocity,
+        pressure,
+        vorticity,
+        solid,
+    }
+}
+
+/// The cell fields of an (r, z) flow, r fastest.
+struct RzCellFields {
+    velocity: Vec<[f64; 3]>,
+    pressure: Vec<f64>,
+    vorticity: Vec<[f64; 3]>,
+    solid: Vec<f64>,
 }
 
 impl FieldFiles {
@@ -252,7 +263,12 @@ impl FieldFiles {
     /// y, `.vti` on uniform radial cells, `.vtr` on stretched ones. A
     /// Rotational Extrusion about z in ParaView sweeps it into the cylinder.
     pub fn write_rz(&mut self, system: &mut AxisymmetricCoupledSystem) -> std::io::Result<()> {
-        let (velocity, pressure, vorticity, solid) = rz_cell_fields(system);
+        let RzCellFields {
+            velocity,
+            pressure,
+            vorticity,
+            solid,
+        } = rz_cell_fields(system);
         let grid = &system.flow.grid;
         let [nr, nz] = grid.cells;
         let thickness = grid.width(1);
@@ -271,7 +287,8 @@ impl FieldFiles {
             }
         };
         let name = format!("fields/fields_{:06}.{}", self.frames, layout.extension());
-        let scalars: Vec<(&str, &[f64])> = vec![("pressure", &pressure), ("solid_fraction", &solid)];
+        let scalars: Vec<(&str, &[f64])> =
+            vec![("pressure", &pressure), ("solid_fraction", &solid)];
         FieldFrame {
             cells: [nr, 1, nz],
             offset: [0; 3],

@@ -41,7 +41,10 @@ impl AxisymmetricModel {
             system.coupling,
             3,
         )?);
-        let dt = case.time.dt.expect("validated: a coupled scene has time.dt");
+        let dt = case
+            .time
+            .dt
+            .expect("validated: a coupled scene has time.dt");
         let grid = &system.flow.grid;
         let [nr, nz] = grid.cells;
         let description = vec![
@@ -101,7 +104,10 @@ impl AxisymmetricModel {
     /// (speed over the smallest cell) reach that CFL number, at most
     /// `time.dt`.
     fn step_size(&self, case: &Case) -> f64 {
-        let largest = case.time.dt.expect("validated: grains in a fluid have time.dt");
+        let largest = case
+            .time
+            .dt
+            .expect("validated: grains in a fluid have time.dt");
         let Some(cfl) = case.time.cfl else {
             return largest;
         };
@@ -123,7 +129,9 @@ impl AxisymmetricModel {
         let report = self
             .system
             .step_observed(step_dt, |dem| analysis.after_stage(dem))
-            .map_err(|e| format!("unstable at t = {time:.6e} s (step {steps}): {e}; reduce time.dt"))?;
+            .map_err(|e| {
+                format!("unstable at t = {time:.6e} s (step {steps}): {e}; reduce time.dt")
+            })?;
         self.last_report = Some(report);
         self.dem_substeps += report.dem_substeps;
         self.max_divergence = report.flow.max_divergence;
@@ -134,7 +142,9 @@ impl AxisymmetricModel {
             ));
         }
         if let Some(why) = cfl_overrun(report.flow.max_cfl, step_dt, case) {
-            return Err(format!("unstable at t = {time:.6e} s (step {steps}): {why}"));
+            return Err(format!(
+                "unstable at t = {time:.6e} s (step {steps}): {why}"
+            ));
         }
         if report.dem.max_overlap_ratio > case.time.overlap_limit {
             return Err(format!(
@@ -183,7 +193,10 @@ impl AxisymmetricModel {
             ("forcing_step", json!(self.system.immersed.forcing_step)),
             ("dem_dt", json!(self.system.dem_dt)),
             ("contact_time", json!(self.contact_time)),
-            ("seconds_per_step", json!(wall_seconds / self.steps.max(1) as f64)),
+            (
+                "seconds_per_step",
+                json!(wall_seconds / self.steps.max(1) as f64),
+            ),
             ("seconds_flow", json!(t.flow)),
             ("seconds_forcing", json!(t.forcing)),
             ("seconds_loads", json!(t.loads)),

@@ -186,7 +186,10 @@ impl AxisymmetricCoupledSystem {
     pub fn save_state(&self, state: &mut grainflow_core::State) {
         self.flow.save_state(state);
         self.dem.save_state(state);
-        state.put_f64s("coupled.previous_stage_dt", self.previous_stage_dt.as_slice());
+        state.put_f64s(
+            "coupled.previous_stage_dt",
+            self.previous_stage_dt.as_slice(),
+        );
         let t = &self.timings;
         state.put_f64s("coupled.timings", &[t.flow, t.forcing, t.loads, t.dem]);
     }
