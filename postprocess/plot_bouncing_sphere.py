@@ -120,6 +120,23 @@ for resolution in sorted({r["cells_per_diameter"] for r in runs}, key=int):
                          for r in group]
             ax.plot(stokes, step_ends, "x", color=line.get_color(), alpha=0.6,
                     label="  same, read at step ends only")
+# The (r, z) runs (scripts/bouncing_sphere_sweep.py --axisymmetric), if any:
+# the same sphere on the axis of a cylinder of radius 3 D.
+axisymmetric = os.path.join(os.path.dirname(source), "bouncing_sphere_axisymmetric.csv")
+if os.path.exists(axisymmetric):
+    rz = [r for r in csv.DictReader(open(axisymmetric)) if r["status"] == "ok" and r["stokes"]]
+    for resolution in sorted({r["cells_per_diameter"] for r in rz}, key=int):
+        for lubricated, style in [("True", "-"), ("False", "--")]:
+            group = sorted((r for r in rz if r["lubrication"] == lubricated
+                            and r["cells_per_diameter"] == resolution),
+                           key=lambda r: float(r["stokes"]))
+            if not group:
+                continue
+            key = "restitution_ratio_through_film" if lubricated == "True" else "restitution_ratio"
+            ax.plot([float(r["stokes"]) for r in group], [float(r[key]) for r in group], "*",
+                    ls=style, ms=8, mfc="none" if lubricated == "False" else None,
+                    label=f"grainflow (r, z), D/Δx = {resolution}, "
+                          f"{'with lubrication, through the film' if lubricated == 'True' else 'without lubrication, peak'}")
 # The paper's forcing of the first cells at the wall (coupling.wall_layer =
 # "forced"), the case's default until 2026-12-01, at D/Δx = 8.
 forced = os.path.join(os.path.dirname(source), "bouncing_sphere_forced_wall_layer.csv")

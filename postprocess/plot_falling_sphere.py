@@ -66,12 +66,24 @@ for r in reference_runs:
 points = sorted(by_resolution.items())
 seconds = [float(r["wall_seconds"]) for _, r in points]
 error = [abs(float(r["terminal_reynolds_error"])) * 100 for _, r in points]
-chart.loglog(seconds, error, "o-")
+chart.loglog(seconds, error, "o-", label="3D, box 8 D (Cartesian)")
 for (n, _), s, e in zip(points, seconds, error):
     chart.annotate(f"D/Δx = {n}", (s, e), textcoords="offset points", xytext=(5, 5))
+# The (r, z) runs of the paper's own domain
+# (scripts/falling_sphere_axisymmetric_sweep.py), when there are some.
+axisymmetric = os.path.join(os.path.dirname(source), "falling_sphere_axisymmetric.csv")
+if os.path.exists(axisymmetric):
+    rz = list(csv.DictReader(open(axisymmetric)))
+    rz_seconds = [float(r["wall_seconds"]) for r in rz]
+    rz_error = [abs(float(r["terminal_reynolds_error"])) * 100 for r in rz]
+    chart.loglog(rz_seconds, rz_error, "s-", label="(r, z), the paper's 20 D × 40 D")
+    for r, s_, e in zip(rz, rz_seconds, rz_error):
+        chart.annotate(f"D/Δx = {r['cells_per_diameter']}", (s_, e), textcoords="offset points",
+                       xytext=(5, -12))
+chart.legend(fontsize=8)
 chart.set_xlabel("wall time of the run [s] (2 threads)")
 chart.set_ylabel("|terminal Re error| against Schiller–Naumann [%]")
-chart.set_title("speed against accuracy (box 8 D, paper's CFL)")
+chart.set_title("speed against accuracy (paper's CFL)")
 
 coarse = [r for r in reference_runs if r["cells_per_diameter"] == "8" and not r.get("cfl")]
 for held, marker, name in [(False, "o-", "eq. 7 at every stage"),

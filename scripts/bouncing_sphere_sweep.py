@@ -7,6 +7,10 @@ approach and rebound velocities, restitution over e_n, cost).
     scripts/bouncing_sphere_sweep.py --out docs/validation/bouncing_sphere.csv \
         --viscosity 0.6 --viscosity 0.066 ... [--cells-per-diameter 12]
 
+With --axisymmetric the runs are those of
+`cases/bouncing_sphere_axisymmetric.toml`: the same sphere on the axis of a
+cylinder of radius 3 D in (r, z).
+
 With --release-offsets each viscosity is run from several heights a
 fraction of a millimetre apart: the contact then falls at other points of
 its fluid step, and the rebound read after the stages spreads with that
@@ -37,8 +41,11 @@ RELEASE = 10.0  # diameters above the floor (sphere bottom)
 
 
 def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=None, extra=(),
-        offset_mm=0.0):
+        offset_mm=0.0, axisymmetric=False):
     width, height = 6.0, 13.0
+    case = "cases/bouncing_sphere_axisymmetric.toml" if axisymmetric else "cases/bouncing_sphere.toml"
+    # The axis of the (r, z) case is x = y = 0; the 3D box's centre is at 3 D.
+    centre = 0.0 if axisymmetric else 0.018
     dx = D / cells_per_d
     # Free fall of the buoyant weight over the release height bounds the speed.
     reduced_g = G * 7.0 / 8.5
@@ -46,8 +53,8 @@ def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=Non
     dt = min(0.8 * dx / fastest, 6e-4)
     end = 2.0 * (2.0 * RELEASE * D / reduced_g) ** 0.5 + 0.15
     tag = "_".join(a.replace("/", "") for a in extra)
-    name = (f"bounce_{cells_per_d}_{viscosity}_{'lub' if lubrication else 'dry'}_{roughness}{tag}"
-            f"_{offset_mm}mm")
+    name = (f"bounce_{'rz_' if axisymmetric else ''}{cells_per_d}_{viscosity}_"
+            f"{'lub' if lubrication else 'dry'}_{roughness}{tag}_{offset_mm}mm")
     out = os.path.join(workdir, name)
     sets = [
         f"fluid.viscosity={viscosity}",
@@ -60,13 +67,13 @@ def run(binary, viscosity, lubrication, cells_per_d, cfl, workdir, roughness=Non
     if offset_mm:
         # The case's sphere: centre 10 D above the floor plus its radius.
         height = RELEASE * D + 0.5 * D + offset_mm * 1e-3
-        sets.append(f"particles.block[0].positions=[[0.018,0.018,{height}]]")
+        sets.append(f"particles.block[0].positions=[[{centre},{centre},{height}]]")
     if not lubrication:
         sets.append("lubrication.range=1e-9")
     if roughness is not None:
         sets.append(f"lubrication.roughness={roughness}")
     sets += list(extra)
-    command = [binary, "run", "cases/bouncing_sphere.toml", "--out", out]
+    command = [binary, "run", case, "--out", out]
     for s in sets:
         command += ["--set", s]
     finished = subprocess.run(command, stdout=subprocess.DEVNULL)
@@ -104,6 +111,8 @@ def main():
                         help="another assignment for every run, as grainflow run --set")
     parser.add_argument("--lubrication", choices=["on", "off", "both"], default="on",
                         help="run each viscosity with the film force, without it, or both")
+    parser.add_argument("--axisymmetric", action="store_true",
+                        help="the (r, z) case on the axis of a cylinder of radius 3 D")
     parser.add_argument("--release-offsets", default="0",
                         help="comma-separated heights [mm] added to the release, one run each")
     args = parser.parse_args()
@@ -123,7 +132,8 @@ def main():
             for lubrication in {"on": [True], "off": [False], "both": [True, False]}[args.lubrication]:
                 for offset in offsets:
                     row = run(args.binary, viscosity, lubrication, args.cells_per_diameter,
-                              args.cfl, args.workdir, args.roughness, args.extra, offset)
+                              args.cfl, args.workdir, args.roughness, args.extra, offset,
+                              args.axisymmetric)
                     writer.writerow(row)
                     f.flush()
                     print(json.dumps(row), flush=True)

@@ -9,8 +9,10 @@
 //! singular on the constant: its mode `λ = 0` drops the last radial
 //! equation (which the compatible right-hand side satisfies once the others
 //! are) and the solution is shifted to zero volume mean.
-
-use rayon::prelude::*;
+//!
+//! The elimination sweeps the radial rows once for all the modes together,
+//! its inner loop over the modes (vector instructions); the transforms run
+//! on the threads.
 
 use crate::transform::{AxisTransform, Direction};
 
@@ -30,8 +32,10 @@ pub struct RzDirectSolver {
     /// Volume weight `r̄_i w_i` of each radial unknown, for the mean of a
     /// singular solve.
     rings: Vec<f64>,
-    /// Unknowns, r fastest, then transformed.
+    /// Unknowns, the z rows (then the modes) fastest.
     work: Vec<f64>,
+    /// The elimination's `upper / pivot` of every row and mode.
+    upper: Vec<f64>,
 }
 
 impl RzDirectSolver {
@@ -62,6 +66,7 @@ impl RzDirectSolver {
             z_eigenvalues,
             singular,
             rings,
+            upper: work.clone(),
             work,
         }
     }
@@ -78,82 +83,108 @@ impl RzDirectSolver {
 
     /// Replaces the unknowns of the padded `field` by the solution of
     /// `(a I + b L) x = field`, homogeneous conditions at the walls.
+    ///
+    /// The work array holds the modes fastest (each radial row of all the
+    /// modes contiguous): the transforms run along contiguous lines, and
+    /// the elimination sweeps the rows once for every mode together, its
+    /// inner loop over the modes free of the recurrence along r (vector
+    /// instructions), each mode's arithmetic the same whatever the others.
     pub fn solve(&mut self, grid: &RzGrid, field: &mut [f64], a: f64, b: f64) {
         let n = self.radial.len();
-        let lines = self.z_rows.len();
+        let modes = self.z_rows.len();
         let first = self.radial.first;
-        for (line, k) in self.z_rows.clone().enumerate() {
-            let start = grid.index(first, k);
-            self.work[line * n..(line + 1) * n].copy_from_slice(&field[start..start + n]);
+        let z_first = self.z_rows.start;
+        for j in 0..n {
+            let row = &mut self.work[j * modes..(j + 1) * modes];
+            for (m, value) in row.iter_mut().enumerate() {
+                *value = field[grid.index(first + j, z_first + m)];
+            }
         }
-        let shape = [n, lines, 1];
+        let shape = [modes, n, 1];
         self.transform
-            .apply_along(&mut self.work, shape, 1, Direction::Forward);
-        let rows = &self.radial.rows;
-        let eigenvalues = &self.z_eigenvalues;
-        let singular = self.singular && a == 0.0;
-        let rings = &self.rings;
-        self.work
-            .par_chunks_mut(n)
-            .with_min_len(16)
-            .enumerate()
-            .for_each_init(
-                || vec![0.0; n],
-                |modified, (mode, line)| {
-                    let shift = a + b * eigenvalues[mode];
-                    let null_mode = singular && eigenvalues[mode] == 0.0;
-                    thomas(rows, b, shift, line, modified, null_mode);
-                    if null_mode {
-                        let volume: f64 = rings.iter().sum();
-                        let mean = line.iter().zip(rings).map(|(x, w)| x * w).sum::<f64>() / volume;
-                        line.iter_mut().for_each(|x| *x -= mean);
-                    }
-                },
-            );
+            .apply_along(&mut self.work, shape, 0, Direction::Forward);
+        let shifts: Vec<f64> = self.z_eigenvalues.iter().map(|l| a + b * l).collect();
+        let null_mode = (self.singular && a == 0.0)
+            .then(|| self.z_eigenvalues.iter().position(|&l| l == 0.0))
+            .flatten();
+        thomas_across_modes(
+            &self.radial.rows,
+            b,
+            &shifts,
+            null_mode,
+            &mut self.work,
+            &mut self.upper,
+        );
+        if let Some(m) = null_mode {
+            // Zero volume mean over the radial line of the constant mode.
+            let volume: f64 = self.rings.iter().sum();
+            let mean = (0..n)
+                .map(|j| self.work[j * modes + m] * self.rings[j])
+                .sum::<f64>()
+                / volume;
+            (0..n).for_each(|j| self.work[j * modes + m] -= mean);
+        }
         self.transform
-            .apply_along(&mut self.work, shape, 1, Direction::Backward);
-        for (line, k) in self.z_rows.clone().enumerate() {
-            let start = grid.index(first, k);
-            field[start..start + n].copy_from_slice(&self.work[line * n..(line + 1) * n]);
+            .apply_along(&mut self.work, shape, 0, Direction::Backward);
+        for j in 0..n {
+            let row = &self.work[j * modes..(j + 1) * modes];
+            for (m, value) in row.iter().enumerate() {
+                field[grid.index(first + j, z_first + m)] = *value;
+            }
         }
     }
 }
 
-/// Solves `(shift I + b A) x = f` in place for the tridiagonal `A` of
-/// `rows`; with `drop_last`, the last equation is replaced by `x_n = 0`
-/// (a singular operator with a compatible right-hand side).
-fn thomas(
+/// Solves `(shift_m I + b A) x_m = f_m` in place for every mode `m` at
+/// once, `A` the tridiagonal of `rows` and `x` holding row `j` of every
+/// mode at `j M .. (j + 1) M` (`M` modes). The singular mode `null_mode`
+/// (shift 0 with `A` annihilating constants: the pressure's constant)
+/// drops its last equation for `x_n = 0`, which its compatible right-hand
+/// side satisfies.
+fn thomas_across_modes(
     rows: &[[f64; 3]],
     b: f64,
-    shift: f64,
+    shifts: &[f64],
+    null_mode: Option<usize>,
     x: &mut [f64],
-    modified: &mut [f64],
-    drop_last: bool,
+    upper_over_pivot: &mut [f64],
 ) {
-    let n = x.len();
-    let solved = if drop_last { n - 1 } else { n };
-    let mut previous_upper = 0.0;
-    for j in 0..solved {
-        let [lower, diagonal, upper] = rows[j];
-        let (lower, diagonal, upper) = (b * lower, shift + b * diagonal, b * upper);
-        let pivot = if j == 0 {
-            diagonal
+    let modes = shifts.len();
+    let n = rows.len();
+    for j in 0..n {
+        let [lower, diagonal, upper] = rows[j].map(|c| b * c);
+        let (done, rest) = x.split_at_mut(j * modes);
+        let row = &mut rest[..modes];
+        let (before, this) = upper_over_pivot.split_at_mut(j * modes);
+        let this = &mut this[..modes];
+        if j == 0 {
+            for m in 0..modes {
+                let inverse = 1.0 / (shifts[m] + diagonal);
+                this[m] = upper * inverse;
+                row[m] *= inverse;
+            }
         } else {
-            diagonal - lower * previous_upper
-        };
-        let right = if j == 0 {
-            x[0]
-        } else {
-            x[j] - lower * x[j - 1]
-        };
-        previous_upper = if j + 1 < solved { upper / pivot } else { 0.0 };
-        modified[j] = previous_upper;
-        x[j] = right / pivot;
+            let previous = &done[(j - 1) * modes..];
+            let previous_upper = &before[(j - 1) * modes..];
+            for m in 0..modes {
+                let inverse = 1.0 / (shifts[m] + diagonal - lower * previous_upper[m]);
+                this[m] = upper * inverse;
+                row[m] = (row[m] - lower * previous[m]) * inverse;
+            }
+        }
     }
-    if drop_last {
-        x[n - 1] = 0.0;
+    // The singular mode's last pivot is zero to round-off: its last row
+    // is the dropped equation's, x_n = 0.
+    if let Some(m) = null_mode {
+        x[(n - 1) * modes + m] = 0.0;
     }
-    for j in (0..solved.saturating_sub(1)).rev() {
-        x[j] -= modified[j] * x[j + 1];
+    for j in (0..n - 1).rev() {
+        let (head, tail) = x.split_at_mut((j + 1) * modes);
+        let row = &mut head[j * modes..];
+        let next = &tail[..modes];
+        let factors = &upper_over_pivot[j * modes..(j + 1) * modes];
+        for m in 0..modes {
+            row[m] -= factors[m] * next[m];
+        }
     }
 }
