@@ -117,3 +117,24 @@ fn what_r_z_cannot_hold_is_refused_naming_the_key_and_nothing_is_written() {
     assert!(stderr.contains("fluid.stretching.core_radius"), "{stderr}");
     assert!(!written);
 }
+
+/// A step adapted to `time.cfl` that collapses (a flow running away, which
+/// the adapted step would follow towards zero while the run stands still)
+/// stops the run with a diagnosis; near the end a short last step does not.
+#[test]
+fn a_collapsed_adaptive_step_is_a_diagnosed_failure() {
+    use grainflow::simulation::coupled::{collapsed_step, COLLAPSED_STEP};
+    let overrides = vec!["time.cfl=1.0".to_string()];
+    let case =
+        grainflow::case::Case::load(&case_path("bouncing_sphere_axisymmetric.toml"), &overrides)
+            .unwrap();
+    let largest = case.time.dt.unwrap();
+    let tiny = 0.5 * COLLAPSED_STEP * largest;
+    let why = collapsed_step(tiny, &case, 0.1, 0.3).expect("a collapse");
+    assert!(
+        why.contains("time.cfl") && why.contains("running away"),
+        "{why}"
+    );
+    assert!(collapsed_step(0.5 * largest, &case, 0.1, 0.3).is_none());
+    assert!(collapsed_step(tiny, &case, 0.3 - 0.5 * tiny, 0.3).is_none());
+}

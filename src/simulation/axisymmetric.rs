@@ -3,7 +3,7 @@
 //! adapted to a CFL number, the last one landing on the end time; the
 //! sphere's analysis, the series and the (r, z) fields.
 
-use super::coupled::{check_dem_substep, check_density_ratio};
+use super::coupled::{check_dem_substep, check_density_ratio, collapsed_step};
 use super::fluid::cfl_overrun;
 use crate::case::Case;
 use crate::coupled_analysis::SphereInFluid;
@@ -125,6 +125,11 @@ impl AxisymmetricModel {
         self.dt = step_dt;
         let steps = self.steps;
         let time = self.system.flow.time;
+        if let Some(why) = collapsed_step(step_dt, case, time, end) {
+            return Err(format!(
+                "unstable at t = {time:.6e} s (step {steps}): {why}"
+            ));
+        }
         let analysis = &mut self.analysis;
         let report = self
             .system

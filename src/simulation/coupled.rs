@@ -115,6 +115,23 @@ pub fn check_dem_substep(dem_dt: f64, contact_time: f64) -> Result<Option<String
     }
 }
 
+/// The diagnosis of a step adapted to `time.cfl` that collapsed below
+/// [`COLLAPSED_STEP`] of `time.dt` before the end: a flow running away,
+/// which the adapted step would otherwise follow towards zero, the run
+/// standing still.
+pub fn collapsed_step(step_dt: f64, case: &Case, time: f64, end: f64) -> Option<String> {
+    let largest = case.time.dt?;
+    let collapsed = case.time.cfl.is_some() && step_dt < COLLAPSED_STEP * largest;
+    (collapsed && end - time > step_dt).then(|| {
+        format!(
+            "the step adapted to time.cfl collapsed to {step_dt:.3e} s, below {COLLAPSED_STEP} of              time.dt = {largest:.3e} s: the flow is running away (a cell Reynolds number too high              for the grid, or grains moving faster than the scene was set for); refine the grid              or raise the viscosity"
+        )
+    })
+}
+
+/// The fraction of `time.dt` below which an adapted step has collapsed.
+pub const COLLAPSED_STEP: f64 = 1e-3;
+
 /// Below this CFL number at a grain's settling velocity the forced layer
 /// around it, pulled towards its velocity at every stage, thickens the
 /// grain noticeably: at D/Δx = 8 the falling sphere settles 4 % slow at
@@ -310,6 +327,12 @@ impl CoupledModel {
         let step_dt = step_size(&self.system, case).min(end - self.system.flow.time);
         self.dt = step_dt;
         let steps = self.steps;
+        let time = self.system.flow.time;
+        if let Some(why) = collapsed_step(step_dt, case, time, end) {
+            return Err(format!(
+                "unstable at t = {time:.6e} s (step {steps}): {why}"
+            ));
+        }
         let analysis = &mut self.analysis;
         let time = self.system.flow.time;
         let report = self

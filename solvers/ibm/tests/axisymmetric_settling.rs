@@ -197,7 +197,7 @@ fn a_slow_sphere_in_a_cylinder_settles_at_the_haberman_sayre_velocity() {
 /// the terminal Reynolds number lies within 1 % of the band between the
 /// standard drag curve of Clift, Grace & Weber (19.74) and
 /// Schiller–Naumann (20.318), two correlations 2.8 % apart (measured
-/// 19.97: −1.7 % against Schiller–Naumann, +1.2 % against the drag
+/// 19.971: −1.7 % against Schiller–Naumann, +1.2 % against the drag
 /// curve). About 50 s on two cores.
 #[test]
 fn the_papers_falling_sphere_in_r_z_settles_within_the_drag_correlations() {
