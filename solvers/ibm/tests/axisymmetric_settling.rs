@@ -5,7 +5,7 @@ use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::axisymmetric::{AxialEnd, AxisymmetricFlow, OuterWall, RzGrid, RzWalls};
 use grainflow_ibm::axisymmetric::AxisymmetricCoupledSystem;
-use grainflow_ibm::settling::{early_acceleration, schiller_naumann_reynolds};
+use grainflow_ibm::settling::schiller_naumann_reynolds;
 use grainflow_ibm::Coupling;
 
 /// A sphere of diameter 1 and density `density_ratio` (fluid density 1,
@@ -99,56 +99,6 @@ fn paper_falling_sphere(per: usize) -> AxisymmetricCoupledSystem {
         fixed: false,
     }]);
     AxisymmetricCoupledSystem::new(flow, dem, 1.0, Coupling::InnerFluidMomentum, 1e-3).unwrap()
-}
-
-#[test]
-#[ignore]
-fn explore_paper() {
-    let viscosity = (3.0f64 / 800.0).sqrt();
-    let sn = schiller_naumann_reynolds(800.0);
-    let runs: Vec<(usize, f64, Option<f64>)> = std::env::var("EXPLORE")
-        .unwrap()
-        .split(';')
-        .map(|r| {
-            let v: Vec<&str> = r.split(',').collect();
-            (
-                v[0].parse().unwrap(),
-                v[1].parse().unwrap(),
-                v.get(2).map(|x| x.parse().unwrap()),
-            )
-        })
-        .collect();
-    for (per, dt, held) in runs {
-        let mut system = paper_falling_sphere(per);
-        system.immersed.forcing_step = held;
-        let clock = std::time::Instant::now();
-        let mut samples = Vec::new();
-        for step in 1..=((28.0 / dt) as usize) {
-            system.step(dt).unwrap();
-            let v = -system.dem.particles.velocity[0].z;
-            let t = step as f64 * dt;
-            if t <= 0.2 + 1e-9 {
-                samples.push((t, v));
-            }
-            if step % ((2.0 / dt) as usize) == 0 {
-                eprintln!(
-                    "per {per} dt {dt} held {held:?} t {t:.2} z {:.2} Re/SN {:.5}",
-                    system.dem.particles.position[0].z,
-                    v / viscosity / sn
-                );
-            }
-            if step == (0.2 / dt).round() as usize {
-                eprintln!(
-                    "a0 err {:.4}",
-                    early_acceleration(&samples) / (3.0 / 4.5) - 1.0
-                );
-            }
-            if system.dem.particles.position[0].z < 3.0 {
-                break;
-            }
-        }
-        eprintln!("per {per}: {:.1} s", clock.elapsed().as_secs_f64());
-    }
 }
 
 /// A sphere settling at Re ≈ 0.04 on the axis of a closed cylinder of
@@ -251,35 +201,4 @@ fn clift_grace_weber_reynolds(archimedes: f64) -> f64 {
         }
     }
     0.5 * (low + high)
-}
-
-#[test]
-#[ignore]
-fn explore_stokes() {
-    for per in [10usize, 16, 20] {
-        let viscosity = 1.0;
-        let radius = 4.0;
-        let mut system = settling_on_axis(per, radius, 16.0, 10.0, 2.0, viscosity);
-        let dx = 1.0 / per as f64;
-        let dt = 0.8 * dx * dx / viscosity;
-        let stokes = 1.0 / (18.0 * viscosity);
-        let expected = stokes * haberman_sayre(0.5 / radius);
-        let clock = std::time::Instant::now();
-        let mut t = 0.0;
-        let mut last = 0.0;
-        while t < 30.0 {
-            system.step(dt).unwrap();
-            t += dt;
-            let v = -system.dem.particles.velocity[0].z;
-            if (t / 5.0).floor() != ((t - dt) / 5.0).floor() {
-                eprintln!(
-                    "per {per} t {t:.2} v/expected {:.5} change {:.2e}",
-                    v / expected,
-                    (v - last) / v
-                );
-                last = v;
-            }
-        }
-        eprintln!("per {per}: {:.1} s", clock.elapsed().as_secs_f64());
-    }
 }
