@@ -405,6 +405,46 @@ fn fluid_report(case: &Case) -> Result<String, RunError> {
     Ok(out)
 }
 
+/// A sphere settling under gravity, for the numbers `check` prints.
+pub(crate) struct Settling {
+    pub rho: f64,
+    pub rho_p: f64,
+    pub mu: f64,
+    pub diameter: f64,
+    pub g: f64,
+}
+
+impl Settling {
+    /// Writes Ar, the Schiller–Naumann terminal Re, U and St, and the step
+    /// `dt` against the CFL limit on cells of `h` at that velocity; returns U.
+    pub(crate) fn write(&self, out: &mut String, dt: f64, h: f64) -> f64 {
+        let Settling {
+            rho,
+            rho_p,
+            mu,
+            diameter,
+            g,
+        } = *self;
+        let archimedes = rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu);
+        let reynolds = schiller_naumann_reynolds(archimedes);
+        let velocity = reynolds * mu / (rho * diameter);
+        let stokes = (rho_p + 0.5 * rho) * velocity * diameter / (9.0 * mu);
+        let _ = writeln!(
+            out,
+            "  Ar = {archimedes:.4e}; Schiller–Naumann terminal Re = {reynolds:.4}, \
+             U = {velocity:.4e} m/s, St = {stokes:.4}"
+        );
+        let _ = writeln!(
+            out,
+            "  dt = {dt:.4e} s = {:.4} (D/g)^1/2: CFL at the terminal velocity {:.3} (RK3 \
+             limit {CFL_LIMIT:.3})",
+            dt / (diameter / g).sqrt(),
+            velocity * dt / h
+        );
+        velocity
+    }
+}
+
 /// `check` of grains in a fluid: the models, the dimensionless numbers of
 /// the lightest grain (density ratio, Archimedes, Schiller–Naumann terminal
 /// Reynolds and Stokes numbers), resolution, the fluid step against the
@@ -497,22 +537,14 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
             rho_p / rho
         );
         if dim == 3 && g > 0.0 && rho_p != rho {
-            let archimedes = rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu);
-            let reynolds = schiller_naumann_reynolds(archimedes);
-            let velocity = reynolds * mu / (rho * diameter);
-            let stokes = (rho_p + 0.5 * rho) * velocity * diameter / (9.0 * mu);
-            let _ = writeln!(
-                out,
-                "  Ar = {archimedes:.4e}; Schiller–Naumann terminal Re = {reynolds:.4}, \
-                 U = {velocity:.4e} m/s, St = {stokes:.4}"
-            );
-            let _ = writeln!(
-                out,
-                "  dt = {dt:.4e} s = {:.4} (D/g)^1/2: CFL at the terminal velocity {:.3} (RK3 \
-                 limit {CFL_LIMIT:.3})",
-                dt / (diameter / g).sqrt(),
-                velocity * dt / h
-            );
+            let settling = Settling {
+                rho,
+                rho_p,
+                mu,
+                diameter,
+                g,
+            };
+            let velocity = settling.write(&mut out, dt, h);
             let layer_step = system.immersed.forcing_step.unwrap_or(dt);
             if let Some(w) = coupled_simulation::forcing_step_warning(velocity * layer_step / h) {
                 let _ = writeln!(out, "{w}");

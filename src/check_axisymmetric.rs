@@ -3,12 +3,11 @@
 //! time estimated by timing a few steps of the scene itself.
 
 use crate::case::Case;
+use crate::check::Settling;
 use crate::cost_estimate::{self, Evolution};
 use crate::simulation::coupled as coupled_simulation;
 use crate::{axisymmetric_scene, RunError};
 use grainflow_core::Communicator;
-use grainflow_fluid::CFL_LIMIT;
-use grainflow_ibm::settling::schiller_naumann_reynolds;
 use std::fmt::Write;
 
 pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
@@ -80,22 +79,14 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
             rho_p / rho
         );
         if g > 0.0 && rho_p != rho {
-            let archimedes = rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu);
-            let reynolds = schiller_naumann_reynolds(archimedes);
-            let velocity = reynolds * mu / (rho * diameter);
-            let stokes = (rho_p + 0.5 * rho) * velocity * diameter / (9.0 * mu);
-            let _ = writeln!(
-                out,
-                "  Ar = {archimedes:.4e}; Schiller–Naumann terminal Re = {reynolds:.4}, U = \
-                 {velocity:.4e} m/s, St = {stokes:.4}"
-            );
-            let _ = writeln!(
-                out,
-                "  dt = {dt:.4e} s = {:.4} (D/g)^1/2: CFL at the terminal velocity {:.3} (RK3 \
-                 limit {CFL_LIMIT:.3})",
-                dt / (diameter / g).sqrt(),
-                velocity * dt / h
-            );
+            let settling = Settling {
+                rho,
+                rho_p,
+                mu,
+                diameter,
+                g,
+            };
+            settling.write(&mut out, dt, h);
         }
     }
     let _ = writeln!(out, "time:");

@@ -3,7 +3,10 @@
 //! adapted to a CFL number, the last one landing on the end time; the
 //! sphere's analysis, the series and the (r, z) fields.
 
-use super::coupled::{check_dem_substep, check_density_ratio, collapsed_step};
+use super::coupled::{
+    check_dem_substep, check_density_ratio, collapsed_step, done_line, timing_summary,
+    CoupledCounts,
+};
 use super::fluid::cfl_overrun;
 use crate::case::Case;
 use crate::coupled_analysis::SphereInFluid;
@@ -184,7 +187,6 @@ impl AxisymmetricModel {
 
     /// The scene's own entries of `summary.json`.
     pub fn summary(&self, case: &Case, wall_seconds: f64) -> Map<String, Value> {
-        let t = self.system.timings;
         let grid = &self.system.flow.grid;
         let mut summary = Map::new();
         for (key, value) in [
@@ -192,32 +194,27 @@ impl AxisymmetricModel {
             ("cells", json!(grid.cells[0] * grid.cells[1])),
             ("geometry", json!("axisymmetric")),
             ("dimension", json!(3)),
-            ("dem_substeps", json!(self.dem_substeps)),
-            ("dt", json!(case.time.dt)),
-            ("cfl", json!(case.time.cfl)),
-            ("forcing_step", json!(self.system.immersed.forcing_step)),
-            ("dem_dt", json!(self.system.dem_dt)),
-            ("contact_time", json!(self.contact_time)),
-            (
-                "seconds_per_step",
-                json!(wall_seconds / self.steps.max(1) as f64),
-            ),
-            ("seconds_flow", json!(t.flow)),
-            ("seconds_forcing", json!(t.forcing)),
-            ("seconds_loads", json!(t.loads)),
-            ("seconds_dem", json!(t.dem)),
         ] {
             summary.insert(key.into(), value);
         }
+        let counts = CoupledCounts {
+            steps: self.steps,
+            dem_substeps: self.dem_substeps,
+            dem_dt: self.system.dem_dt,
+            contact_time: self.contact_time,
+            forcing_step: self.system.immersed.forcing_step,
+            timings: &self.system.timings,
+        };
+        summary.extend(timing_summary(case, &counts, wall_seconds));
         summary
     }
 
     pub fn done_line(&self, wall_seconds: f64) -> String {
-        let t = self.system.timings;
-        format!(
-            "{} steps ({} DEM sub-steps) in {wall_seconds:.2} s: flow {:.2} s, forcing {:.2} s, \
-             loads {:.2} s, DEM {:.2} s",
-            self.steps, self.dem_substeps, t.flow, t.forcing, t.loads, t.dem
+        done_line(
+            self.steps,
+            self.dem_substeps,
+            wall_seconds,
+            &self.system.timings,
         )
     }
 

@@ -13,7 +13,7 @@ use grainflow_core::{Communicator, State, StateError};
 use grainflow_fluid::time_step_for_cfl_rates;
 use grainflow_ibm::forcing::WallLayer;
 use grainflow_ibm::{
-    CoupledReport, CoupledSystem, Coupling, RIGID_INNER_FLUID_FAILS_BELOW,
+    CoupledReport, CoupledSystem, Coupling, Timings, RIGID_INNER_FLUID_FAILS_BELOW,
     RIGID_INNER_FLUID_WARNS_BELOW,
 };
 use serde_json::{json, Map, Value};
@@ -202,6 +202,51 @@ pub fn check_density_ratio(
              holds further down"
         )
     }))
+}
+
+/// The log's last line of a coupled run: its steps and where the time went.
+pub fn done_line(steps: u64, dem_substeps: usize, wall_seconds: f64, t: &Timings) -> String {
+    format!(
+        "{steps} steps ({dem_substeps} DEM sub-steps) in {wall_seconds:.2} s: flow {:.2} s, \
+         forcing {:.2} s, loads {:.2} s, DEM {:.2} s",
+        t.flow, t.forcing, t.loads, t.dem
+    )
+}
+
+/// What every coupled run reports of its sub-steps and its time.
+pub struct CoupledCounts<'a> {
+    pub steps: u64,
+    pub dem_substeps: usize,
+    pub dem_dt: f64,
+    pub contact_time: f64,
+    pub forcing_step: Option<f64>,
+    pub timings: &'a Timings,
+}
+
+/// The entries of `summary.json` every coupled run has: the steps and
+/// sub-steps, the time settings and where the time went.
+pub fn timing_summary(case: &Case, c: &CoupledCounts, wall_seconds: f64) -> Map<String, Value> {
+    let t = c.timings;
+    let mut summary = Map::new();
+    for (key, value) in [
+        ("dem_substeps", json!(c.dem_substeps)),
+        ("dt", json!(case.time.dt)),
+        ("cfl", json!(case.time.cfl)),
+        ("forcing_step", json!(c.forcing_step)),
+        ("dem_dt", json!(c.dem_dt)),
+        ("contact_time", json!(c.contact_time)),
+        (
+            "seconds_per_step",
+            json!(wall_seconds / c.steps.max(1) as f64),
+        ),
+        ("seconds_flow", json!(t.flow)),
+        ("seconds_forcing", json!(t.forcing)),
+        ("seconds_loads", json!(t.loads)),
+        ("seconds_dem", json!(t.dem)),
+    ] {
+        summary.insert(key.into(), value);
+    }
+    summary
 }
 
 /// Grains in a fluid: coupled steps, fixed or adapted to a CFL number (the
@@ -420,39 +465,33 @@ impl CoupledModel {
 
     /// The scene's own entries of `summary.json`.
     pub fn summary(&self, case: &Case, wall_seconds: f64) -> Map<String, Value> {
-        let t = self.system.timings;
         let mut summary = Map::new();
         for (key, value) in [
             ("particles", json!(self.particles)),
             ("cells", json!(self.cells)),
             ("dimension", json!(self.system.flow.grid.dim())),
-            ("dem_substeps", json!(self.dem_substeps)),
-            ("dt", json!(case.time.dt)),
-            ("cfl", json!(case.time.cfl)),
             ("mean_grain_cfl", json!(self.grain_cfl())),
-            ("forcing_step", json!(self.system.immersed.forcing_step)),
-            ("dem_dt", json!(self.system.dem_dt)),
-            ("contact_time", json!(self.contact_time)),
-            (
-                "seconds_per_step",
-                json!(wall_seconds / self.steps.max(1) as f64),
-            ),
-            ("seconds_flow", json!(t.flow)),
-            ("seconds_forcing", json!(t.forcing)),
-            ("seconds_loads", json!(t.loads)),
-            ("seconds_dem", json!(t.dem)),
         ] {
             summary.insert(key.into(), value);
         }
+        let counts = CoupledCounts {
+            steps: self.steps,
+            dem_substeps: self.dem_substeps,
+            dem_dt: self.system.dem_dt,
+            contact_time: self.contact_time,
+            forcing_step: self.system.immersed.forcing_step,
+            timings: &self.system.timings,
+        };
+        summary.extend(timing_summary(case, &counts, wall_seconds));
         summary
     }
 
     pub fn done_line(&self, wall_seconds: f64) -> String {
-        let t = self.system.timings;
-        format!(
-            "{} steps ({} DEM sub-steps) in {wall_seconds:.2} s: flow {:.2} s, forcing {:.2} s, \
-             loads {:.2} s, DEM {:.2} s",
-            self.steps, self.dem_substeps, t.flow, t.forcing, t.loads, t.dem
+        done_line(
+            self.steps,
+            self.dem_substeps,
+            wall_seconds,
+            &self.system.timings,
         )
     }
 

@@ -147,20 +147,7 @@ impl CoupledSystem {
     ) -> Self {
         let immersed = ImmersedBoundaries::new(&flow.grid);
         let mut dem = dem;
-        let n = dem.particles.n_owned;
-        let dimension = dem.dimension();
-        let virtual_mass = match coupling {
-            Coupling::InnerFluidMomentum => crate::settling::added_mass_coefficient(dimension),
-            Coupling::RigidInnerFluid => 0.0,
-        };
-        let p = &mut dem.particles;
-        for k in 0..n {
-            if p.inverse_mass[k] > 0.0 {
-                let carried =
-                    virtual_mass * fluid_density * particle_volume(dimension, p.radius[k]);
-                p.inverse_mass[k] = 1.0 / (p.mass[k] + carried);
-            }
-        }
+        let virtual_mass = carry_virtual_mass(&mut dem, coupling, fluid_density);
         // Every grain that forces this rank's cells must be here, and the
         // ghosts carry the inertia with the virtual mass.
         let max_radius = dem.communicator.max(dem.particles.max_radius());
@@ -297,18 +284,9 @@ impl CoupledSystem {
     /// its present velocity. Collective.
     fn inner_momentum_moved_from(&mut self, unknowns: &[Block], stage_dt: f64) -> (Loads, f64) {
         if let Some(previous) = self.previous_stage_dt {
-            let p = &self.dem.particles;
-            let n = p.n_owned;
-            let kept = Loads {
-                force: p.inner_fluid_momentum[..n].to_vec(),
-                torque: p.inner_fluid_angular_momentum[..n].to_vec(),
-            };
-            return (kept, previous);
+            return (kept_inner_momentum(&self.dem), previous);
         }
-        let mut earlier = self.dem.particles.clone();
-        for k in 0..earlier.len() {
-            earlier.position[k] -= earlier.velocity[k] * stage_dt;
-        }
+        let earlier = moved_back(&self.dem, stage_dt);
         let bodies = self.immersed.bodies(&earlier, &self.flow.grid, unknowns);
         let measured = self
             .immersed
@@ -329,14 +307,89 @@ impl CoupledSystem {
     /// The smallest `ρ_p/ρ` among the moving particles of every rank
     /// (infinite if none).
     pub fn smallest_density_ratio(&self) -> f64 {
-        let p = &self.dem.particles;
-        let dimension = self.dem.dimension();
-        let local = (0..p.n_owned)
-            .filter(|&k| p.inverse_mass[k] > 0.0)
-            .map(|k| p.mass[k] / particle_volume(dimension, p.radius[k]) / self.fluid_density)
-            .fold(f64::INFINITY, f64::min);
-        -self.dem.communicator.max(-local)
+        smallest_density_ratio(&self.dem, self.fluid_density)
     }
+}
+
+/// The virtual-mass coefficient `C_v` of `coupling` (a grain's added-mass
+/// coefficient with the inner-fluid-momentum load, 0 with the rigid inner
+/// fluid), added to the inertia of every moving owned grain of `dem`.
+pub(crate) fn carry_virtual_mass(
+    dem: &mut DemSystem,
+    coupling: Coupling,
+    fluid_density: f64,
+) -> f64 {
+    let dimension = dem.dimension();
+    let virtual_mass = match coupling {
+        Coupling::InnerFluidMomentum => crate::settling::added_mass_coefficient(dimension),
+        Coupling::RigidInnerFluid => 0.0,
+    };
+    let p = &mut dem.particles;
+    for k in 0..p.n_owned {
+        if p.inverse_mass[k] > 0.0 {
+            let carried = virtual_mass * fluid_density * particle_volume(dimension, p.radius[k]);
+            p.inverse_mass[k] = 1.0 / (p.mass[k] + carried);
+        }
+    }
+    virtual_mass
+}
+
+/// The smallest `ρ_p/ρ` among the moving grains of `dem` on every rank
+/// (infinite if none; collective).
+pub(crate) fn smallest_density_ratio(dem: &DemSystem, fluid_density: f64) -> f64 {
+    let p = &dem.particles;
+    let dimension = dem.dimension();
+    let local = (0..p.n_owned)
+        .filter(|&k| p.inverse_mass[k] > 0.0)
+        .map(|k| p.mass[k] / particle_volume(dimension, p.radius[k]) / fluid_density)
+        .fold(f64::INFINITY, f64::min);
+    -dem.communicator.max(-local)
+}
+
+/// The inner momentum each owned grain keeps from the previous stage.
+pub(crate) fn kept_inner_momentum(dem: &DemSystem) -> Loads {
+    let p = &dem.particles;
+    let n = p.n_owned;
+    Loads {
+        force: p.inner_fluid_momentum[..n].to_vec(),
+        torque: p.inner_fluid_angular_momentum[..n].to_vec(),
+    }
+}
+
+/// The grains of `dem` where they stood `stage_dt` earlier at their
+/// present velocities (before the first stage, where the transport of
+/// their inner momentum starts).
+pub(crate) fn moved_back(dem: &DemSystem, stage_dt: f64) -> grainflow_dem::Particles {
+    let mut earlier = dem.particles.clone();
+    for k in 0..earlier.len() {
+        earlier.position[k] -= earlier.velocity[k] * stage_dt;
+    }
+    earlier
+}
+
+/// Saves the coupling's own state: the last stage's length and the time
+/// spent in each part.
+pub(crate) fn save_coupling(state: &mut State, previous_stage_dt: Option<f64>, t: &Timings) {
+    state.put_f64s("coupled.previous_stage_dt", previous_stage_dt.as_slice());
+    state.put_f64s("coupled.timings", &[t.flow, t.forcing, t.loads, t.dem]);
+}
+
+/// Takes back what [`save_coupling`] saved.
+pub(crate) fn restore_coupling(state: &mut State) -> Result<(Option<f64>, Timings), StateError> {
+    let previous = state.take_f64s("coupled.previous_stage_dt")?;
+    if previous.len() > 1 {
+        return Err(StateError(
+            "coupled.previous_stage_dt holds at most one number".into(),
+        ));
+    }
+    let t = state.take_f64s_of_len("coupled.timings", 4)?;
+    let timings = Timings {
+        flow: t[0],
+        forcing: t[1],
+        loads: t[2],
+        dem: t[3],
+    };
+    Ok((previous.first().copied(), timings))
 }
 
 /// How the grains take their hydrodynamic loads.
@@ -495,12 +548,7 @@ impl CoupledSystem {
     pub fn save_state(&self, state: &mut State) {
         self.flow.save_state(state);
         self.dem.save_state(state);
-        state.put_f64s(
-            "coupled.previous_stage_dt",
-            self.previous_stage_dt.as_slice(),
-        );
-        let t = &self.timings;
-        state.put_f64s("coupled.timings", &[t.flow, t.forcing, t.loads, t.dem]);
+        save_coupling(state, self.previous_stage_dt, &self.timings);
     }
 
     /// Takes back the states saved on every rank of a job of another size
@@ -521,20 +569,7 @@ impl CoupledSystem {
     }
 
     fn restore_coupling(&mut self, state: &mut State) -> Result<(), StateError> {
-        let previous = state.take_f64s("coupled.previous_stage_dt")?;
-        if previous.len() > 1 {
-            return Err(StateError(
-                "coupled.previous_stage_dt holds at most one number".into(),
-            ));
-        }
-        self.previous_stage_dt = previous.first().copied();
-        let t = state.take_f64s_of_len("coupled.timings", 4)?;
-        self.timings = Timings {
-            flow: t[0],
-            forcing: t[1],
-            loads: t[2],
-            dem: t[3],
-        };
+        (self.previous_stage_dt, self.timings) = restore_coupling(state)?;
         Ok(())
     }
 }

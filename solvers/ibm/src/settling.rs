@@ -35,8 +35,30 @@ pub fn early_acceleration(samples: &[(f64, f64)]) -> f64 {
 /// with the Schiller–Naumann drag `C_D = 24/Re (1 + 0.15 Re^0.687)`: the
 /// balance of eq. 21, `C_D Re² = 4 Ar / 3`, solved by bisection.
 pub fn schiller_naumann_reynolds(archimedes: f64) -> f64 {
-    let balance = |re: f64| 24.0 * re * (1.0 + 0.15 * re.powf(0.687)) - 4.0 * archimedes / 3.0;
-    let (mut low, mut high) = (0.0, 1e6);
+    terminal_reynolds(
+        |re| 24.0 * re * (1.0 + 0.15 * re.powf(0.687)),
+        archimedes,
+        [0.0, 1e6],
+    )
+}
+
+/// The terminal Reynolds number of a sphere of Archimedes number `Ar` on
+/// the standard drag curve of Clift, Grace & Weber (1978),
+/// `C_D = 24/Re (1 + 0.1315 Re^{0.82 − 0.05 log₁₀ Re})` for 0.01 < Re ≤ 20.
+pub fn clift_grace_weber_reynolds(archimedes: f64) -> f64 {
+    terminal_reynolds(
+        |re| 24.0 * re * (1.0 + 0.1315 * re.powf(0.82 - 0.05 * re.log10())),
+        archimedes,
+        [0.01, 20.0],
+    )
+}
+
+/// The Reynolds number in `bracket` at which `C_D Re²` (`drag_re2`, of a
+/// drag law) balances the buoyant weight, `C_D Re² = 4 Ar / 3` (eq. 21),
+/// by bisection.
+fn terminal_reynolds(drag_re2: impl Fn(f64) -> f64, archimedes: f64, bracket: [f64; 2]) -> f64 {
+    let balance = |re: f64| drag_re2(re) - 4.0 * archimedes / 3.0;
+    let [mut low, mut high] = bracket;
     for _ in 0..200 {
         let mid = 0.5 * (low + high);
         if balance(mid) > 0.0 {

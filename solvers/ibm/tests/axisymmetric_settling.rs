@@ -5,7 +5,7 @@ use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::axisymmetric::{AxialEnd, AxisymmetricFlow, OuterWall, RzGrid, RzWalls};
 use grainflow_ibm::axisymmetric::AxisymmetricCoupledSystem;
-use grainflow_ibm::settling::schiller_naumann_reynolds;
+use grainflow_ibm::settling::{clift_grace_weber_reynolds, schiller_naumann_reynolds};
 use grainflow_ibm::Coupling;
 
 /// A sphere of diameter 1 and density `density_ratio` (fluid density 1,
@@ -29,6 +29,14 @@ fn settling_on_axis(
     let grid = RzGrid::uniform(cells, radius, [0.0, height]).unwrap();
     let walls = RzWalls::new(OuterWall::NoSlip, [AxialEnd::NoSlip; 2]).unwrap();
     let flow = AxisymmetricFlow::new(grid, walls, viscosity).unwrap();
+    let dem = sphere_on_axis(radius, height, start, density_ratio);
+    AxisymmetricCoupledSystem::new(flow, dem, 1.0, Coupling::InnerFluidMomentum, 1e-3).unwrap()
+}
+
+/// A sphere of diameter 1 and density `density_ratio` at rest at height
+/// `start` on the axis of the box around a cylinder of radius `radius` and
+/// height `height`, g = 1 downwards, with no walls of its own.
+fn sphere_on_axis(radius: f64, height: f64, start: f64, density_ratio: f64) -> DemSystem {
     let domain = Domain {
         dimension: Dimension::Three,
         lower: Vec3::new(-radius, -radius, 0.0),
@@ -51,7 +59,7 @@ fn settling_on_axis(
         density: density_ratio,
         fixed: false,
     }]);
-    AxisymmetricCoupledSystem::new(flow, dem, 1.0, Coupling::InnerFluidMomentum, 1e-3).unwrap()
+    dem
 }
 
 /// Haberman & Sayre (1958): the settling velocity of a sphere of radius
@@ -76,28 +84,7 @@ fn paper_falling_sphere(per: usize) -> AxisymmetricCoupledSystem {
     let grid = RzGrid::from_radial_faces(&faces, 40 * per, [0.0, 40.0]).unwrap();
     let walls = RzWalls::new(OuterWall::FreeSlip, [AxialEnd::FreeSlip; 2]).unwrap();
     let flow = AxisymmetricFlow::new(grid, walls, viscosity).unwrap();
-    let domain = Domain {
-        dimension: Dimension::Three,
-        lower: Vec3::new(-20.0, -20.0, 0.0),
-        upper: Vec3::new(20.0, 20.0, 40.0),
-        periodic: [false; 3],
-        gravity: Vec3::new(0.0, 0.0, -1.0),
-    };
-    let law = ContactLaw {
-        normal: NormalStiffness::from_restitution(0.9, 1e-2, NormalCalibration::Exact),
-        tangential_ratio: 0.2,
-        friction: 0.25,
-        rolling_friction: 0.0,
-    };
-    let mut dem = DemSystem::new(domain, law, Vec::new(), 0.1);
-    dem.add_particles(&[NewParticle {
-        position: Vec3::new(0.0, 0.0, 37.5),
-        velocity: Vec3::zeros(),
-        angular_velocity: Vec3::zeros(),
-        radius: 0.5,
-        density: 4.0,
-        fixed: false,
-    }]);
+    let dem = sphere_on_axis(20.0, 40.0, 37.5, 4.0);
     AxisymmetricCoupledSystem::new(flow, dem, 1.0, Coupling::InnerFluidMomentum, 1e-3).unwrap()
 }
 
@@ -181,24 +168,4 @@ fn the_papers_falling_sphere_in_r_z_settles_within_the_drag_correlations() {
         0.99 * low,
         1.01 * high
     );
-}
-
-/// The terminal Reynolds number of a sphere of Archimedes number `Ar` on
-/// the standard drag curve of Clift, Grace & Weber (1978),
-/// `C_D = 24/Re (1 + 0.1315 Re^{0.82 − 0.05 log₁₀ Re})` for 0.01 < Re ≤ 20:
-/// `C_D Re² = 4 Ar/3` by bisection.
-fn clift_grace_weber_reynolds(archimedes: f64) -> f64 {
-    let balance = |re: f64| {
-        24.0 * re * (1.0 + 0.1315 * re.powf(0.82 - 0.05 * re.log10())) - 4.0 * archimedes / 3.0
-    };
-    let (mut low, mut high) = (0.01, 20.0);
-    for _ in 0..200 {
-        let mid = 0.5 * (low + high);
-        if balance(mid) > 0.0 {
-            high = mid;
-        } else {
-            low = mid;
-        }
-    }
-    0.5 * (low + high)
 }

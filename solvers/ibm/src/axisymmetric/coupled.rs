@@ -16,7 +16,8 @@ use grainflow_fluid::{stage_fraction, FluidError, STAGES};
 use super::bodies::{check_grains_on_axis, EndLayers};
 use super::forcing::AxisymmetricImmersed;
 use crate::coupled::{
-    dem_substeps, hydrodynamic_loads, inner_momentum_rate, particle_volume, set_stage_loads,
+    carry_virtual_mass, dem_substeps, hydrodynamic_loads, inner_momentum_rate, kept_inner_momentum,
+    moved_back, restore_coupling, save_coupling, set_stage_loads, smallest_density_ratio,
     CoupledReport, Coupling, GrainLoad, StageMeasures, Timings,
 };
 use crate::forcing::Loads;
@@ -59,18 +60,8 @@ impl AxisymmetricCoupledSystem {
             )));
         }
         let immersed = AxisymmetricImmersed::new(&flow.grid, EndLayers::at_walls(&flow.walls));
-        let virtual_mass = match coupling {
-            Coupling::InnerFluidMomentum => 0.5,
-            Coupling::RigidInnerFluid => 0.0,
-        };
         let mut dem = dem;
-        let p = &mut dem.particles;
-        for k in 0..p.n_owned {
-            if p.inverse_mass[k] > 0.0 {
-                let volume = particle_volume(grainflow_core::Dimension::Three, p.radius[k]);
-                p.inverse_mass[k] = 1.0 / (p.mass[k] + virtual_mass * fluid_density * volume);
-            }
-        }
+        let virtual_mass = carry_virtual_mass(&mut dem, coupling, fluid_density);
         Ok(AxisymmetricCoupledSystem {
             flow,
             dem,
@@ -155,20 +146,12 @@ impl AxisymmetricCoupledSystem {
     /// first stage, measured where the grain stood one stage earlier at
     /// its present velocity.
     fn inner_momentum_moved_from(&mut self, stage_dt: f64) -> (Loads, f64) {
-        let p = &self.dem.particles;
-        let n = p.n_owned;
         if let Some(previous) = self.previous_stage_dt {
-            let kept = Loads {
-                force: p.inner_fluid_momentum[..n].to_vec(),
-                torque: p.inner_fluid_angular_momentum[..n].to_vec(),
-            };
-            return (kept, previous);
+            return (kept_inner_momentum(&self.dem), previous);
         }
-        let mut earlier = p.clone();
-        for k in 0..earlier.len() {
-            earlier.position[k] -= earlier.velocity[k] * stage_dt;
-        }
-        let bodies = self.immersed.bodies(&earlier, &self.flow);
+        let bodies = self
+            .immersed
+            .bodies(&moved_back(&self.dem, stage_dt), &self.flow);
         (self.immersed.inner_momentum(&self.flow, &bodies), stage_dt)
     }
 }
@@ -186,12 +169,7 @@ impl AxisymmetricCoupledSystem {
     pub fn save_state(&self, state: &mut grainflow_core::State) {
         self.flow.save_state(state);
         self.dem.save_state(state);
-        state.put_f64s(
-            "coupled.previous_stage_dt",
-            self.previous_stage_dt.as_slice(),
-        );
-        let t = &self.timings;
-        state.put_f64s("coupled.timings", &[t.flow, t.forcing, t.loads, t.dem]);
+        save_coupling(state, self.previous_stage_dt, &self.timings);
     }
 
     /// Takes back what [`AxisymmetricCoupledSystem::save_state`] saved, into
@@ -202,32 +180,12 @@ impl AxisymmetricCoupledSystem {
     ) -> Result<(), grainflow_core::StateError> {
         self.flow.restore_state(state)?;
         self.dem.restore_state(state)?;
-        let previous = state.take_f64s("coupled.previous_stage_dt")?;
-        if previous.len() > 1 {
-            return Err(grainflow_core::StateError(
-                "coupled.previous_stage_dt holds at most one number".into(),
-            ));
-        }
-        self.previous_stage_dt = previous.first().copied();
-        let t = state.take_f64s_of_len("coupled.timings", 4)?;
-        self.timings = Timings {
-            flow: t[0],
-            forcing: t[1],
-            loads: t[2],
-            dem: t[3],
-        };
+        (self.previous_stage_dt, self.timings) = restore_coupling(state)?;
         Ok(())
     }
 
     /// The smallest `ρ_p/ρ` among the moving grains (infinite if none).
     pub fn smallest_density_ratio(&self) -> f64 {
-        let p = &self.dem.particles;
-        (0..p.n_owned)
-            .filter(|&k| p.inverse_mass[k] > 0.0)
-            .map(|k| {
-                let volume = particle_volume(grainflow_core::Dimension::Three, p.radius[k]);
-                p.mass[k] / volume / self.fluid_density
-            })
-            .fold(f64::INFINITY, f64::min)
+        smallest_density_ratio(&self.dem, self.fluid_density)
     }
 }
