@@ -25,7 +25,7 @@
 //! files.
 
 use crate::case::{Case, OutputFormat};
-use crate::output::fields::{cell_fields, cell_layout};
+use crate::output::fields::{cell_layout, CellFields};
 use grainflow_core::Communicator;
 use grainflow_dem::DemSystem;
 use grainflow_fluid::FlowSolver;
@@ -59,6 +59,7 @@ pub struct Hdf5Fields {
     /// Lower corner of the domain: the origin of a uniform grid.
     origin: [f64; 3],
     frames: usize,
+    cell_fields: CellFields,
 }
 
 impl Hdf5Fields {
@@ -87,6 +88,7 @@ impl Hdf5Fields {
             }),
             origin,
             frames: resumed.0,
+            cell_fields: CellFields::default(),
         }))
     }
 
@@ -109,16 +111,20 @@ impl Hdf5Fields {
         density: f64,
         extra: &[(&str, &[f64])],
     ) -> std::io::Result<()> {
-        let (velocity, pressure, vorticity) = cell_fields(solver, density);
+        self.cell_fields.compute(solver, density);
+        let CellFields {
+            velocity,
+            pressure,
+            vorticity,
+        } = &self.cell_fields;
         let grid = &solver.grid;
         let partition = solver.partition();
         let faces = [0, 1, 2].map(|axis| grid.face_coordinates(axis));
         let uniform = grid.is_uniform(grid.line_axis());
         let layout = cell_layout(grid, self.origin, &faces);
-        let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", &pressure)];
+        let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", pressure)];
         scalars.extend_from_slice(extra);
-        let vectors: [(&str, &[[f64; 3]]); 2] =
-            [("velocity", &velocity), ("vorticity", &vorticity)];
+        let vectors: [(&str, &[[f64; 3]]); 2] = [("velocity", velocity), ("vorticity", vorticity)];
         let name = format!("fields/fields_{:06}.h5", self.frames);
         FieldFrameH5 {
             time: solver.time,

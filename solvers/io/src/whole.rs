@@ -16,6 +16,10 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+/// The write buffer: a field frame of 32³ cells (1.8 MB) goes to the
+/// system in two calls instead of 225 of the default 8 KiB.
+const WRITE_BUFFER: usize = 1 << 20;
+
 /// The suffix of the temporary sibling a file is written under.
 pub const TEMPORARY_SUFFIX: &str = ".tmp";
 
@@ -35,7 +39,7 @@ where
 {
     let temporary = temporary_path(path);
     let result = (|| {
-        let mut out = BufWriter::new(File::create(&temporary)?);
+        let mut out = BufWriter::with_capacity(WRITE_BUFFER, File::create(&temporary)?);
         write(&mut out)?;
         out.flush()?;
         drop(out);
