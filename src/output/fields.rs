@@ -88,8 +88,7 @@ impl CellFields {
                     for shift_x in [1, 0] {
                         for shift_y in [1, 0] {
                             let edge = index - shift_x - shift_y * sy;
-                            wz += (vy[edge + 1] - vy[edge]) * ix
-                                - (vx[edge + sy] - vx[edge]) * iy;
+                            wz += (vy[edge + 1] - vy[edge]) * ix - (vx[edge + sy] - vx[edge]) * iy;
                         }
                     }
                     [0.25 * wx, 0.25 * wy, 0.25 * wz]
@@ -388,8 +387,8 @@ mod tests {
         fields.compute(&mut solver, 1000.0);
         let expected = [f - d, b - e, c - a];
         for cell in inner_cells(cells, 3) {
-            for axis in 0..3 {
-                let error = fields.vorticity[cell][axis] - expected[axis];
+            for (axis, (value, exact)) in fields.vorticity[cell].iter().zip(expected).enumerate() {
+                let error = value - exact;
                 assert!(error.abs() < 1e-12, "cell {cell}, axis {axis}: {error}");
             }
         }
@@ -404,7 +403,9 @@ mod tests {
         let grid =
             Grid::stretched(Dimension::Two, cells, [0.0; 3], [1.0, 1.0, 1.0], &faces).unwrap();
         let slip = BoundaryCondition::FreeSlip;
-        let walls = Boundaries::periodic().with(0, slip, slip).with(1, slip, slip);
+        let walls = Boundaries::periodic()
+            .with(0, slip, slip)
+            .with(1, slip, slip);
         let mut solver = FlowSolver::new(grid, walls, 1e-3, Communicator::serial()).unwrap();
         let (a, c) = (0.6, -1.7);
         solver.set_velocity(|component, [x, y, _]| if component == 0 { a * y } else { c * x });
