@@ -12,6 +12,7 @@ pub mod analysis;
 pub mod axisymmetric_scene;
 pub mod bed_analysis;
 pub mod case;
+pub mod cfl_steps;
 pub mod check;
 pub mod check_axisymmetric;
 pub mod checkpoint;

@@ -250,6 +250,40 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
     assert!(String::from_utf8_lossy(&refused.stderr).contains("hard contact"));
 }
 
+/// With `time.cfl`, `check` counts the steps at the speeds the scene is
+/// set to reach instead of those of `time.dt`: on the immersed avalanche,
+/// the flow gravity drives along the periodic x in the film above the
+/// stored bed. The bed's plane-averaged solid fraction falls through 0.3
+/// between 0.029 m (0.48) and 0.031 m (0.19) over the floor of the 0.05 m
+/// box, so the film is 0.020 m deep, within a millimetre; its laminar
+/// start-up reaches g_x H²/(2ν) = 0.75 m/s, and the count passes the 4,600
+/// steps of time.dt (11,041 made in the full run).
+#[test]
+fn check_counts_the_steps_of_a_cfl_run_at_the_speeds_the_scene_reaches() {
+    let output = grainflow()
+        .args(["check", &case("immersed_avalanche.toml")])
+        .output()
+        .unwrap();
+    assert!(output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.contains("time.cfl = 0.5: about"))
+        .unwrap_or_else(|| panic!("{text}"));
+    let number_after = |marker: &str| -> f64 {
+        let rest = &line[line.find(marker).unwrap_or_else(|| panic!("{line}")) + marker.len()..];
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    let depth = number_after("in a film ");
+    assert!((depth - 0.020).abs() < 1e-3, "{line}");
+    let steps = number_after("about ");
+    assert!(steps > 4600.0, "{line}");
+    assert!(
+        text.contains(&format!("for {steps:.0} steps adapted to CFL 0.5")),
+        "{text}"
+    );
+}
+
 /// A fluid step short against the time a grain takes to cross a cell makes
 /// the grains look larger under the forcing of eq. 7: `check` warns, and
 /// names `coupling.forcing_step`, which, set to the calibration step,

@@ -1,0 +1,209 @@
+//! How many steps a run of grains in a fluid adapted to `time.cfl` makes,
+//! for `check`, which cannot run the flow to see. Each step is the one at
+//! which the flow's largest speeds along the axes and the fastest grain's,
+//! summed and over the cell size, reach the CFL number, at most `time.dt`
+//! (`simulation::coupled::step_size`). `check` takes the speed scales the
+//! scene is set up to reach:
+//!
+//! - grains settling at their Schiller–Naumann terminal velocity `U_t`;
+//! - a flow that a body force `A` drives along a periodic axis between the
+//!   walls across it, above the grains' bed: its laminar start-up, whose
+//!   fastest point reaches `A W²/(8ν)` between two walls `W` apart (`W` is
+//!   twice the depth under a free-slip top) over the time `W²/ν`;
+//!
+//! and counts `N = ∫ max(1/Δt_max, K U(t)/(C h)) dt` to the end time, `U`
+//! the larger of the two, `C` the CFL number, `h` the smallest cell. `K`,
+//! the sum of the flow's component maxima and the grain's speed over the
+//! grain's speed, is 2.8 in the ten Cate run (steps of 4.1 ms at 0.109 m/s
+//! on cells of 1.25 mm at CFL 1): it counts 462 steps there, against 296
+//! made (the sphere starts from rest and stops on the floor), and 18,000 on
+//! the immersed avalanche, against 11,041 made (the erodible bed's grains
+//! move slower than the fluid above them).
+
+use std::f64::consts::PI;
+
+/// The sum of the flow's largest component speeds and the fastest grain's
+/// speed over the speed scale (measured on the ten Cate run).
+pub const SPEED_SUM_OVER_SCALE: f64 = 2.8;
+
+/// Plane-averaged solid fraction above which a grain layer counts as the
+/// bed the driven flow runs over.
+pub const BED_FRACTION: f64 = 0.3;
+
+/// How the walls across a driven flow hold it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Confinement {
+    /// Two no-slip (or sliding) walls `width` apart.
+    Channel { width: f64 },
+    /// A no-slip wall under a free-slip one, `depth` apart: half a
+    /// channel of twice the depth.
+    Film { depth: f64 },
+    /// No wall holds it back: it accelerates freely.
+    Free,
+}
+
+/// A flow driven along a periodic axis by an acceleration no pressure
+/// balances.
+#[derive(Clone, Copy, Debug)]
+pub struct DrivenFlow {
+    pub acceleration: f64,
+    pub confinement: Confinement,
+    pub viscosity: f64,
+}
+
+impl DrivenFlow {
+    /// The fastest speed of the laminar start-up from rest at time `t`:
+    /// `A W²/(8ν) [1 − (32/π³) Σ_n (−1)ⁿ/(2n+1)³ exp(−(2n+1)² π² ν t/W²)]`
+    /// at the centre of a channel of width `W`.
+    pub fn fastest_speed(&self, t: f64) -> f64 {
+        let width = match self.confinement {
+            Confinement::Channel { width } => width,
+            Confinement::Film { depth } => 2.0 * depth,
+            Confinement::Free => return self.acceleration * t,
+        };
+        if t <= 0.0 {
+            return 0.0; // the series converges slowest here
+        }
+        let nu = self.viscosity;
+        let steady = self.acceleration * width * width / (8.0 * nu);
+        let mut transient = 0.0;
+        for n in 0..200 {
+            let m = (2 * n + 1) as f64;
+            let decay = (-(m * m) * PI * PI * nu * t / (width * width)).exp();
+            let sign = if n % 2 == 0 { 1.0 } else { -1.0 };
+            transient += sign * decay / (m * m * m);
+            if decay < 1e-17 {
+                break;
+            }
+        }
+        steady * (1.0 - 32.0 / PI.powi(3) * transient)
+    }
+}
+
+/// The speed scales of a scene and its step limits.
+pub struct SpeedScales {
+    /// The fastest Schiller–Naumann terminal velocity of its grains (m/s).
+    pub settling: f64,
+    pub driven: Option<DrivenFlow>,
+}
+
+impl SpeedScales {
+    /// The steps to `end` of a run whose steps are at most `largest` and
+    /// adapted to `cfl` on cells of `cell`: the integral above, in 4,000
+    /// slices.
+    pub fn steps(&self, end: f64, largest: f64, cfl: f64, cell: f64) -> f64 {
+        let slices = 4000;
+        let width = end / slices as f64;
+        (0..slices)
+            .map(|i| {
+                let t = (i as f64 + 0.5) * width;
+                let driven = self.driven.map_or(0.0, |d| d.fastest_speed(t));
+                let speed = self.settling.max(driven);
+                (1.0 / largest).max(SPEED_SUM_OVER_SCALE * speed / (cfl * cell)) * width
+            })
+            .sum::<f64>()
+            .ceil()
+    }
+}
+
+/// The height of the grains' bed over the wall at `floor` along an axis
+/// running from `lower` to `upper`: the farthest point from the floor
+/// where the grains' solid fraction, averaged over the plane across, is at
+/// least [`BED_FRACTION`] (0 without one). `grains` are (distance along
+/// the axis, radius); `plane_area` the area of the plane across (its
+/// length in 2D, where grains are discs).
+pub fn bed_height(
+    grains: &[(f64, f64)],
+    lower: f64,
+    upper: f64,
+    plane_area: f64,
+    three_d: bool,
+) -> f64 {
+    let smallest = grains.iter().map(|g| g.1).fold(f64::INFINITY, f64::min);
+    if grains.is_empty() || !smallest.is_finite() {
+        return 0.0;
+    }
+    // Slices a tenth of the smallest radius thick, the section of every
+    // grain through each slice's middle.
+    let thickness = 0.1 * smallest;
+    let slices = ((upper - lower) / thickness).ceil() as usize;
+    let mut section = vec![0.0; slices];
+    for &(centre, radius) in grains {
+        let first = (((centre - radius - lower) / thickness).floor().max(0.0)) as usize;
+        let last = (((centre + radius - lower) / thickness).ceil() as usize).min(slices);
+        for (slice, area) in section.iter_mut().enumerate().take(last).skip(first) {
+            let offset = lower + (slice as f64 + 0.5) * thickness - centre;
+            let half_chord_squared = radius * radius - offset * offset;
+            if half_chord_squared > 0.0 {
+                *area += if three_d {
+                    PI * half_chord_squared
+                } else {
+                    2.0 * half_chord_squared.sqrt()
+                };
+            }
+        }
+    }
+    section
+        .iter()
+        .rposition(|area| area / plane_area >= BED_FRACTION)
+        .map_or(0.0, |slice| (slice + 1) as f64 * thickness)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// From rest the start-up accelerates freely (`A t`) until viscosity
+    /// reaches the centre, then settles on the Poiseuille speed.
+    #[test]
+    fn a_driven_channel_starts_at_the_free_acceleration_and_ends_at_poiseuille() {
+        let flow = DrivenFlow {
+            acceleration: 2.0,
+            confinement: Confinement::Channel { width: 0.1 },
+            viscosity: 1e-3,
+        };
+        let early = 1e-3; // ν t / W² = 1e-4
+        assert!((flow.fastest_speed(early) / (2.0 * early) - 1.0).abs() < 1e-6);
+        let poiseuille = 2.0 * 0.01 / 8e-3;
+        assert!((flow.fastest_speed(100.0) / poiseuille - 1.0).abs() < 1e-9);
+        assert_eq!(flow.fastest_speed(0.0), 0.0);
+        let film = DrivenFlow {
+            confinement: Confinement::Film { depth: 0.05 },
+            ..flow
+        };
+        assert_eq!(film.fastest_speed(3.0), flow.fastest_speed(3.0));
+    }
+
+    /// A simple cubic lattice of spheres filling the lower half of a box
+    /// (solid fraction π/6 ≈ 0.52, above the bed's 0.3) stands as high as
+    /// its top layer's tops.
+    #[test]
+    fn a_lattice_bed_is_as_high_as_its_top_layer() {
+        let (radius, layers) = (0.5, 5);
+        let grains: Vec<(f64, f64)> = (0..layers)
+            .flat_map(|k| (0..16).map(move |_| (radius + k as f64, radius)))
+            .collect();
+        let height = bed_height(&grains, 0.0, 10.0, 16.0, true);
+        // The section falls below 0.3 × 1 where π (R² − d²) < 0.3: d above
+        // 0.39 R from the top layer's centre.
+        let top = (layers - 1) as f64 + radius + (radius * radius - 0.3 / PI).sqrt();
+        assert!(
+            (height - top).abs() < 0.1 * radius,
+            "{height} against {top}"
+        );
+        assert_eq!(bed_height(&[], 0.0, 1.0, 1.0, true), 0.0);
+    }
+
+    /// Grains settling at a steady speed make `K U T/(C h)` steps, and
+    /// never fewer than those of the largest step.
+    #[test]
+    fn settling_grains_step_at_the_cfl_number_of_their_speed() {
+        let scales = SpeedScales {
+            settling: 0.1,
+            driven: None,
+        };
+        let steps = scales.steps(2.0, 0.1, 0.5, 1e-3);
+        assert_eq!(steps, (SPEED_SUM_OVER_SCALE * 0.1 * 2.0 / 0.5e-3).ceil());
+        assert_eq!(scales.steps(2.0, 1e-3, 0.5, 1e-3), 2000.0);
+    }
+}
