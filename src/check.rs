@@ -416,6 +416,23 @@ pub(crate) struct Settling {
 }
 
 impl Settling {
+    /// The terminal velocity and the acceleration from rest (eq. 20, with
+    /// the added-mass coefficient `added_mass`) of this grain.
+    pub(crate) fn starting_from_rest(&self, added_mass: f64) -> cfl_steps::Settling {
+        let Settling {
+            rho,
+            rho_p,
+            mu,
+            diameter,
+            g,
+        } = *self;
+        let archimedes = rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu);
+        cfl_steps::Settling {
+            terminal: schiller_naumann_reynolds(archimedes) * mu / (rho * diameter),
+            initial_acceleration: (rho_p - rho).abs() * g / (rho_p + added_mass * rho),
+        }
+    }
+
     /// Writes Ar, the Schiller–Naumann terminal Re, U and St, and the step
     /// `dt` against the CFL limit on cells of `h` at that velocity; returns U.
     pub(crate) fn write(&self, out: &mut String, dt: f64, h: f64) -> f64 {
@@ -613,16 +630,28 @@ fn speed_scales(system: &grainflow_ibm::CoupledSystem) -> SpeedScales {
     let rho = system.fluid_density;
     let mu = flow.viscosity * rho;
     let gravity = dem.domain.gravity;
+    let added_mass = grainflow_ibm::settling::added_mass_coefficient(dem.dimension());
     let settling = (0..p.n_owned)
         .filter(|&k| !p.is_fixed(k))
         .map(|k| {
             let diameter = 2.0 * p.radius[k];
             let rho_p = p.mass[k] / grainflow_ibm::particle_volume(dem.dimension(), p.radius[k]);
-            let archimedes =
-                rho * (rho_p - rho).abs() * gravity.norm() * diameter.powi(3) / (mu * mu);
-            schiller_naumann_reynolds(archimedes) * mu / (rho * diameter)
+            let settling = Settling {
+                rho,
+                rho_p,
+                mu,
+                diameter,
+                g: gravity.norm(),
+            };
+            settling.starting_from_rest(added_mass)
         })
-        .fold(0.0, f64::max);
+        .fold(cfl_steps::Settling::default(), |a, b| {
+            if b.terminal > a.terminal {
+                b
+            } else {
+                a
+            }
+        });
     let acceleration = flow.unbalanced_acceleration();
     let driven_axis = (0..dim)
         .filter(|&a| acceleration[a] > 0.0)
@@ -681,7 +710,7 @@ fn speed_scales(system: &grainflow_ibm::CoupledSystem) -> SpeedScales {
 
 /// `check`'s line on the speed scales behind the steps of a run adapted to
 /// `time.cfl`.
-fn scales_line(scales: &SpeedScales, cfl: f64, steps: f64) -> String {
+pub(crate) fn scales_line(scales: &SpeedScales, cfl: f64, steps: f64) -> String {
     let driven = match scales.driven {
         Some(d) => {
             let over = match d.confinement {
@@ -702,7 +731,7 @@ fn scales_line(scales: &SpeedScales, cfl: f64, steps: f64) -> String {
         "  time.cfl = {cfl}: about {steps:.0} steps, counted at the speeds the scene is set to \
          reach (grains settling at {:.4e} m/s{driven}; the flow's and the grains' speeds summed \
          at {} times the larger, as measured on the ten Cate run)",
-        scales.settling,
+        scales.settling.terminal,
         cfl_steps::SPEED_SUM_OVER_SCALE
     )
 }

@@ -3,6 +3,7 @@
 //! time estimated by timing a few steps of the scene itself.
 
 use crate::case::Case;
+use crate::cfl_steps::SpeedScales;
 use crate::check::Settling;
 use crate::cost_estimate::{self, Evolution};
 use crate::simulation::coupled as coupled_simulation;
@@ -64,6 +65,7 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
     let dt = case.time.dt.expect("validated");
     let h = core.min(grid.dz);
     let moving = (0..p.n_owned).filter(|&k| !p.is_fixed(k));
+    let mut settling_from_rest = crate::cfl_steps::Settling::default();
     if let Some(k) = moving.min_by(|&a, &b| p.mass[a].total_cmp(&p.mass[b])) {
         let (rho, mu) = (f.density, f.viscosity);
         let diameter = 2.0 * p.radius[k];
@@ -87,6 +89,7 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
                 g,
             };
             settling.write(&mut out, dt, h);
+            settling_from_rest = settling.starting_from_rest(0.5);
         }
     }
     let _ = writeln!(out, "time:");
@@ -96,7 +99,18 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
         system.dem_dt,
         system.dem_dt / contact_time
     );
-    let steps = (case.time.end / dt).ceil();
+    let (steps, what) = match case.time.cfl {
+        Some(cfl) => {
+            let scales = SpeedScales {
+                settling: settling_from_rest,
+                driven: None,
+            };
+            let steps = scales.steps(case.time.end, dt, cfl, h);
+            let _ = writeln!(out, "{}", crate::check::scales_line(&scales, cfl, steps));
+            (steps, format!("steps adapted to CFL {cfl}"))
+        }
+        None => ((case.time.end / dt).ceil(), "steps".to_string()),
+    };
     let _ = writeln!(
         out,
         "  end = {} s: {steps:.0} fluid steps, {:.3e} cell-steps",
@@ -110,12 +124,7 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
         system.step(dt).is_ok()
     });
     if let Some(estimate) = estimate {
-        let what = if case.time.cfl.is_some() {
-            "steps of time.dt (more where time.cfl shortens them)"
-        } else {
-            "steps"
-        };
-        let _ = writeln!(out, "{}", estimate.line(steps, what));
+        let _ = writeln!(out, "{}", estimate.line(steps, &what));
     }
     let _ = writeln!(out, "{memory_line}");
     Ok(out)
