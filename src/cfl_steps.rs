@@ -24,6 +24,9 @@
 //! erodible bed's grains move slower than the film above them). Each is
 //! an upper bound within a factor 2.
 
+use grainflow_fluid::BoundaryCondition;
+use grainflow_ibm::settling::{added_mass_coefficient, schiller_naumann_reynolds};
+use grainflow_ibm::{particle_volume, CoupledSystem};
 use std::f64::consts::PI;
 
 /// The sum of the flow's largest component speeds and the fastest grain's
@@ -94,6 +97,25 @@ pub struct Settling {
 }
 
 impl Settling {
+    /// A grain of density `rho_p` and diameter `diameter` in a fluid of
+    /// density `rho` and viscosity `mu` under gravity `g`: its
+    /// Schiller–Naumann terminal velocity and its acceleration from rest
+    /// (eq. 20, added-mass coefficient `added_mass`).
+    pub fn from_rest(
+        rho: f64,
+        rho_p: f64,
+        mu: f64,
+        diameter: f64,
+        g: f64,
+        added_mass: f64,
+    ) -> Self {
+        let archimedes = rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu);
+        Settling {
+            terminal: schiller_naumann_reynolds(archimedes) * mu / (rho * diameter),
+            initial_acceleration: (rho_p - rho).abs() * g / (rho_p + added_mass * rho),
+        }
+    }
+
     /// `U_t tanh(a₀ t/U_t)`: the start of eq. 20 and the terminal plateau.
     pub fn speed(&self, t: f64) -> f64 {
         if self.terminal > 0.0 {
@@ -171,6 +193,92 @@ pub fn bed_height(
         .iter()
         .rposition(|area| area / plane_area >= BED_FRACTION)
         .map_or(0.0, |slice| (slice + 1) as f64 * thickness)
+}
+
+/// The speed scales a coupled run adapted to `time.cfl` is set to reach
+/// (above): its grains' fastest Schiller–Naumann terminal velocity
+/// (gravity along the walled axes against their buoyant weight), and the
+/// flow a body force drives along a periodic axis between the walls across
+/// it, over the grains' bed.
+pub fn speed_scales(system: &CoupledSystem) -> SpeedScales {
+    let flow = &system.flow;
+    let grid = &flow.grid;
+    let dim = grid.dim();
+    let dem = &system.dem;
+    let p = &dem.particles;
+    let rho = system.fluid_density;
+    let mu = flow.viscosity * rho;
+    let gravity = dem.domain.gravity;
+    let added_mass = added_mass_coefficient(dem.dimension());
+    let settling = (0..p.n_owned)
+        .filter(|&k| !p.is_fixed(k))
+        .map(|k| {
+            let diameter = 2.0 * p.radius[k];
+            let rho_p = p.mass[k] / particle_volume(dem.dimension(), p.radius[k]);
+            Settling::from_rest(rho, rho_p, mu, diameter, gravity.norm(), added_mass)
+        })
+        .fold(Settling::default(), |a, b| {
+            if b.terminal > a.terminal {
+                b
+            } else {
+                a
+            }
+        });
+    let acceleration = flow.unbalanced_acceleration();
+    let driven_axis = (0..dim)
+        .filter(|&a| acceleration[a] > 0.0)
+        .max_by(|&a, &b| acceleration[a].total_cmp(&acceleration[b]));
+    let driven = driven_axis.map(|axis| {
+        let (lower, upper) = (dem.domain.lower, dem.domain.upper);
+        // The walls across: the narrowest walled axis.
+        let across = (0..dim)
+            .filter(|&b| b != axis && !dem.domain.periodic[b])
+            .min_by(|&a, &b| (upper[a] - lower[a]).total_cmp(&(upper[b] - lower[b])));
+        let confinement = across.map_or(Confinement::Free, |b| {
+            let walls = flow.boundaries.faces[b];
+            let holds = |c: &BoundaryCondition| {
+                matches!(
+                    c,
+                    BoundaryCondition::NoSlip | BoundaryCondition::MovingWall(_)
+                )
+            };
+            // The bed lies on the wall gravity points to.
+            let plane: f64 = (0..dim)
+                .filter(|&c| c != b)
+                .map(|c| upper[c] - lower[c])
+                .product();
+            let grains: Vec<(f64, f64)> = (0..p.n_owned)
+                .map(|k| {
+                    let along = p.position[k][b];
+                    let from_floor = if gravity[b] <= 0.0 {
+                        along - lower[b]
+                    } else {
+                        upper[b] - along
+                    };
+                    (from_floor, p.radius[k])
+                })
+                .collect();
+            let bed = if gravity[b] == 0.0 {
+                0.0
+            } else {
+                bed_height(&grains, 0.0, upper[b] - lower[b], plane, dim == 3)
+            };
+            let open = upper[b] - lower[b] - bed;
+            match (holds(&walls[0]), holds(&walls[1])) {
+                (true, true) => Confinement::Channel { width: open },
+                (true, false) | (false, true) if walls.contains(&BoundaryCondition::FreeSlip) => {
+                    Confinement::Film { depth: open }
+                }
+                _ => Confinement::Free,
+            }
+        });
+        DrivenFlow {
+            acceleration: acceleration[axis],
+            confinement,
+            viscosity: flow.viscosity,
+        }
+    });
+    SpeedScales { settling, driven }
 }
 
 #[cfg(test)]

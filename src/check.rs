@@ -2,7 +2,7 @@
 //! derived numbers and the models the scene will run.
 
 use crate::case::Case;
-use crate::cfl_steps::{self, Confinement, DrivenFlow, SpeedScales};
+use crate::cfl_steps::{self, Confinement, SpeedScales};
 use crate::cost_estimate::{self, Evolution};
 use crate::footprint::{human_bytes, machine_memory, Footprint};
 use crate::simulation::coupled as coupled_simulation;
@@ -416,23 +416,6 @@ pub(crate) struct Settling {
 }
 
 impl Settling {
-    /// The terminal velocity and the acceleration from rest (eq. 20, with
-    /// the added-mass coefficient `added_mass`) of this grain.
-    pub(crate) fn starting_from_rest(&self, added_mass: f64) -> cfl_steps::Settling {
-        let Settling {
-            rho,
-            rho_p,
-            mu,
-            diameter,
-            g,
-        } = *self;
-        let archimedes = rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu);
-        cfl_steps::Settling {
-            terminal: schiller_naumann_reynolds(archimedes) * mu / (rho * diameter),
-            initial_acceleration: (rho_p - rho).abs() * g / (rho_p + added_mass * rho),
-        }
-    }
-
     /// Writes Ar, the Schiller–Naumann terminal Re, U and St, and the step
     /// `dt` against the CFL limit on cells of `h` at that velocity; returns U.
     pub(crate) fn write(&self, out: &mut String, dt: f64, h: f64) -> f64 {
@@ -598,7 +581,7 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
         .expect("validated: grains in a fluid have time.dt");
     let (steps, what) = match case.time.cfl {
         Some(cfl) => {
-            let scales = speed_scales(&system);
+            let scales = cfl_steps::speed_scales(&system);
             let steps = scales.steps(case.time.end, dt, cfl, h);
             let _ = writeln!(out, "{}", scales_line(&scales, cfl, steps));
             (steps, format!("steps adapted to CFL {cfl}"))
@@ -614,98 +597,6 @@ fn coupled_report(case: &Case) -> Result<String, RunError> {
     }
     let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)
-}
-
-/// The speed scales a coupled run adapted to `time.cfl` is set to reach
-/// ([`cfl_steps`]): its grains' fastest Schiller–Naumann terminal velocity
-/// (gravity along the walled axes against their buoyant weight), and the
-/// flow a body force drives along a periodic axis between the walls across
-/// it, over the grains' bed.
-fn speed_scales(system: &grainflow_ibm::CoupledSystem) -> SpeedScales {
-    let flow = &system.flow;
-    let grid = &flow.grid;
-    let dim = grid.dim();
-    let dem = &system.dem;
-    let p = &dem.particles;
-    let rho = system.fluid_density;
-    let mu = flow.viscosity * rho;
-    let gravity = dem.domain.gravity;
-    let added_mass = grainflow_ibm::settling::added_mass_coefficient(dem.dimension());
-    let settling = (0..p.n_owned)
-        .filter(|&k| !p.is_fixed(k))
-        .map(|k| {
-            let diameter = 2.0 * p.radius[k];
-            let rho_p = p.mass[k] / grainflow_ibm::particle_volume(dem.dimension(), p.radius[k]);
-            let settling = Settling {
-                rho,
-                rho_p,
-                mu,
-                diameter,
-                g: gravity.norm(),
-            };
-            settling.starting_from_rest(added_mass)
-        })
-        .fold(cfl_steps::Settling::default(), |a, b| {
-            if b.terminal > a.terminal {
-                b
-            } else {
-                a
-            }
-        });
-    let acceleration = flow.unbalanced_acceleration();
-    let driven_axis = (0..dim)
-        .filter(|&a| acceleration[a] > 0.0)
-        .max_by(|&a, &b| acceleration[a].total_cmp(&acceleration[b]));
-    let driven = driven_axis.map(|axis| {
-        let (lower, upper) = (dem.domain.lower, dem.domain.upper);
-        // The walls across: the narrowest walled axis.
-        let across = (0..dim)
-            .filter(|&b| b != axis && !dem.domain.periodic[b])
-            .min_by(|&a, &b| (upper[a] - lower[a]).total_cmp(&(upper[b] - lower[b])));
-        let confinement = across.map_or(Confinement::Free, |b| {
-            use grainflow_fluid::BoundaryCondition::{FreeSlip, MovingWall, NoSlip};
-            let walls = flow.boundaries.faces[b];
-            let holds =
-                |c: &grainflow_fluid::BoundaryCondition| matches!(c, NoSlip | MovingWall(_));
-            // The bed lies on the wall gravity points to.
-            let plane: f64 = (0..dim)
-                .filter(|&c| c != b)
-                .map(|c| upper[c] - lower[c])
-                .product();
-            let grains: Vec<(f64, f64)> = (0..p.n_owned)
-                .map(|k| {
-                    let along = p.position[k][b];
-                    let from_floor = if gravity[b] <= 0.0 {
-                        along - lower[b]
-                    } else {
-                        upper[b] - along
-                    };
-                    (from_floor, p.radius[k])
-                })
-                .collect();
-            let bed = if gravity[b] == 0.0 {
-                0.0
-            } else {
-                cfl_steps::bed_height(&grains, 0.0, upper[b] - lower[b], plane, dim == 3)
-            };
-            let open = upper[b] - lower[b] - bed;
-            match (holds(&walls[0]), holds(&walls[1])) {
-                (true, true) => Confinement::Channel { width: open },
-                (true, false) | (false, true)
-                    if matches!(walls[0], FreeSlip) || matches!(walls[1], FreeSlip) =>
-                {
-                    Confinement::Film { depth: open }
-                }
-                _ => Confinement::Free,
-            }
-        });
-        DrivenFlow {
-            acceleration: acceleration[axis],
-            confinement,
-            viscosity: flow.viscosity,
-        }
-    });
-    SpeedScales { settling, driven }
 }
 
 /// `check`'s line on the speed scales behind the steps of a run adapted to

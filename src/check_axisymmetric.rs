@@ -89,7 +89,8 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
                 g,
             };
             settling.write(&mut out, dt, h);
-            settling_from_rest = settling.starting_from_rest(0.5);
+            settling_from_rest =
+                crate::cfl_steps::Settling::from_rest(rho, rho_p, mu, diameter, g, 0.5);
         }
     }
     let _ = writeln!(out, "time:");
