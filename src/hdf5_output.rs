@@ -111,20 +111,18 @@ impl Hdf5Fields {
         density: f64,
         extra: &[(&str, &[f64])],
     ) -> std::io::Result<()> {
-        self.cell_fields.compute(solver, density);
-        let CellFields {
-            velocity,
-            pressure,
-            vorticity,
-        } = &self.cell_fields;
+        let fields = self.cell_fields.compute(solver, density);
         let grid = &solver.grid;
         let partition = solver.partition();
         let faces = [0, 1, 2].map(|axis| grid.face_coordinates(axis));
         let uniform = grid.is_uniform(grid.line_axis());
         let layout = cell_layout(grid, self.origin, &faces);
-        let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", pressure)];
+        let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", &fields.pressure)];
         scalars.extend_from_slice(extra);
-        let vectors: [(&str, &[[f64; 3]]); 2] = [("velocity", velocity), ("vorticity", vorticity)];
+        let vectors: [(&str, &[[f64; 3]]); 2] = [
+            ("velocity", &fields.velocity),
+            ("vorticity", &fields.vorticity),
+        ];
         let name = format!("fields/fields_{:06}.h5", self.frames);
         FieldFrameH5 {
             time: solver.time,

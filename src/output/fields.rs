@@ -24,7 +24,7 @@ pub struct CellFields {
 
 impl CellFields {
     /// The fields of the current flow of `solver` (fluid density `density`).
-    pub fn compute(&mut self, solver: &mut FlowSolver, density: f64) {
+    pub fn compute(&mut self, solver: &mut FlowSolver, density: f64) -> &Self {
         solver.fill_velocity_ghosts();
         let grid = &solver.grid;
         let dim = grid.dim();
@@ -108,6 +108,7 @@ impl CellFields {
                 };
             }
         });
+        self
     }
 }
 
@@ -175,12 +176,7 @@ impl FieldFiles {
         density: f64,
         extra: &[(&str, &[f64])],
     ) -> std::io::Result<()> {
-        self.cell_fields.compute(solver, density);
-        let CellFields {
-            velocity,
-            pressure,
-            vorticity,
-        } = &self.cell_fields;
+        let fields = self.cell_fields.compute(solver, density);
         let grid = &solver.grid;
         let partition = solver.partition();
         let (ranks, rank) = (partition.size(), solver.communicator().rank());
@@ -193,14 +189,17 @@ impl FieldFiles {
         } else {
             format!("fields/{}", piece(rank))
         };
-        let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", pressure)];
+        let mut scalars: Vec<(&str, &[f64])> = vec![("pressure", &fields.pressure)];
         scalars.extend_from_slice(extra);
         FieldFrame {
             cells: grid.cells,
             offset: partition.offset(),
             layout,
             scalars: &scalars,
-            vectors: &[("velocity", velocity), ("vorticity", vorticity)],
+            vectors: &[
+                ("velocity", &fields.velocity),
+                ("vorticity", &fields.vorticity),
+            ],
         }
         .write(&self.dir.join(&name))
         .map_err(|e| std::io::Error::new(e.kind(), format!("{name}: {e}")))?;
@@ -383,8 +382,8 @@ mod tests {
             1 => c * x + d * z,
             _ => e * x + f * y,
         });
-        let mut fields = CellFields::default();
-        fields.compute(&mut solver, 1000.0);
+        let mut scratch = CellFields::default();
+        let fields = scratch.compute(&mut solver, 1000.0);
         let expected = [f - d, b - e, c - a];
         for cell in inner_cells(cells, 3) {
             for (axis, (value, exact)) in fields.vorticity[cell].iter().zip(expected).enumerate() {
@@ -409,8 +408,8 @@ mod tests {
         let mut solver = FlowSolver::new(grid, walls, 1e-3, Communicator::serial()).unwrap();
         let (a, c) = (0.6, -1.7);
         solver.set_velocity(|component, [x, y, _]| if component == 0 { a * y } else { c * x });
-        let mut fields = CellFields::default();
-        fields.compute(&mut solver, 1000.0);
+        let mut scratch = CellFields::default();
+        let fields = scratch.compute(&mut solver, 1000.0);
         for cell in inner_cells(cells, 2) {
             let error = fields.vorticity[cell][2] - (c - a);
             assert!(error.abs() < 1e-12, "cell {cell}: {error}");
