@@ -221,6 +221,16 @@ pub fn report(case: &Case) -> Result<String, RunError> {
             "steps to time.end"
         };
         let _ = writeln!(out, "{}", estimate.line(steps, what));
+        if pouring.remaining() > 0 {
+            let _ = writeln!(
+                out,
+                "  (an underestimate: the steps were timed with the {} moving grains there at \
+                 t = 0, and the pour brings {} more; a step costs more as they come in: in the \
+                 full silo it cost ten times the probe's once 6,370 grains were in)",
+                n - glued,
+                pouring.remaining()
+            );
+        }
     }
     let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)

@@ -284,6 +284,30 @@ fn check_counts_the_steps_of_a_cfl_run_at_the_speeds_the_scene_reaches() {
     );
 }
 
+/// `check` times a pour over its first steps, before most of its grains
+/// are in, and says that its estimate is then an underestimate, naming the
+/// grains still to come (`cases/silo.toml`, poured in batches).
+#[test]
+fn check_says_a_pour_is_timed_before_its_grains_come_in() {
+    let output = grainflow()
+        .args(["check", &case("silo.toml")])
+        .output()
+        .unwrap();
+    assert!(output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    let more: usize = text
+        .lines()
+        .find_map(|l| l.trim().strip_suffix(" more to be poured during the run"))
+        .unwrap_or_else(|| panic!("{text}"))
+        .parse()
+        .unwrap();
+    assert!(
+        text.contains("(an underestimate: the steps were timed with the")
+            && text.contains(&format!("the pour brings {more} more")),
+        "{text}"
+    );
+}
+
 /// A fluid step short against the time a grain takes to cross a cell makes
 /// the grains look larger under the forcing of eq. 7: `check` warns, and
 /// names `coupling.forcing_step`, which, set to the calibration step,
