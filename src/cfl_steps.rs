@@ -25,7 +25,9 @@
 //! an upper bound within a factor 2.
 
 use grainflow_fluid::BoundaryCondition;
-use grainflow_ibm::settling::{added_mass_coefficient, schiller_naumann_reynolds};
+use grainflow_ibm::settling::{
+    added_mass_coefficient, archimedes_number, schiller_naumann_reynolds,
+};
 use grainflow_ibm::{particle_volume, CoupledSystem};
 use std::f64::consts::PI;
 
@@ -109,7 +111,7 @@ impl Settling {
         g: f64,
         added_mass: f64,
     ) -> Self {
-        let archimedes = rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu);
+        let archimedes = archimedes_number(rho, rho_p, mu, diameter, g);
         Settling {
             terminal: schiller_naumann_reynolds(archimedes) * mu / (rho * diameter),
             initial_acceleration: (rho_p - rho).abs() * g / (rho_p + added_mass * rho),

@@ -11,7 +11,7 @@ use crate::simulation::dry_stepper::DryStepper;
 use crate::{fluid_scene, scene, sharing, stability, RunError};
 use grainflow_contact::Method;
 use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
-use grainflow_ibm::settling::schiller_naumann_reynolds;
+use grainflow_ibm::settling::{archimedes_number, schiller_naumann_reynolds};
 use std::fmt::Write;
 
 /// [`report`], and with `ranks` above one how the scene would be shared
@@ -436,7 +436,7 @@ impl Settling {
             diameter,
             g,
         } = *self;
-        let archimedes = rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu);
+        let archimedes = archimedes_number(rho, rho_p, mu, diameter, g);
         let reynolds = schiller_naumann_reynolds(archimedes);
         let velocity = reynolds * mu / (rho * diameter);
         let stokes = (rho_p + 0.5 * rho) * velocity * diameter / (9.0 * mu);

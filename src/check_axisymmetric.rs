@@ -8,7 +8,8 @@ use crate::check::Settling;
 use crate::cost_estimate::{self, Evolution};
 use crate::simulation::coupled as coupled_simulation;
 use crate::{axisymmetric_scene, RunError};
-use grainflow_core::Communicator;
+use grainflow_core::{Communicator, Dimension};
+use grainflow_ibm::settling::added_mass_coefficient;
 use std::fmt::Write;
 
 pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
@@ -89,8 +90,9 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
                 g,
             };
             settling.write(&mut out, dt, h);
+            let added_mass = added_mass_coefficient(Dimension::Three);
             settling_from_rest =
-                crate::cfl_steps::Settling::from_rest(rho, rho_p, mu, diameter, g, 0.5);
+                crate::cfl_steps::Settling::from_rest(rho, rho_p, mu, diameter, g, added_mass);
         }
     }
     let _ = writeln!(out, "time:");

@@ -4,7 +4,7 @@
 //! sphere's analysis, the series and the (r, z) fields.
 
 use super::coupled::{
-    check_dem_substep, check_density_ratio, collapsed_step, done_line, timing_summary,
+    check_dem_substep, check_density_ratio, collapsed_step, coupled_summary, done_line,
     CoupledCounts,
 };
 use super::fluid::cfl_overrun;
@@ -188,15 +188,12 @@ impl AxisymmetricModel {
     /// The scene's own entries of `summary.json`.
     pub fn summary(&self, case: &Case, wall_seconds: f64) -> Map<String, Value> {
         let grid = &self.system.flow.grid;
-        let mut summary = Map::new();
-        for (key, value) in [
+        let scene = [
             ("particles", json!(self.system.dem.particles.n_owned)),
             ("cells", json!(grid.cells[0] * grid.cells[1])),
             ("geometry", json!("axisymmetric")),
             ("dimension", json!(3)),
-        ] {
-            summary.insert(key.into(), value);
-        }
+        ];
         let counts = CoupledCounts {
             steps: self.steps,
             dem_substeps: self.dem_substeps,
@@ -205,8 +202,7 @@ impl AxisymmetricModel {
             forcing_step: self.system.immersed.forcing_step,
             timings: &self.system.timings,
         };
-        summary.extend(timing_summary(case, &counts, wall_seconds));
-        summary
+        coupled_summary(scene, case, &counts, wall_seconds)
     }
 
     pub fn done_line(&self, wall_seconds: f64) -> String {

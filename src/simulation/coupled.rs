@@ -124,7 +124,10 @@ pub fn collapsed_step(step_dt: f64, case: &Case, time: f64, end: f64) -> Option<
     let collapsed = case.time.cfl.is_some() && step_dt < COLLAPSED_STEP * largest;
     (collapsed && end - time > step_dt).then(|| {
         format!(
-            "the step adapted to time.cfl collapsed to {step_dt:.3e} s, below {COLLAPSED_STEP} of              time.dt = {largest:.3e} s: the flow is running away (a cell Reynolds number too high              for the grid, or grains moving faster than the scene was set for); refine the grid              or raise the viscosity"
+            "the step adapted to time.cfl collapsed to {step_dt:.3e} s, below {COLLAPSED_STEP} of \
+             time.dt = {largest:.3e} s: the flow is running away (a cell Reynolds number too high \
+             for the grid, or grains moving faster than the scene was set for); refine the grid \
+             or raise the viscosity"
         )
     })
 }
@@ -223,11 +226,17 @@ pub struct CoupledCounts<'a> {
     pub timings: &'a Timings,
 }
 
-/// The entries of `summary.json` every coupled run has: the steps and
-/// sub-steps, the time settings and where the time went.
-pub fn timing_summary(case: &Case, c: &CoupledCounts, wall_seconds: f64) -> Map<String, Value> {
+/// The entries of a coupled run's `summary.json`: the scene's own
+/// `scene`, then those every coupled run has (the steps and sub-steps, the
+/// time settings and where the time went).
+pub fn coupled_summary<'a>(
+    scene: impl IntoIterator<Item = (&'a str, Value)>,
+    case: &Case,
+    c: &CoupledCounts,
+    wall_seconds: f64,
+) -> Map<String, Value> {
     let t = c.timings;
-    let mut summary = Map::new();
+    let mut summary: Map<String, Value> = scene.into_iter().map(|(k, v)| (k.into(), v)).collect();
     for (key, value) in [
         ("dem_substeps", json!(c.dem_substeps)),
         ("dt", json!(case.time.dt)),
@@ -465,15 +474,12 @@ impl CoupledModel {
 
     /// The scene's own entries of `summary.json`.
     pub fn summary(&self, case: &Case, wall_seconds: f64) -> Map<String, Value> {
-        let mut summary = Map::new();
-        for (key, value) in [
+        let scene = [
             ("particles", json!(self.particles)),
             ("cells", json!(self.cells)),
             ("dimension", json!(self.system.flow.grid.dim())),
             ("mean_grain_cfl", json!(self.grain_cfl())),
-        ] {
-            summary.insert(key.into(), value);
-        }
+        ];
         let counts = CoupledCounts {
             steps: self.steps,
             dem_substeps: self.dem_substeps,
@@ -482,8 +488,7 @@ impl CoupledModel {
             forcing_step: self.system.immersed.forcing_step,
             timings: &self.system.timings,
         };
-        summary.extend(timing_summary(case, &counts, wall_seconds));
-        summary
+        coupled_summary(scene, case, &counts, wall_seconds)
     }
 
     pub fn done_line(&self, wall_seconds: f64) -> String {

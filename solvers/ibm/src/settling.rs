@@ -31,6 +31,13 @@ pub fn early_acceleration(samples: &[(f64, f64)]) -> f64 {
     (r1 * s22 - r2 * s12) / (s11 * s22 - s12 * s12)
 }
 
+/// The Archimedes number `Ar = ρ |ρ_p − ρ| g D³ / μ²` of a grain of density
+/// `rho_p` and diameter `diameter` in a fluid of density `rho` and dynamic
+/// viscosity `mu` under gravity `g`.
+pub fn archimedes_number(rho: f64, rho_p: f64, mu: f64, diameter: f64, g: f64) -> f64 {
+    rho * (rho_p - rho).abs() * g * diameter.powi(3) / (mu * mu)
+}
+
 /// The terminal Reynolds number of a sphere of Archimedes number `Ar`
 /// with the Schiller–Naumann drag `C_D = 24/Re (1 + 0.15 Re^0.687)`: the
 /// balance of eq. 21, `C_D Re² = 4 Ar / 3`, solved by bisection.
