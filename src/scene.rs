@@ -87,6 +87,7 @@ pub fn walls(case: &Case) -> Vec<PlaneWall> {
             normal: vector(&w.normal).normalize(),
             friction: w.friction.unwrap_or(default_friction),
             remove_at: w.remove_at,
+            two_sided: w.two_sided,
         })
         .collect()
 }

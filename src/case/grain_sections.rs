@@ -218,6 +218,10 @@ pub struct WallSection {
     /// Time [s] at which the wall is removed.
     #[serde(default)]
     pub remove_at: Option<f64>,
+    /// A thin plate grains touch from either side (a gate between a
+    /// column and an erodible layer); default: one-sided.
+    #[serde(default)]
+    pub two_sided: bool,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]

@@ -101,6 +101,7 @@ impl ParallelSection {
 mod fluid_sections;
 mod grain_sections;
 mod run_sections;
+mod validate_analysis;
 mod validate_axisymmetric;
 mod validate_fluid;
 mod validate_grains;
@@ -380,37 +381,7 @@ impl Case {
                 "a fluid scene needs time.dt [s] or time.cfl",
             ));
         }
-        if let Some(AnalysisSection::Silo { slab, .. }) = &self.analysis {
-            positive("analysis.slab", *slab)?;
-        }
-        if let Some(AnalysisSection::StaticBox { settle }) = &self.analysis {
-            if !(*settle >= 0.0 && *settle < self.time.end) {
-                return Err(invalid(
-                    "analysis.settle",
-                    settle,
-                    "allowed: 0 ≤ settle < time.end",
-                ));
-            }
-        }
-        if let Some(AnalysisSection::ColumnCollapse { profile_times }) = &self.analysis {
-            if profile_times.iter().any(|t| t.is_nan() || *t < 0.0) {
-                return Err(invalid(
-                    "analysis.profile_times",
-                    format!("{profile_times:?}"),
-                    "allowed: times ≥ 0 after the release [s]",
-                ));
-            }
-        }
-        if matches!(self.analysis, Some(AnalysisSection::ColumnCollapse { .. }))
-            && !self.walls.iter().any(|w| w.remove_at.is_some())
-        {
-            return Err(invalid(
-                "analysis.kind",
-                "column_collapse",
-                "needs walls with remove_at (the gates)",
-            ));
-        }
-        Ok(())
+        self.validate_analysis()
     }
 }
 

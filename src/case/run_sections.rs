@@ -125,6 +125,23 @@ impl Default for OutputSection {
     }
 }
 
+fn default_front_interval() -> f64 {
+    0.01
+}
+
+fn default_profile_interval() -> f64 {
+    0.1
+}
+
+/// The paper's criterion for static grains: u_x < 1 cm/s.
+fn default_flowing_speed() -> f64 {
+    0.01
+}
+
+fn default_front_smoothing() -> f64 {
+    0.05
+}
+
 pub(super) fn default_true() -> bool {
     true
 }
@@ -151,6 +168,31 @@ pub enum AnalysisSection {
         /// the grains is written to `profiles.csv`.
         #[serde(default)]
         profile_times: Vec<f64>,
+    },
+    /// A column released onto a channel covered by an erodible layer
+    /// (Martin et al. 2022, section 5; [`crate::analysis::ErodibleBed`]):
+    /// the front and its phases, the bed's energy, mass and velocity
+    /// profiles, the static/flowing interface.
+    ErodibleBed {
+        /// Times after the release [s] at which h(x) is written to
+        /// `profiles.csv`.
+        #[serde(default)]
+        profile_times: Vec<f64>,
+        /// Positions along the channel [m] of the velocity profiles.
+        #[serde(default)]
+        probes: Vec<f64>,
+        /// Interval [s] of the front and energy samples (`front.csv`).
+        #[serde(default = "default_front_interval")]
+        sample_interval: f64,
+        /// Interval [s] of the velocity profiles and of the interface.
+        #[serde(default = "default_profile_interval")]
+        profile_interval: f64,
+        /// Speed along the slope [m/s] below which grains are static.
+        #[serde(default = "default_flowing_speed")]
+        flowing_speed: f64,
+        /// Window [s] over which the front speed is averaged.
+        #[serde(default = "default_front_smoothing")]
+        smoothing: f64,
     },
     /// Grains at rest in a box (Martin et al. 2022, Fig. 3): the largest
     /// ratio of kinetic to potential energy after they settle.

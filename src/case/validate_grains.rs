@@ -19,8 +19,8 @@ impl Case {
                 "analysis.kind",
                 "(a fluid analysis)",
                 "a scene of grains allows \"binary_collision\", \"bouncing\", \"silo\", \
-                 \"column_collapse\", \"static_box\" or, in a fluid, \"falling_sphere\", \
-                 \"bouncing_sphere\" or \"inclined_bed\"",
+                 \"column_collapse\", \"erodible_bed\", \"static_box\" or, in a fluid, \
+                 \"falling_sphere\", \"bouncing_sphere\" or \"inclined_bed\"",
             ));
         }
         if self.fluid.is_none()

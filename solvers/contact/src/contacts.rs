@@ -275,7 +275,7 @@ pub fn gather(
                 contacts.push(
                     i,
                     Partner::Wall(w as u32),
-                    wall.normal,
+                    wall.normal_towards(&p.position[i]),
                     gap,
                     p.radius[i],
                     0.0,

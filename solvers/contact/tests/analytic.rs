@@ -79,6 +79,7 @@ fn on_incline(
         normal,
         friction,
         remove_at: None,
+        two_sided: false,
     };
     let mut system = DemSystem::new(
         domain(dimension, gravity, false),
@@ -307,5 +308,66 @@ fn head_on_impacts_are_inelastic_or_newtonian_and_periodic_edges_change_nothing(
             finals.push(v0);
         }
         assert!((finals[0] - finals[1]).abs() < 1e-9 * speed);
+    }
+}
+
+/// A two-sided plate (the gate between a column and an erodible layer):
+/// a grain flying at it from either side stops at its own face, inelastic
+/// with COCD, at e_n = 0.5 with NSCD, and neither crosses it.
+#[test]
+fn grains_stop_or_bounce_on_their_own_face_of_a_two_sided_plate() {
+    let speed = 0.2;
+    for (method, restitution) in [
+        (Method::Cocd, 0.0),
+        (Method::Nscd { restitution: 0.5 }, 0.5),
+    ] {
+        let plate = PlaneWall {
+            name: "gate".into(),
+            point: Vec3::zeros(),
+            normal: Vec3::x(),
+            friction: 0.3,
+            remove_at: None,
+            two_sided: true,
+        };
+        let mut system = DemSystem::new(
+            domain(Dimension::Three, Vec3::zeros(), false),
+            ContactLaw::rigid(0.3),
+            vec![plate],
+            0.2 * RADIUS,
+        );
+        // Apart along y, so that they do not meet across the plate.
+        system.add_particles(&[
+            grain(
+                Vec3::new(1.3 * RADIUS, 0.0, 0.0),
+                Vec3::new(-speed, 0.0, 0.0),
+                false,
+            ),
+            grain(
+                Vec3::new(-1.3 * RADIUS, 3.0 * RADIUS, 0.0),
+                Vec3::new(speed, 0.0, 0.0),
+                false,
+            ),
+        ]);
+        let mut contact = hard(method);
+        contact.prepare(&mut system);
+        for _ in 0..100 {
+            let report = contact.step(&mut system, 1e-4).unwrap();
+            assert!(report.penetration < TOLERANCE, "{method:?}");
+        }
+        for (id, side) in [(0, 1.0), (1, -1.0)] {
+            let k = system.index_of(id).unwrap();
+            let (x, v) = (
+                system.particles.position[k].x,
+                system.particles.velocity[k].x,
+            );
+            assert!(
+                side * x >= RADIUS * (1.0 - TOLERANCE),
+                "{method:?}: grain {id} at {x}"
+            );
+            assert!(
+                (side * v - restitution * speed).abs() < 1e-9,
+                "{method:?}: grain {id} leaves at {v}"
+            );
+        }
     }
 }

@@ -894,13 +894,14 @@ impl DemSystem {
                         let (vi, wi) = (velocities.linear(i), velocities.angular(i));
                         let bit = 1u64 << w;
                         let distance = wall.distance(&xi);
+                        let normal = wall.normal_towards(&xi);
                         let present = wall.is_present(time);
                         if let (Some(film), true) = (&lubrication, present) {
                             // Eq. 19 against a wall, across the gap left
                             // before contact.
                             total_force += film.force(
                                 distance - ri - contact_gap,
-                                wall.normal,
+                                normal,
                                 vi,
                                 ri,
                                 f64::INFINITY,
@@ -919,8 +920,8 @@ impl DemSystem {
                         touches |= bit;
                         let contact = ContactPoint {
                             overlap,
-                            normal: wall.normal,
-                            relative_velocity: vi - (ri * wi).cross(&wall.normal),
+                            normal,
+                            relative_velocity: vi - (ri * wi).cross(&normal),
                             relative_spin: wi,
                             radius: ri,
                             partner_radius: f64::INFINITY,
@@ -1135,11 +1136,12 @@ impl DemSystem {
             if overlap <= 0.0 || !wall.is_present(self.time) || p.inverse_mass[i] == 0.0 {
                 continue;
             }
+            let normal = wall.normal_towards(&p.position[i]);
             let relative_velocity =
-                p.velocity[i] - (p.radius[i] * p.angular_velocity[i]).cross(&wall.normal);
+                p.velocity[i] - (p.radius[i] * p.angular_velocity[i]).cross(&normal);
             let contact = self.law.force(
                 overlap,
-                wall.normal,
+                normal,
                 relative_velocity,
                 p.inverse_mass[i],
                 wall.friction,
@@ -1150,7 +1152,7 @@ impl DemSystem {
                 w,
                 Contact {
                     partner: usize::MAX,
-                    normal: wall.normal,
+                    normal,
                     force: contact.force,
                     normal_force: contact.normal_force,
                 },
@@ -1612,6 +1614,7 @@ mod pair_evaluation_tests {
                 normal: Vec3::z(),
                 friction: 0.5,
                 remove_at: None,
+                two_sided: false,
             },
             PlaneWall {
                 name: "front".into(),
@@ -1619,6 +1622,7 @@ mod pair_evaluation_tests {
                 normal: Vec3::y(),
                 friction: 0.5,
                 remove_at: None,
+                two_sided: false,
             },
             PlaneWall {
                 name: "back".into(),
@@ -1626,6 +1630,7 @@ mod pair_evaluation_tests {
                 normal: -Vec3::y(),
                 friction: 0.5,
                 remove_at: None,
+                two_sided: false,
             },
         ];
         let mut rng = rand_pcg::Pcg64::seed_from_u64(7);

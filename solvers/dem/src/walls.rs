@@ -14,6 +14,11 @@ pub struct PlaneWall {
     pub friction: f64,
     /// Time at which the wall is taken away (the gate of a column collapse).
     pub remove_at: Option<f64>,
+    /// A thin plate that grains touch from either side (a gate with a
+    /// column behind it and an erodible layer in front): each grain is
+    /// pushed away from the plane towards its own side. Otherwise the
+    /// grains live on the side `normal` points into.
+    pub two_sided: bool,
 }
 
 impl PlaneWall {
@@ -21,9 +26,26 @@ impl PlaneWall {
         self.remove_at.is_none_or(|t| time < t)
     }
 
-    /// Signed distance from the plane to a point (positive on the particle side).
+    /// Signed distance from the plane to a point (positive on the particle
+    /// side; for a two-sided wall, the distance on either side).
     #[inline(always)]
     pub fn distance(&self, x: &Vec3) -> f64 {
-        (x - self.point).dot(&self.normal)
+        let signed = (x - self.point).dot(&self.normal);
+        if self.two_sided {
+            signed.abs()
+        } else {
+            signed
+        }
+    }
+
+    /// The wall's normal towards the grain at `x`: `normal`, or for a
+    /// two-sided wall its opposite on the other side.
+    #[inline(always)]
+    pub fn normal_towards(&self, x: &Vec3) -> Vec3 {
+        if self.two_sided && (x - self.point).dot(&self.normal) < 0.0 {
+            -self.normal
+        } else {
+            self.normal
+        }
     }
 }

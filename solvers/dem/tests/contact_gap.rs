@@ -29,6 +29,7 @@ fn dropped(contact_gap: f64) -> DemSystem {
         normal: Vec3::z(),
         friction: 0.0,
         remove_at: None,
+        two_sided: false,
     };
     let mut system = DemSystem::new(domain, law, vec![floor], 0.2 * RADIUS);
     system.contact_gap = contact_gap;

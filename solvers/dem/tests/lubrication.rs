@@ -53,6 +53,7 @@ fn approach_with_contact_gap(
         normal: Vec3::z(),
         friction: 0.0,
         remove_at: None,
+        two_sided: false,
     };
     let mut system = film_scene(vec![floor], viscosity, roughness);
     system.contact_gap = contact_gap;
@@ -288,6 +289,7 @@ fn grain_between_walls(gap: f64, speed: f64) -> DemSystem {
         normal,
         friction: 0.0,
         remove_at: None,
+        two_sided: false,
     };
     let height = 2.0 * (RADIUS + gap);
     let mut system = stiff_film_scene(vec![

@@ -46,6 +46,7 @@ fn bouncing_on_axis(per: usize, viscosity: f64, lubricated: bool) -> Axisymmetri
         normal: Vec3::new(0.0, 0.0, 1.0),
         friction: 0.25,
         remove_at: None,
+        two_sided: false,
     };
     let mut dem = DemSystem::new(domain, law, vec![floor], 0.1 * DIAMETER);
     if lubricated {

@@ -324,6 +324,7 @@ mod tests {
             normal: Vec3::new(0.0, 0.0, 1.0),
             friction: 0.5,
             remove_at: None,
+            two_sided: false,
         };
         let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
         // 8 x 8 grains per layer, 7 layers, jittered, falling onto the floor.
@@ -429,6 +430,7 @@ mod tests {
             normal: Vec3::new(0.0, 0.0, -1.0),
             friction: 0.5,
             remove_at: None,
+            two_sided: false,
         });
         let mut other = DemSystem::new(
             first.domain.clone(),
