@@ -12,19 +12,22 @@
 //! those beyond it the erodible bed's, and they keep that origin. The
 //! glued grains are the rigid bed.
 //!
-//! The front is the leading edge of the flowing mass: the farthest grain
-//! surface of the largest set of grains moving down the slope at
-//! `flowing_speed` or faster that contacts link together
-//! ([`deposit::main_mass`]), when that set holds at least
-//! [`FLOWING_SHARE`] of the column's grains (and [`FLOWING_LEAST`]).
-//! Static grains of the bed ahead of it do not count, nor do a few grains
-//! rolling ahead of a mass at rest. The front reached so far is
-//! kept: r_f(t) is the largest such edge up to t (from R0 at the release),
-//! so it stays where the flow stopped.
+//! The front is where the flow has raised the surface above where it stood
+//! at the release: h(x), the solid volume of the mobile grains per unit
+//! length in bins [`BIN_DIAMETERS`] mean diameters wide, is compared with
+//! h(x) at the release, and the front is the position beyond which the
+//! raised volume, ∫ max(h − h_release, 0) dx from the end of the channel,
+//! amounts to [`FRONT_GRAINS`] mean grains (interpolated within its bin).
+//! Static grains of the bed ahead do not raise it; a few grains rolling
+//! ahead of the flow do not make the front; and it moves continuously as
+//! the flow carries mass forwards. (The leading edge of the largest linked
+//! set of moving grains, tried first, jumped by R0 at a time with 410
+//! discs of 8 mm: the head of a thin flow stops and starts in clusters.)
+//! Without an erodible layer it is the leading edge of the spreading mass,
+//! less a few grains.
 
 use super::front_phases::{front_phases, FrontPhases};
-use crate::deposit;
-use grainflow_core::{Dimension, Domain, Vec3};
+use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::DemSystem;
 use grainflow_io::write_whole;
 use serde_json::{json, Map, Value};
@@ -33,13 +36,8 @@ use std::path::Path;
 
 /// The width of the bins of h(x) and of the front, in mean diameters.
 pub const BIN_DIAMETERS: f64 = 2.0;
-/// The least share of the column's grains a flowing set must hold to make
-/// a front: a few discs rolling down the slope after the mass stopped do
-/// not (with 410 discs of 8 mm at 16°, one such group made the front jump
-/// from 2.9 R0 to 4.0 R0 a second after the mass came to rest).
-pub const FLOWING_SHARE: f64 = 0.02;
-/// The least number of grains of a flowing set that makes a front.
-pub const FLOWING_LEAST: usize = 5;
+/// The raised volume beyond the front, in mean grain volumes.
+pub const FRONT_GRAINS: f64 = 5.0;
 /// The width of a probe's window along x, in mean diameters.
 pub const PROBE_DIAMETERS: f64 = 5.0;
 
@@ -154,17 +152,15 @@ impl ErodibleBed {
         let release = self.release.as_ref().expect("set above");
         let bins = Bins::new(system, release.diameter);
         if after >= self.next_sample {
-            let reached = self
-                .samples
-                .last()
-                .map_or(self.gate, |s| self.back + s.front);
-            let front = flowing_front(
-                &system.domain,
-                &grains,
-                self.settings.flowing_speed,
-                release,
+            let heights = bins.heights(&grains);
+            let grain = grains.mean_volume_per_span();
+            let front = raised_front(
+                &bins,
+                &heights,
+                &release.initial_heights,
+                FRONT_GRAINS * grain,
             )
-            .map_or(reached, |edge| edge.max(reached));
+            .unwrap_or(self.gate);
             let (bed_kinetic, bed_potential) = bed_energies(system, &release.bed_ids);
             self.samples.push(Sample {
                 time: after,
@@ -407,6 +403,12 @@ impl Grains {
         self.centre[k][self.normal] - self.floor
     }
 
+    /// Mean solid volume of the mobile grains per unit span.
+    fn mean_volume_per_span(&self) -> f64 {
+        let mobile: Vec<usize> = (0..self.centre.len()).filter(|&k| !self.fixed[k]).collect();
+        mobile.iter().map(|&k| self.volume_per_span(k)).sum::<f64>() / mobile.len().max(1) as f64
+    }
+
     /// Solid volume of grain k per unit span.
     fn volume_per_span(&self, k: usize) -> f64 {
         let r = self.radius[k];
@@ -455,29 +457,21 @@ impl Bins {
     }
 }
 
-/// The leading edge along x of the largest linked set of grains moving
-/// down the slope at `flowing_speed` or faster; `None` where that set is
-/// too small to be the flow.
-fn flowing_front(
-    domain: &Domain,
-    grains: &Grains,
-    flowing_speed: f64,
-    release: &Release,
-) -> Option<f64> {
-    let moving: Vec<usize> = (0..grains.centre.len())
-        .filter(|&k| !grains.fixed[k] && grains.velocity_x[k] >= flowing_speed)
-        .collect();
-    let centres: Vec<Vec3> = moving.iter().map(|&k| grains.centre[k]).collect();
-    let radii: Vec<f64> = moving.iter().map(|&k| grains.radius[k]).collect();
-    let link = deposit::CONTACT_GAP * release.diameter;
-    let mass = deposit::main_mass(domain, &centres, &radii, link);
-    let least = FLOWING_LEAST.max((FLOWING_SHARE * release.column_grains as f64).ceil() as usize);
-    if mass.len() < least {
-        return None;
+/// The position beyond which the volume (per unit span) of the mobile
+/// grains above their h at the release, `∫ max(h − initial, 0) dx` from
+/// the end of the channel, reaches `volume`; `None` where it nowhere does.
+fn raised_front(bins: &Bins, heights: &[f64], initial: &[f64], volume: f64) -> Option<f64> {
+    let mut beyond = 0.0;
+    for b in (0..bins.count).rev() {
+        let raised = (heights[b] - initial[b]).max(0.0) * bins.width;
+        if beyond + raised >= volume {
+            // Uniform within the bin: the share still needed from its end.
+            let needed = (volume - beyond) / raised;
+            return Some(bins.lower + (b as f64 + 1.0 - needed) * bins.width);
+        }
+        beyond += raised;
     }
-    mass.iter()
-        .map(|&k| centres[k].x + radii[k])
-        .reduce(f64::max)
+    None
 }
 
 /// The highest grain surface above the rigid bed's floor in each bin of
@@ -632,31 +626,24 @@ mod tests {
     }
 
     #[test]
-    fn the_front_is_the_edge_of_the_linked_flowing_grains() {
-        // Unit discs in a row touching from x = 0.5 to 4.5 moving at 1 m/s,
-        // then static bed grains touching them up to x = 8.5, then one
-        // grain rolling alone at x = 11.
-        let mut centres: Vec<[f64; 2]> = (0..9).map(|i| [0.5 + i as f64, 0.5]).collect();
-        centres.push([11.0, 0.5]);
-        let mut speeds = vec![1.0; 5];
-        speeds.extend([0.0, 0.0, 0.0, 0.0, 1.0]);
-        let g = grains(&centres, &speeds);
-        let domain = Domain {
-            dimension: Dimension::Two,
-            lower: Vec3::zeros(),
-            upper: Vec3::new(20.0, 5.0, 0.0),
-            periodic: [false; 3],
-            gravity: Vec3::new(0.0, -9.81, 0.0),
+    fn the_front_leaves_a_few_grains_of_raised_volume_ahead_of_it() {
+        // Bins of 2: h raised by 1 over [0, 6), by 0.25 in [8, 10), and
+        // the bin [6, 8) raised at the release already.
+        let bins = Bins {
+            lower: 0.0,
+            width: 2.0,
+            count: 5,
         };
-        let front = flowing_front(&domain, &g, 0.01, &release(1.0));
-        assert_eq!(front, Some(5.0));
-        let at_rest = grains(&centres, &[0.0; 10]);
-        assert_eq!(flowing_front(&domain, &at_rest, 0.01, &release(1.0)), None);
-        // Three grains rolling together are not a flow.
-        let mut few = vec![0.0; 10];
-        few[..3].fill(1.0);
-        let rolling = grains(&centres, &few);
-        assert_eq!(flowing_front(&domain, &rolling, 0.01, &release(1.0)), None);
+        let heights = [1.0, 1.0, 1.0, 1.0, 0.25];
+        let initial = [0.0, 0.0, 0.0, 1.0, 0.0];
+        // 0.5 beyond x = 8, none in [6, 8), then 2 in [4, 6): the other
+        // 1.5 lie in [4.5, 6).
+        let front = raised_front(&bins, &heights, &initial, 2.0);
+        assert!((front.unwrap() - 4.5).abs() < 1e-12, "{front:?}");
+        // Less than the whole raised volume (6.5) in all: no front.
+        assert_eq!(raised_front(&bins, &heights, &initial, 7.0), None);
+        // Mass removed (eroded) raises nothing.
+        assert_eq!(raised_front(&bins, &initial, &heights, 1.1), None);
     }
 
     #[test]
