@@ -9,7 +9,7 @@ use crate::simulation::coupled as coupled_simulation;
 use crate::simulation::dry::{check_time_step, time_step};
 use crate::simulation::dry_stepper::DryStepper;
 use crate::{fluid_scene, scene, sharing, stability, RunError};
-use grainflow_contact::Method;
+use grainflow_contact::{ConicSolver, Method};
 use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
 use grainflow_ibm::settling::{archimedes_number, schiller_naumann_reynolds};
 use std::fmt::Write;
@@ -66,8 +66,15 @@ pub fn report(case: &Case) -> Result<String, RunError> {
     let model = match hard.as_ref().map(|h| h.method) {
         None => "soft-sphere DEM (linear spring-dashpot, tangential history, Coulomb)".to_string(),
         Some(Method::Cocd) => {
-            "hard contact: COCD, one conic program per step (Clarabel), inelastic, Coulomb's cone"
-                .to_string()
+            // grainflow's interior point where the cones are linear (2D
+            // discs, frictionless contacts), Clarabel for 3D cones.
+            let linear_cones = dim == 2
+                || (system.law.friction == 0.0 && system.walls.iter().all(|w| w.friction == 0.0));
+            let solver = match hard.as_ref().map(|h| h.conic_solver) {
+                Some(ConicSolver::InteriorPoint) if linear_cones => "grainflow's interior point",
+                _ => "Clarabel",
+            };
+            format!("hard contact: COCD, one conic program per step ({solver}), inelastic, Coulomb's cone")
         }
         Some(Method::Nscd { restitution }) => format!(
             "hard contact: NSCD, Gauss-Seidel over the contacts, Newton restitution {restitution}, Coulomb"
@@ -86,10 +93,11 @@ pub fn report(case: &Case) -> Result<String, RunError> {
             .unwrap_or_default();
         let _ = writeln!(
             out,
-            "    {} normal {:?} friction {}{}",
+            "    {} normal {:?} friction {}{}{}",
             w.name,
             w.normal.as_slice(),
             w.friction,
+            if w.two_sided { ", two-sided" } else { "" },
             removal
         );
     }
