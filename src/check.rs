@@ -66,12 +66,8 @@ pub fn report(case: &Case) -> Result<String, RunError> {
     let model = match hard.as_ref().map(|h| h.method) {
         None => "soft-sphere DEM (linear spring-dashpot, tangential history, Coulomb)".to_string(),
         Some(Method::Cocd) => {
-            // grainflow's interior point where the cones are linear (2D
-            // discs, frictionless contacts), Clarabel for 3D cones.
-            let linear_cones = dim == 2
-                || (system.law.friction == 0.0 && system.walls.iter().all(|w| w.friction == 0.0));
-            let solver = match hard.as_ref().map(|h| h.conic_solver) {
-                Some(ConicSolver::InteriorPoint) if linear_cones => "grainflow's interior point",
+            let solver = match hard.as_ref().map(|h| h.conic_solver_for(&system)) {
+                Some(ConicSolver::InteriorPoint) => "grainflow's interior point",
                 _ => "Clarabel",
             };
             format!("hard contact: COCD, one conic program per step ({solver}), inelastic, Coulomb's cone")

@@ -126,7 +126,7 @@ impl DryModel {
                 None,
             ));
         }
-        description.push(stepper.describe(dt));
+        description.push(stepper.describe(dt, &system));
         warnings.extend(warning);
 
         let last_removal = system

@@ -5,7 +5,7 @@
 use super::dry::{check_time_step, time_step};
 use crate::case::Case;
 use crate::{scene, RunError};
-use grainflow_contact::{HardContact, Method, StepReport};
+use grainflow_contact::{ConicSolver, HardContact, Method, StepReport};
 use grainflow_core::{State, StateError};
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
@@ -103,7 +103,7 @@ impl DryStepper {
     }
 
     /// One line for the log naming the model and its step.
-    pub fn describe(&self, dt: f64) -> String {
+    pub fn describe(&self, dt: f64, system: &DemSystem) -> String {
         match self {
             DryStepper::Soft { contact_time } => format!(
                 "soft-sphere DEM; dt = {dt:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s)",
@@ -111,7 +111,13 @@ impl DryStepper {
             ),
             DryStepper::Hard { contact, .. } => {
                 let scheme = match contact.method {
-                    Method::Cocd => "COCD (conic program per step, Clarabel)".to_string(),
+                    Method::Cocd => {
+                        let solver = match contact.conic_solver_for(system) {
+                            ConicSolver::InteriorPoint => "grainflow's interior point",
+                            ConicSolver::Clarabel => "Clarabel",
+                        };
+                        format!("COCD (conic program per step, {solver})")
+                    }
                     Method::Nscd { restitution } => {
                         format!("NSCD (Gauss-Seidel, restitution {restitution})")
                     }

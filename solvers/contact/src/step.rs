@@ -120,6 +120,19 @@ impl HardContact {
         }
     }
 
+    /// The interior-point code that solves `system`'s COCD programs:
+    /// grainflow's where every cone is linear (2D discs, or no friction
+    /// with grains nor walls), Clarabel where 3D cones are second-order.
+    pub fn conic_solver_for(&self, system: &DemSystem) -> ConicSolver {
+        let linear_cones = system.dimension() == grainflow_core::Dimension::Two
+            || (system.law.friction == 0.0 && system.walls.iter().all(|w| w.friction == 0.0));
+        if linear_cones {
+            self.conic_solver
+        } else {
+            ConicSolver::Clarabel
+        }
+    }
+
     /// Lists pairs within the threshold from now on (call before the first
     /// step, or the first step rebuilds the list).
     pub fn prepare(&self, system: &mut DemSystem) {
