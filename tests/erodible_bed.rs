@@ -21,31 +21,38 @@ const DIAMETER: f64 = 0.008;
 /// of 3 d, each within 5 %.
 #[test]
 fn a_column_runs_farther_on_an_erodible_layer_than_on_the_rigid_bed() {
-    let mut runouts = Vec::new();
-    for deposit in [
+    let deposits = [
         "data/erodible_bed_2d_no_layer.csv",
         "data/erodible_bed_2d.csv",
-    ] {
-        let (summary, _dir) = run(
-            "erodible_bed_2d.toml",
-            &[
-                &format!("particles.block[1].path=\"{deposit}\""),
-                "time.end=2.0",
-            ],
-        );
-        assert!(metric(&summary, "max_coulomb_violation") < 1e-8);
-        assert!(metric(&summary, "max_penetration") < 1e-8);
-        assert!(relative_error(metric(&summary, "aspect_ratio"), 0.7) < 0.05);
-        let layer = metric(&summary, "erodible_thickness");
-        let bed_grains = metric(&summary, "bed_grains");
+    ];
+    // The two runs side by side (each takes one thread at this size).
+    let summaries: Vec<_> = std::thread::scope(|scope| {
+        let runs: Vec<_> = deposits
+            .map(|deposit| {
+                scope.spawn(move || {
+                    let path = format!("particles.block[1].path=\"{deposit}\"");
+                    run("erodible_bed_2d.toml", &[&path, "time.end=2.0"]).0
+                })
+            })
+            .into_iter()
+            .collect();
+        runs.into_iter().map(|r| r.join().unwrap()).collect()
+    });
+    let mut runouts = Vec::new();
+    for (deposit, summary) in deposits.iter().zip(&summaries) {
+        assert!(metric(summary, "max_coulomb_violation") < 1e-8);
+        assert!(metric(summary, "max_penetration") < 1e-8);
+        assert!(relative_error(metric(summary, "aspect_ratio"), 0.7) < 0.05);
+        let layer = metric(summary, "erodible_thickness");
+        let bed_grains = metric(summary, "bed_grains");
         if deposit.contains("no_layer") {
             assert_eq!((layer, bed_grains), (0.0, 0.0));
         } else {
             assert!(relative_error(layer, 3.0 * DIAMETER) < 0.05, "{layer}");
             // The flow sets the layer moving.
-            assert!(metric(&summary, "bed_max_kinetic_to_potential") > 0.0);
+            assert!(metric(summary, "bed_max_kinetic_to_potential") > 0.0);
         }
-        let runout = metric(&summary, "runout");
+        let runout = metric(summary, "runout");
         println!("{deposit}: runout {runout:.3} at t = 2 s");
         runouts.push(runout);
     }
