@@ -220,6 +220,7 @@ impl Hdf5Particles {
             radius: &p.radius[..n],
             contacts: &contacts,
             fixed: &fixed,
+            group: &p.group[..n],
         }
         .write(&self.dir.join(&name), &writers(&self.communicator))?;
         if let Some(index) = &mut self.index {

@@ -27,6 +27,8 @@ pub struct Pouring {
 struct Pour {
     /// Its index in `particles.pour` (for messages).
     index: usize,
+    /// The group of its grains: after those of the blocks.
+    group: u64,
     lower: Vec3,
     upper: Vec3,
     spacing: f64,
@@ -58,7 +60,11 @@ impl Pouring {
             .pour
             .iter()
             .enumerate()
-            .map(|(index, section)| Pour::new(index, section, p.density, p.seed, radii))
+            .map(|(index, section)| {
+                let mut pour = Pour::new(index, section, p.density, p.seed, radii);
+                pour.group = (p.block.len() + index) as u64;
+                pour
+            })
             .collect();
         Pouring { pours }
     }
@@ -125,6 +131,7 @@ impl Pour {
     ) -> Self {
         Pour {
             index,
+            group: index as u64,
             lower: vector(&section.lower),
             upper: vector(&section.upper),
             spacing: section.spacing,
@@ -220,7 +227,7 @@ impl Pour {
             }
         }
         let first_id = system.next_id();
-        system.add_particles(&batch);
+        system.add_particles_in_groups(&batch, &vec![self.group; batch.len()]);
         self.last_batch = first_id..system.next_id();
         self.poured += batch.len();
         self.batches += 1;

@@ -94,22 +94,27 @@ pub fn walls(case: &Case) -> Vec<PlaneWall> {
 
 /// The particles of every generator block, in order, refused where a
 /// moving grain starts inside another ([`initial_overlaps`]).
-pub fn particles(case: &Case) -> Result<Vec<NewParticle>, String> {
-    let (placed, blocks) = particles_by_block(case)?;
+/// The particles of a case's blocks, and the group of each.
+pub fn particles(case: &Case) -> Result<(Vec<NewParticle>, Vec<u64>), String> {
+    let (placed, blocks, groups) = particles_by_block(case)?;
     initial_overlaps::check(&domain(case), &placed, &blocks)?;
-    Ok(placed)
+    Ok((placed, groups))
 }
 
 /// The warning for glued grains placed overlapping each other, if any (a
 /// moving grain placed inside another is an error, [`particles`]).
 pub fn glued_overlap_warning(case: &Case) -> Result<Option<String>, String> {
-    let (placed, blocks) = particles_by_block(case)?;
+    let (placed, blocks, _) = particles_by_block(case)?;
     initial_overlaps::check(&domain(case), &placed, &blocks)
 }
 
-/// The particles of every generator block, in order, and the range each
-/// block made.
-fn particles_by_block(case: &Case) -> Result<(Vec<NewParticle>, Vec<Range<usize>>), String> {
+/// The particles of every generator block, in order, the range each
+/// block made and each particle's group: its block's index, or the
+/// `group` column of a `file` block.
+#[allow(clippy::type_complexity)]
+fn particles_by_block(
+    case: &Case,
+) -> Result<(Vec<NewParticle>, Vec<Range<usize>>, Vec<u64>), String> {
     let p = case.particles_section();
     let dimension = domain(case).dimension;
     let mut rng = Pcg64::seed_from_u64(p.seed);
@@ -119,7 +124,9 @@ fn particles_by_block(case: &Case) -> Result<(Vec<NewParticle>, Vec<Range<usize>
     };
     let mut all: Vec<NewParticle> = Vec::new();
     let mut blocks = Vec::with_capacity(p.block.len());
+    let mut groups = Vec::new();
     for (k, block) in p.block.iter().enumerate() {
+        let mut file_groups = None;
         let made = match block {
             BlockSection::Lattice {
                 lower,
@@ -198,8 +205,10 @@ fn particles_by_block(case: &Case) -> Result<(Vec<NewParticle>, Vec<Range<usize>
                 })
                 .collect(),
             BlockSection::File { path, fixed } => {
-                read_particles(path, dimension, p.density, *fixed)
-                    .map_err(|e| format!("particles.block[{k}] (file {path}): {e}"))?
+                let (read, groups) = read_particles(path, dimension, p.density, *fixed)
+                    .map_err(|e| format!("particles.block[{k}] (file {path}): {e}"))?;
+                file_groups = groups;
+                read
             }
             BlockSection::CollisionPairs {
                 count,
@@ -222,18 +231,24 @@ fn particles_by_block(case: &Case) -> Result<(Vec<NewParticle>, Vec<Range<usize>
             ));
         }
         blocks.push(all.len()..all.len() + made.len());
+        match file_groups.take() {
+            Some(read) => groups.extend(read),
+            None => groups.extend(std::iter::repeat_n(k as u64, made.len())),
+        }
         all.extend(made);
     }
-    Ok((all, blocks))
+    Ok((all, blocks, groups))
 }
 
-/// Reads `x,y[,z],radius[,vx,vy[,vz]]` rows after a header line.
+/// Reads `x,y[,z],radius[,vx,vy[,vz]][,group]` rows after a header line
+/// (the columns of `final_particles.csv`); the groups where the file has
+/// them.
 fn read_particles(
     path: &str,
     dimension: Dimension,
     density: f64,
     fixed: bool,
-) -> Result<Vec<NewParticle>, String> {
+) -> Result<(Vec<NewParticle>, Option<Vec<u64>>), String> {
     let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
     let dim = dimension.count();
     let mut lines = text.lines();
@@ -251,8 +266,11 @@ fn read_particles(
     if header.len() < names.len() || header[..names.len()] != *names {
         return Err(format!("the header must start with {}", names.join(",")));
     }
-    let with_velocity = header.len() >= names.len() + dim;
+    let group_column = header.iter().position(|h| *h == "group");
+    let numbers = header.len() - group_column.is_some() as usize;
+    let with_velocity = numbers >= names.len() + dim;
     let mut out = Vec::new();
+    let mut groups = Vec::new();
     for (n, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
         let values: Result<Vec<f64>, _> =
             line.split(',').map(|v| v.trim().parse::<f64>()).collect();
@@ -270,6 +288,16 @@ fn read_particles(
         } else {
             Vec3::zeros()
         };
+        if let Some(column) = group_column {
+            let group = values.get(column).copied().unwrap_or(f64::NAN);
+            if !(group >= 0.0 && group.fract() == 0.0) {
+                return Err(format!(
+                    "line {}: group must be a whole number ≥ 0, found {group}",
+                    n + 2
+                ));
+            }
+            groups.push(group as u64);
+        }
         out.push(NewParticle {
             position,
             velocity,
@@ -279,7 +307,7 @@ fn read_particles(
             fixed,
         });
     }
-    Ok(out)
+    Ok((out, group_column.map(|_| groups)))
 }
 
 /// Pair k: particle 2k moving with (v_n, Ψ1 v_n) towards particle 2k + 1 at
@@ -406,7 +434,7 @@ pub fn build_with(
     ghost_reach: impl Fn(f64) -> f64,
 ) -> Result<DemSystem, String> {
     let domain = domain(case);
-    let placed = particles(case)?;
+    let (placed, groups) = particles(case)?;
     check_inside(&domain, &placed)?;
     let mut system = DemSystem::new(domain, contact_law(case), walls(case), skin(case));
     system.threads = case.parallel.as_ref().and_then(|p| p.threads);
@@ -435,7 +463,7 @@ pub fn build_with(
         }
     };
     system.decompose(communicator, ranks);
-    system.add_particles(&placed);
+    system.add_particles_in_groups(&placed, &groups);
     Ok(system)
 }
 

@@ -10,6 +10,20 @@ use common::{metric, relative_error, run, run_cli};
 
 const DIAMETER: f64 = 0.008;
 
+/// The grains of `final_particles.csv` in groups 1 and 2.
+fn final_groups(dir: &std::path::Path) -> [usize; 2] {
+    let text = std::fs::read_to_string(dir.join("final_particles.csv")).unwrap();
+    let mut counts = [0; 2];
+    for line in text.lines().skip(1) {
+        match line.rsplit(',').next().unwrap() {
+            "1" => counts[0] += 1,
+            "2" => counts[1] += 1,
+            other => panic!("group {other}"),
+        }
+    }
+    counts
+}
+
 /// The paper's finding in 2D (section 5.1.1, Fig. 9c): on a slope of 22°
 /// the flow goes farther on an erodible layer than on the rigid bed, the
 /// more the thicker the layer (its largest gain, from h_i = 0 to 3 d).
@@ -31,7 +45,7 @@ fn a_column_runs_farther_on_an_erodible_layer_than_on_the_rigid_bed() {
             .map(|deposit| {
                 scope.spawn(move || {
                     let path = format!("particles.block[1].path=\"{deposit}\"");
-                    run("erodible_bed_2d.toml", &[&path, "time.end=2.0"]).0
+                    run("erodible_bed_2d.toml", &[&path, "time.end=2.0"])
                 })
             })
             .into_iter()
@@ -39,12 +53,18 @@ fn a_column_runs_farther_on_an_erodible_layer_than_on_the_rigid_bed() {
         runs.into_iter().map(|r| r.join().unwrap()).collect()
     });
     let mut runouts = Vec::new();
-    for (deposit, summary) in deposits.iter().zip(&summaries) {
+    for (deposit, (summary, dir)) in deposits.iter().zip(&summaries) {
         assert!(metric(summary, "max_coulomb_violation") < 1e-8);
         assert!(metric(summary, "max_penetration") < 1e-8);
         assert!(relative_error(metric(summary, "aspect_ratio"), 0.7) < 0.05);
         let layer = metric(summary, "erodible_thickness");
         let bed_grains = metric(summary, "bed_grains");
+        // Each grain keeps the group it was rained in, the column's (1) or
+        // the layer's (2): final_particles.csv counts them as the analysis
+        // did at the release.
+        let groups = final_groups(dir.path());
+        let column_grains = metric(summary, "column_grains");
+        assert_eq!(groups, [column_grains as usize, bed_grains as usize]);
         if deposit.contains("no_layer") {
             assert_eq!((layer, bed_grains), (0.0, 0.0));
         } else {

@@ -111,6 +111,7 @@ impl ParticleFiles {
             force: &as_arrays(&p.force),
             radius: &p.radius[..n],
             fixed: &fixed,
+            group: &p.group[..n],
         }
         .write(&self.dir.join(&name))
         .map_err(|e| std::io::Error::new(e.kind(), format!("{name}: {e}")))?;
@@ -177,28 +178,31 @@ pub fn write_tracked(
 }
 
 /// `final_particles.csv`: the mobile grains at the end, in the format a
-/// `file` block reads (`x,y[,z],radius,vx,vy[,vz]`), so that a deposit made
-/// by one run is the initial state of others (collective).
+/// `file` block reads (`x,y[,z],radius,vx,vy[,vz],group`), so that a deposit
+/// made by one run is the initial state of others, each grain keeping the
+/// group it was made in (collective).
 pub fn write_final_particles(dir: &Path, system: &DemSystem) -> std::io::Result<()> {
     let p = &system.particles;
     let dim = system.domain.dimension.count();
-    // [id, x, y, z, radius, vx, vy, vz] of each mobile grain, on the root.
+    // [id, x, y, z, radius, vx, vy, vz, group] of each mobile grain, on the
+    // root.
     let mut local = Vec::new();
     for k in (0..p.n_owned).filter(|&k| !p.is_fixed(k)) {
         local.push(f64::from_bits(p.id[k]));
         local.extend(p.position[k].iter());
         local.push(p.radius[k]);
         local.extend(p.velocity[k].iter());
+        local.push(f64::from_bits(p.group[k]));
     }
     let Some(pieces) = system.communicator.gather(&local) else {
         return Ok(());
     };
-    let mut grains: Vec<&[f64]> = pieces.iter().flat_map(|m| m.chunks_exact(8)).collect();
+    let mut grains: Vec<&[f64]> = pieces.iter().flat_map(|m| m.chunks_exact(9)).collect();
     grains.sort_by_key(|g| g[0].to_bits());
     let header = if dim == 2 {
-        "x,y,radius,vx,vy"
+        "x,y,radius,vx,vy,group"
     } else {
-        "x,y,z,radius,vx,vy,vz"
+        "x,y,z,radius,vx,vy,vz,group"
     };
     write_whole(&dir.join("final_particles.csv"), |file| {
         writeln!(file, "{header}")?;
@@ -206,6 +210,7 @@ pub fn write_final_particles(dir: &Path, system: &DemSystem) -> std::io::Result<
             let mut row: Vec<String> = (0..dim).map(|a| format!("{:.17e}", grain[1 + a])).collect();
             row.push(format!("{:.17e}", grain[4]));
             row.extend((0..dim).map(|a| format!("{:.17e}", grain[5 + a])));
+            row.push(grain[8].to_bits().to_string());
             writeln!(file, "{}", row.join(","))?;
         }
         Ok(())

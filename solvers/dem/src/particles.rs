@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// Numbers per particle in a [`Particles::pack_state`] message.
-pub const PACKED_STATE: usize = 35;
+pub const PACKED_STATE: usize = 36;
 /// Numbers per particle in a [`Particles::pack_motion`] message.
 pub const PACKED_MOTION: usize = 15;
 
@@ -16,6 +16,10 @@ pub struct Particles {
     pub n_owned: usize,
     /// Global identifier, stable over the run (ghosts carry their owner's).
     pub id: Vec<u64>,
+    /// The group the particle was made in: the index of its block in the
+    /// case's `particles.block` (or the group a `file` block read with it),
+    /// so that the particle files tell a column's grains from a bed's.
+    pub group: Vec<u64>,
     pub position: Vec<Vec3>,
     pub velocity: Vec<Vec3>,
     pub angular_velocity: Vec<Vec3>,
@@ -86,7 +90,7 @@ impl Particles {
     }
 
     /// Appends an owned particle (no ghosts may exist yet).
-    pub fn push(&mut self, dimension: Dimension, id: u64, new: &NewParticle) {
+    pub fn push(&mut self, dimension: Dimension, id: u64, group: u64, new: &NewParticle) {
         assert_eq!(
             self.n_owned,
             self.len(),
@@ -94,6 +98,7 @@ impl Particles {
         );
         let (mass, inertia) = mass_and_inertia(dimension, new.radius, new.density);
         self.id.push(id);
+        self.group.push(group);
         self.position.push(new.position);
         self.velocity.push(if new.fixed {
             Vec3::zeros()
@@ -126,6 +131,7 @@ impl Particles {
     pub fn clear_ghosts(&mut self) {
         let n = self.n_owned;
         self.id.truncate(n);
+        self.group.truncate(n);
         self.position.truncate(n);
         self.velocity.truncate(n);
         self.angular_velocity.truncate(n);
@@ -145,6 +151,7 @@ impl Particles {
     /// Appends a ghost copy of particle `source` displaced by `shift`.
     pub fn push_ghost(&mut self, source: usize, shift: Vec3) {
         self.id.push(self.id[source]);
+        self.group.push(self.group[source]);
         self.position.push(self.position[source] + shift);
         self.velocity.push(self.velocity[source]);
         self.angular_velocity.push(self.angular_velocity[source]);
@@ -172,6 +179,7 @@ impl Particles {
             *values = permuted(values, order);
         }
         apply(&mut self.id, order);
+        apply(&mut self.group, order);
         apply(&mut self.position, order);
         apply(&mut self.velocity, order);
         apply(&mut self.angular_velocity, order);
@@ -196,7 +204,8 @@ impl Particles {
     }
 
     /// Appends the whole state of particle `k`, displaced by `shift`, to a
-    /// message ([`PACKED_STATE`] numbers; the id travels as its bits).
+    /// message ([`PACKED_STATE`] numbers; the id and the group travel as
+    /// their bits).
     pub fn pack_state(&self, k: usize, shift: Vec3, message: &mut Vec<f64>) {
         message.push(f64::from_bits(self.id[k]));
         message.extend((self.position[k] + shift).iter());
@@ -219,6 +228,7 @@ impl Particles {
         ] {
             message.extend(v.iter());
         }
+        message.push(f64::from_bits(self.group[k]));
     }
 
     /// Appends a particle from a [`Particles::pack_state`] message: an owned
@@ -244,6 +254,7 @@ impl Particles {
         self.dem_start_velocity.push(vector(26));
         self.inner_fluid_momentum.push(vector(29));
         self.inner_fluid_angular_momentum.push(vector(32));
+        self.group.push(packed[35].to_bits());
         if owned {
             self.n_owned += 1;
         }

@@ -205,8 +205,14 @@ impl DemSystem {
     /// every rank passes the same list and keeps those it owns). Ids follow
     /// the order of the list over all ranks.
     pub fn add_particles(&mut self, new: &[NewParticle]) {
+        self.add_particles_in_groups(new, &vec![0; new.len()]);
+    }
+
+    /// [`DemSystem::add_particles`], particle k in group `groups[k]`.
+    pub fn add_particles_in_groups(&mut self, new: &[NewParticle], groups: &[u64]) {
+        assert_eq!(new.len(), groups.len(), "one group per particle");
         self.particles.clear_ghosts();
-        for particle in new {
+        for (particle, &group) in new.iter().zip(groups) {
             let mut p = particle.clone();
             if self.dimension() == Dimension::Two {
                 p.position.z = 0.0;
@@ -217,7 +223,8 @@ impl DemSystem {
             let mut centre = p.position;
             self.domain.wrap(&mut centre);
             if self.subdomain.owns(&self.domain, &centre) {
-                self.particles.push(self.domain.dimension, self.next_id, &p);
+                self.particles
+                    .push(self.domain.dimension, self.next_id, group, &p);
             }
             self.next_id += 1;
         }

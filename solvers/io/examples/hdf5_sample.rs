@@ -83,6 +83,7 @@ fn main() -> std::io::Result<()> {
         let (position, velocity, spin, force) = (v(0.1), v(-1.0), v(2.0), v(0.5));
         let radius: Vec<f64> = id.iter().map(|&k| 0.01 * (1.0 + k as f64)).collect();
         let fixed: Vec<u8> = id.iter().map(|&k| u8::from(k == 0)).collect();
+        let group = vec![0u64; id.len()];
         let contacts: Vec<u32> = id.iter().map(|&k| (k % 4) as u32).collect();
         let count = ParticleFrameH5 {
             time,
@@ -94,6 +95,7 @@ fn main() -> std::io::Result<()> {
             radius: &radius,
             contacts: &contacts,
             fixed: &fixed,
+            group: &group,
         }
         .write(&dir.join(format!("{name}.h5")), &writers)?;
         index.add_particles(time, &format!("{name}.h5"), count)?;
@@ -105,6 +107,7 @@ fn main() -> std::io::Result<()> {
             force: &force,
             radius: &radius,
             fixed: &fixed,
+            group: &group,
         }
         .write(&dir.join(format!("{name}.vtp")))?;
         pvd.add(time, &format!("{name}.vtp"))?;

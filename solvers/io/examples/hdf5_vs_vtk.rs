@@ -137,6 +137,7 @@ fn main() -> std::io::Result<()> {
         .map(|&k| 1e-3 * (1.0 + (k % 10) as f64 * 0.01))
         .collect();
     let fixed = vec![0u8; id.len()];
+    let group = vec![0u64; id.len()];
     let contacts: Vec<u32> = id.iter().map(|&k| (k % 7) as u32).collect();
     let piece = |r: usize| format!("particles_{r:04}.vtp");
     let vtk_files: Vec<PathBuf> = if ranks == 1 {
@@ -155,6 +156,7 @@ fn main() -> std::io::Result<()> {
             force: &force,
             radius: &radius,
             fixed: &fixed,
+            group: &group,
         }
         .write(&vtk_files[rank])?;
         if ranks > 1 {
@@ -178,6 +180,7 @@ fn main() -> std::io::Result<()> {
             radius: &radius,
             contacts: &contacts,
             fixed: &fixed,
+            group: &group,
         }
         .write(&h5, &writers)
         .map(|_| ())

@@ -26,6 +26,8 @@ pub struct ParticleFrame<'a> {
     pub force: &'a [[f64; 3]],
     pub radius: &'a [f64],
     pub fixed: &'a [u8],
+    /// The group each grain was made in (its block of the case file).
+    pub group: &'a [u64],
 }
 
 impl ParticleFrame<'_> {
@@ -49,6 +51,7 @@ impl ParticleFrame<'_> {
             data.declare(out, "radius", 1, Array::F64(self.radius))?;
             data.declare(out, "id", 1, Array::U64(self.id))?;
             data.declare(out, "fixed", 1, Array::U8(self.fixed))?;
+            data.declare(out, "group", 1, Array::U64(self.group))?;
             data.declare(out, "velocity", 3, Array::F64(self.velocity.as_flattened()))?;
             let spin = Array::F64(self.angular_velocity.as_flattened());
             data.declare(out, "angular_velocity", 3, spin)?;
@@ -83,6 +86,7 @@ pub fn write_particle_pieces_index(path: &Path, pieces: &[String]) -> std::io::R
             ("radius", "Float64", 1),
             ("id", "UInt64", 1),
             ("fixed", "UInt8", 1),
+            ("group", "UInt64", 1),
             ("velocity", "Float64", 3),
             ("angular_velocity", "Float64", 3),
             ("force", "Float64", 3),

@@ -150,6 +150,7 @@ mod tests {
             force: &[[1e-9; 3]; 2],
             radius: &[1e-3, 2e-3],
             fixed: &[0, 1],
+            group: &[3, 0],
         };
         let path = dir.join("p.vtp");
         frame.write(&path).unwrap();
@@ -157,6 +158,7 @@ mod tests {
         assert_eq!(file.arrays["position"].f64s(), position.as_flattened());
         assert_eq!(file.arrays["radius"].f64s(), [1e-3, 2e-3]);
         assert_eq!(file.arrays["fixed"].bytes, [0, 1]);
+        assert_eq!(file.arrays["group"].bytes[..8], 3u64.to_le_bytes());
         let id = &file.arrays["id"];
         assert_eq!(id.vtk_type, "UInt64");
         assert_eq!(id.bytes[8..], u64::MAX.to_le_bytes());

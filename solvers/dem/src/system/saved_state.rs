@@ -22,6 +22,7 @@ impl Particles {
         let name = |field: &str| format!("{prefix}.{field}");
         state.put_usize(&name("n_owned"), self.n_owned);
         state.put_u64s(&name("id"), &self.id);
+        state.put_u64s(&name("group"), &self.group);
         for (field, values) in [
             ("position", &self.position),
             ("velocity", &self.velocity),
@@ -55,6 +56,7 @@ impl Particles {
         let particles = Particles {
             n_owned: state.take_usize(&name("n_owned"))?,
             id: state.take_u64s(&name("id"))?,
+            group: state.take_u64s(&name("group"))?,
             position: state.take_vec3s(&name("position"))?,
             velocity: state.take_vec3s(&name("velocity"))?,
             angular_velocity: state.take_vec3s(&name("angular_velocity"))?,
@@ -73,6 +75,7 @@ impl Particles {
         };
         let len = particles.id.len();
         let lengths = [
+            particles.group.len(),
             particles.position.len(),
             particles.velocity.len(),
             particles.angular_velocity.len(),

@@ -5,7 +5,8 @@
 //!   float64 `[n, 3]`;
 //! - `radius`: float64 `[n]`; `id`: uint64 `[n]`; `contacts` (grain–grain
 //!   contacts at the last force evaluation, the coordination number):
-//!   uint32 `[n]`; `fixed` (1 for a glued grain): uint8 `[n]`;
+//!   uint32 `[n]`; `fixed` (1 for a glued grain): uint8 `[n]`; `group`
+//!   (the block of the case file each grain was made in): uint64 `[n]`;
 //! - the attributes `time` [s] and `count` (`n`) on the root.
 //!
 //! On several ranks the grains of rank r follow those of ranks 0..r: its
@@ -32,6 +33,8 @@ pub struct ParticleFrameH5<'a> {
     pub contacts: &'a [u32],
     /// 1 for a fixed (glued) grain, else 0.
     pub fixed: &'a [u8],
+    /// The group each grain was made in.
+    pub group: &'a [u64],
 }
 
 impl ParticleFrameH5<'_> {
@@ -48,6 +51,7 @@ impl ParticleFrameH5<'_> {
             ("force", self.force.len()),
             ("contacts", self.contacts.len()),
             ("fixed", self.fixed.len()),
+            ("group", self.group.len()),
         ];
         for (name, len) in lengths {
             check_name(path, name)?;
@@ -76,6 +80,7 @@ impl ParticleFrameH5<'_> {
             column_of(file, writers, "id", self.id, total, start)?;
             column_of(file, writers, "contacts", self.contacts, total, start)?;
             column_of(file, writers, "fixed", self.fixed, total, start)?;
+            column_of(file, writers, "group", self.group, total, start)?;
             scalar_attribute(file, "time", &self.time)?;
             scalar_attribute(file, "count", &(total as u64))?;
             Ok(())

@@ -144,7 +144,12 @@ impl XdmfIndex {
         let _ = writeln!(xml, r#"<Geometry GeometryType="XYZ">"#);
         xml.push_str(&data_item(file, "position", &[count, 3], FLOAT));
         xml.push_str("</Geometry>\n");
-        for (name, kind) in [("radius", FLOAT), ("id", UINT64), ("contacts", UINT32)] {
+        for (name, kind) in [
+            ("radius", FLOAT),
+            ("id", UINT64),
+            ("group", UINT64),
+            ("contacts", UINT32),
+        ] {
             xml.push_str(&attribute(file, name, "Scalar", "Node", &[count], kind));
         }
         xml.push_str(&attribute(file, "fixed", "Scalar", "Node", &[count], UINT8));
