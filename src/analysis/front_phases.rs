@@ -9,7 +9,8 @@
 //! - the front speed v_f is the central difference of r_f, averaged over a
 //!   window of `smoothing` seconds (the front advances grain by grain);
 //! - the acceleration ends at the largest v_f;
-//! - the front stops when v_f falls below the rest speed for good;
+//! - the front stops when v_f falls below the rest speed for good (and
+//!   stays there three smoothing windows at least before the run ends);
 //! - the deceleration ends at the knee of v_f between its maximum and the
 //!   stop (or the end of the run): the sample farthest below the chord
 //!   that joins them;
@@ -58,8 +59,14 @@ pub fn front_phases(times: &[f64], front: &[f64], smoothing: f64, rest_speed: f6
     let top = (0..n)
         .max_by(|&a, &b| speed[a].total_cmp(&speed[b]))
         .unwrap();
-    // From the stop on, v_f stays below the rest speed.
-    let stop = (top..n).rev().take_while(|&k| speed[k] < rest_speed).last();
+    // From the stop on, v_f stays below the rest speed, for three
+    // smoothing windows at least (a front that paused as the run ended
+    // may go on).
+    let stop = (top..n)
+        .rev()
+        .take_while(|&k| speed[k] < rest_speed)
+        .last()
+        .filter(|&k| times[n - 1] - times[k] >= 3.0 * smoothing);
     let end = stop.unwrap_or(n - 1);
     let mut phases = FrontPhases {
         max_speed: speed[top],
@@ -161,6 +168,14 @@ mod tests {
         assert!(phases.slow_phase);
         let slow = phases.slow_phase_speed.unwrap();
         assert!((slow / 0.2 - 1.0).abs() < 0.02, "slow speed {slow}");
+        assert_eq!(phases.stop_time, None);
+        // Paused for the last 0.1 s of the run: not stopped.
+        let mut paused = front.clone();
+        let end = paused.len() - 1;
+        for k in end - 10..=end {
+            paused[k] = front[end - 10];
+        }
+        let phases = front_phases(&times, &paused, 0.05, 0.01);
         assert_eq!(phases.stop_time, None);
     }
 
