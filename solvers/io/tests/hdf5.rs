@@ -151,6 +151,7 @@ struct Grains {
     radius: Vec<f64>,
     contacts: Vec<u32>,
     fixed: Vec<u8>,
+    group: Vec<u64>,
 }
 
 fn grains(ids: impl Iterator<Item = u64>) -> Grains {
@@ -168,6 +169,7 @@ fn grains(ids: impl Iterator<Item = u64>) -> Grains {
         radius: id.iter().map(|&n| 1e-3 * (1.0 + n as f64)).collect(),
         contacts: id.iter().map(|&n| (n % 7) as u32).collect(),
         fixed: id.iter().map(|&n| u8::from(n % 5 == 0)).collect(),
+        group: id.iter().map(|&n| n % 3).collect(),
         id,
     }
 }
@@ -183,6 +185,7 @@ fn write_grains(path: &Path, writers: &Writers, time: f64, g: &Grains) -> std::i
         radius: &g.radius,
         contacts: &g.contacts,
         fixed: &g.fixed,
+        group: &g.group,
     }
     .write(path, writers)
 }
@@ -209,6 +212,8 @@ fn assert_particle_frame(path: &Path, expected: &Grains, time: f64) {
     assert_eq!(contacts, expected.contacts);
     let fixed: Vec<u8> = file.dataset("fixed").unwrap().read_raw().unwrap();
     assert_eq!(fixed, expected.fixed);
+    let group: Vec<u64> = file.dataset("group").unwrap().read_raw().unwrap();
+    assert_eq!(group, expected.group);
     let written: f64 = file.attr("time").unwrap().read_scalar().unwrap();
     assert_eq!(written, time);
     let count: u64 = file.attr("count").unwrap().read_scalar().unwrap();
@@ -480,6 +485,7 @@ fn the_xdmf_indices_list_every_frame_with_its_time_shapes_and_datasets() {
         [
             ("radius", "Node"),
             ("id", "Node"),
+            ("group", "Node"),
             ("contacts", "Node"),
             ("fixed", "Node"),
             ("velocity", "Node"),
