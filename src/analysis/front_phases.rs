@@ -171,10 +171,8 @@ mod tests {
         assert_eq!(phases.stop_time, None);
         // Paused for the last 0.1 s of the run: not stopped.
         let mut paused = front.clone();
-        let end = paused.len() - 1;
-        for k in end - 10..=end {
-            paused[k] = front[end - 10];
-        }
+        let held = paused.len() - 11;
+        paused[held..].fill(front[held]);
         let phases = front_phases(&times, &paused, 0.05, 0.01);
         assert_eq!(phases.stop_time, None);
     }
