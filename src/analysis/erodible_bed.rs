@@ -16,15 +16,19 @@
 //! at the release: h(x), the solid volume of the mobile grains per unit
 //! length in bins [`BIN_DIAMETERS`] mean diameters wide, is compared with
 //! h(x) at the release, and the front is the position beyond which the
-//! raised volume, ∫ max(h − h_release, 0) dx from the end of the channel,
-//! amounts to [`FRONT_GRAINS`] mean grains (interpolated within its bin).
-//! Static grains of the bed ahead do not raise it; a few grains rolling
-//! ahead of the flow do not make the front; and it moves continuously as
-//! the flow carries mass forwards. (The leading edge of the largest linked
-//! set of moving grains, tried first, jumped by R0 at a time with 410
-//! discs of 8 mm: the head of a thin flow stops and starts in clusters.)
-//! Without an erodible layer it is the leading edge of the spreading mass,
-//! less a few grains.
+//! raised volume of the flowing bins (their grains' mean u_x at
+//! `flowing_speed` or more), ∫ max(h − h_release, 0) dx from the end of
+//! the channel, amounts to [`FRONT_GRAINS`] mean grains (interpolated
+//! within its bin); r_f(t) is the farthest such position so far. Static
+//! grains of the bed ahead do not raise it, even where the bed dilated
+//! (a layer of 10 diameters released at 22° swelled by more than five
+//! grains' volume a metre ahead of the flow, which made the front jump
+//! there when static bins counted); a few grains rolling ahead of the flow
+//! do not make the front; and it moves continuously as the flow carries
+//! mass forwards. (The leading edge of the largest linked set of moving
+//! grains, tried first, jumped by R0 at a time with 410 discs of 8 mm: the
+//! head of a thin flow stops and starts in clusters.) Without an erodible
+//! layer it is the leading edge of the spreading mass, less a few grains.
 
 use super::front_phases::{front_phases, FrontPhases};
 use grainflow_core::{Dimension, Vec3};
@@ -153,14 +157,20 @@ impl ErodibleBed {
         let bins = Bins::new(system, release.diameter);
         if after >= self.next_sample {
             let heights = bins.heights(&grains);
+            let flowing = bins.flowing(&grains, self.settings.flowing_speed);
             let grain = grains.mean_volume_per_span();
+            let reached = self
+                .samples
+                .last()
+                .map_or(self.gate, |s| self.back + s.front);
             let front = raised_front(
                 &bins,
                 &heights,
                 &release.initial_heights,
+                &flowing,
                 FRONT_GRAINS * grain,
             )
-            .unwrap_or(self.gate);
+            .map_or(reached, |x| x.max(reached));
             let (bed_kinetic, bed_potential) = bed_energies(system, &release.bed_ids);
             self.samples.push(Sample {
                 time: after,
@@ -455,14 +465,38 @@ impl Bins {
         }
         h
     }
+
+    /// Whether the mobile grains centred in each bin move down the slope
+    /// at `speed` or faster on average (mass-weighted).
+    fn flowing(&self, grains: &Grains, speed: f64) -> Vec<bool> {
+        let mut momentum = vec![0.0; self.count];
+        let mut mass = vec![0.0; self.count];
+        for k in 0..grains.centre.len() {
+            if !grains.fixed[k] {
+                let b = self.of(grains.centre[k].x);
+                momentum[b] += grains.mass[k] * grains.velocity_x[k];
+                mass[b] += grains.mass[k];
+            }
+        }
+        (0..self.count)
+            .map(|b| mass[b] > 0.0 && momentum[b] >= speed * mass[b])
+            .collect()
+    }
 }
 
 /// The position beyond which the volume (per unit span) of the mobile
-/// grains above their h at the release, `∫ max(h − initial, 0) dx` from
-/// the end of the channel, reaches `volume`; `None` where it nowhere does.
-fn raised_front(bins: &Bins, heights: &[f64], initial: &[f64], volume: f64) -> Option<f64> {
+/// grains above their h at the release in the `flowing` bins,
+/// `∫ max(h − initial, 0) dx` from the end of the channel, reaches
+/// `volume`; `None` where it nowhere does.
+fn raised_front(
+    bins: &Bins,
+    heights: &[f64],
+    initial: &[f64],
+    flowing: &[bool],
+    volume: f64,
+) -> Option<f64> {
     let mut beyond = 0.0;
-    for b in (0..bins.count).rev() {
+    for b in (0..bins.count).rev().filter(|&b| flowing[b]) {
         let raised = (heights[b] - initial[b]).max(0.0) * bins.width;
         if beyond + raised >= volume {
             // Uniform within the bin: the share still needed from its end.
@@ -636,14 +670,45 @@ mod tests {
         };
         let heights = [1.0, 1.0, 1.0, 1.0, 0.25];
         let initial = [0.0, 0.0, 0.0, 1.0, 0.0];
+        let all = [true; 5];
         // 0.5 beyond x = 8, none in [6, 8), then 2 in [4, 6): the other
         // 1.5 lie in [4.5, 6).
-        let front = raised_front(&bins, &heights, &initial, 2.0);
+        let front = raised_front(&bins, &heights, &initial, &all, 2.0);
         assert!((front.unwrap() - 4.5).abs() < 1e-12, "{front:?}");
         // Less than the whole raised volume (6.5) in all: no front.
-        assert_eq!(raised_front(&bins, &heights, &initial, 7.0), None);
+        assert_eq!(raised_front(&bins, &heights, &initial, &all, 7.0), None);
         // Mass removed (eroded) raises nothing.
-        assert_eq!(raised_front(&bins, &initial, &heights, 1.1), None);
+        assert_eq!(raised_front(&bins, &initial, &heights, &all, 1.1), None);
+        // The bin [8, 10) raised but static (a dilated bed): the 2 lie in
+        // [4, 6) alone.
+        let static_ahead = [true, true, true, true, false];
+        let front = raised_front(&bins, &heights, &initial, &static_ahead, 2.0);
+        assert!((front.unwrap() - 4.0).abs() < 1e-12, "{front:?}");
+    }
+
+    #[test]
+    fn a_bin_flows_where_its_grains_move_down_the_slope_on_average() {
+        // Unit discs: three at rest and one at 1 m/s in [0, 2), four at
+        // 0.005 m/s in [2, 4), none in [4, 6).
+        let g = grains(
+            &[
+                [0.5, 0.5],
+                [1.5, 0.5],
+                [0.5, 1.5],
+                [1.5, 1.5],
+                [2.5, 0.5],
+                [3.5, 0.5],
+                [2.5, 1.5],
+                [3.5, 1.5],
+            ],
+            &[0.0, 0.0, 0.0, 1.0, 0.005, 0.005, 0.005, 0.005],
+        );
+        let bins = Bins {
+            lower: 0.0,
+            width: 2.0,
+            count: 3,
+        };
+        assert_eq!(bins.flowing(&g, 0.01), [true, false, false]);
     }
 
     #[test]
