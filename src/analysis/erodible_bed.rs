@@ -145,10 +145,10 @@ impl ErodibleBed {
     }
 
     pub(super) fn after_step(&mut self, system: &DemSystem) {
-        let after = system.time - self.release_time;
-        if after < 0.0 {
+        if !self.wants_grains(system.time) {
             return;
         }
+        let after = system.time - self.release_time;
         if self.release.is_none() {
             self.release = Some(self.at_release(system));
         }
