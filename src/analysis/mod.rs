@@ -1,6 +1,7 @@
 //! Case-specific measurements, reported under `"metrics"` in `summary.json`
 //! and as CSV tables beside it.
 
+mod channel_grains;
 mod column_collapse;
 mod erodible_bed;
 mod front_phases;
