@@ -66,10 +66,10 @@ pub fn report(case: &Case) -> Result<String, RunError> {
     let model = match hard.as_ref().map(|h| h.method) {
         None => "soft-sphere DEM (linear spring-dashpot, tangential history, Coulomb)".to_string(),
         Some(Method::Cocd) => {
-            let solver = match hard.as_ref().map(|h| h.conic_solver_for(&system)) {
-                Some(ConicSolver::InteriorPoint) => "grainflow's interior point",
-                _ => "Clarabel",
-            };
+            let solver = hard
+                .as_ref()
+                .map_or(ConicSolver::Clarabel, |h| h.conic_solver_for(&system))
+                .name();
             format!("hard contact: COCD, one conic program per step ({solver}), inelastic, Coulomb's cone")
         }
         Some(Method::Nscd { restitution }) => format!(

@@ -61,9 +61,8 @@ impl Pouring {
             .iter()
             .enumerate()
             .map(|(index, section)| {
-                let mut pour = Pour::new(index, section, p.density, p.seed, radii);
-                pour.group = (p.block.len() + index) as u64;
-                pour
+                let group = (p.block.len() + index) as u64;
+                Pour::new(index, group, section, p.density, p.seed, radii)
             })
             .collect();
         Pouring { pours }
@@ -124,6 +123,7 @@ impl Pouring {
 impl Pour {
     fn new(
         index: usize,
+        group: u64,
         section: &PourSection,
         density: f64,
         seed: u64,
@@ -131,7 +131,7 @@ impl Pour {
     ) -> Self {
         Pour {
             index,
-            group: index as u64,
+            group,
             lower: vector(&section.lower),
             upper: vector(&section.upper),
             spacing: section.spacing,

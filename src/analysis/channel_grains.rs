@@ -1,7 +1,7 @@
 //! The grains of a channel in bins along the slope and in layers across
 //! it: the mass profile h(x), which bins flow, the raised volume that
-//! places a front, the highest grain surfaces, and the velocity profile
-//! u_x(z) with its static/flowing interface ([`super::ErodibleBed`]).
+//! places a front, and the velocity profile u_x(z) with its static/flowing
+//! interface ([`super::ErodibleBed`]).
 
 use super::erodible_bed::{BIN_DIAMETERS, PROBE_DIAMETERS};
 use grainflow_core::{Dimension, Vec3};
@@ -150,31 +150,6 @@ pub(super) fn raised_front(
         beyond += raised;
     }
     None
-}
-
-/// The highest grain surface above the rigid bed's floor in each bin of
-/// `width` between `from` and `to`, over the bins that hold a grain.
-pub(super) fn column_tops(
-    grains: &Grains,
-    mobile: &[usize],
-    from: f64,
-    to: f64,
-    width: f64,
-) -> Vec<f64> {
-    let count = (((to - from) / width).round() as usize).max(1);
-    let mut top = vec![f64::NAN; count];
-    for &k in mobile {
-        let x = grains.centre[k].x;
-        if x < from || x > to {
-            continue;
-        }
-        let b = (((x - from) / (to - from) * count as f64) as usize).min(count - 1);
-        let h = grains.height(k) + grains.radius[k];
-        if top[b].is_nan() || h > top[b] {
-            top[b] = h;
-        }
-    }
-    top.into_iter().filter(|h| !h.is_nan()).collect()
 }
 
 /// Mass-weighted mean u_x of the mobile grains within a window of

@@ -30,11 +30,10 @@
 //! head of a thin flow stops and starts in clusters.) Without an erodible
 //! layer it is the leading edge of the spreading mass, less a few grains.
 
-use super::channel_grains::{
-    column_tops, raised_front, static_flowing, velocity_layers, Bins, Grains,
-};
+use super::channel_grains::{raised_front, static_flowing, velocity_layers, Bins, Grains};
 use super::front_phases::{front_phases, FrontPhases};
-use grainflow_core::Vec3;
+use crate::deposit;
+use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::DemSystem;
 use grainflow_io::write_whole;
 use serde_json::{json, Map, Value};
@@ -158,8 +157,8 @@ impl ErodibleBed {
         let grains = Grains::of(system);
         let release = self.release.as_ref().expect("set above");
         let bins = Bins::new(system, release.diameter);
+        let heights = bins.heights(&grains);
         if after >= self.next_sample {
-            let heights = bins.heights(&grains);
             let flowing = bins.flowing(&grains, self.settings.flowing_speed);
             let grain = grains.mean_volume_per_span();
             let reached = self
@@ -188,7 +187,6 @@ impl ErodibleBed {
                 break;
             }
             self.mass_profile_times.pop();
-            let heights = bins.heights(&grains);
             for (b, h) in heights.iter().enumerate() {
                 let x = bins.centre(b);
                 self.mass_profiles
@@ -243,9 +241,28 @@ impl ErodibleBed {
             .map(|&k| p.id[k])
             .collect();
         bed_ids.sort_unstable();
+        // The mean of the highest grain surfaces in cells two diameters
+        // wide (and spanwise in 3D), as for a column collapse's H0.
+        let centres: Vec<Vec3> = mobile.iter().map(|&k| grains.centre[k]).collect();
+        let radii: Vec<f64> = mobile.iter().map(|&k| grains.radius[k]).collect();
+        let spanwise = (system.domain.dimension == Dimension::Three).then(|| {
+            let axis = 3 - grains.normal;
+            (
+                axis,
+                system.domain.lower[axis],
+                system.domain.extent()[axis],
+            )
+        });
         let mean_top = |from: f64, to: f64| {
-            let tops = column_tops(&grains, &mobile, from, to, BIN_DIAMETERS * diameter);
-            tops.iter().sum::<f64>() / tops.len().max(1) as f64
+            deposit::mean_top(
+                &centres,
+                &radii,
+                [from, to],
+                BIN_DIAMETERS * diameter,
+                grains.normal,
+                grains.floor,
+                spanwise,
+            )
         };
         let far = mobile
             .iter()

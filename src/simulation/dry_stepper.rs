@@ -5,7 +5,7 @@
 use super::dry::{check_time_step, time_step};
 use crate::case::Case;
 use crate::{scene, RunError};
-use grainflow_contact::{ConicSolver, HardContact, Method, StepReport};
+use grainflow_contact::{HardContact, Method, StepReport};
 use grainflow_core::{State, StateError};
 use grainflow_dem::DemSystem;
 use serde_json::{json, Map, Value};
@@ -112,10 +112,7 @@ impl DryStepper {
             DryStepper::Hard { contact, .. } => {
                 let scheme = match contact.method {
                     Method::Cocd => {
-                        let solver = match contact.conic_solver_for(system) {
-                            ConicSolver::InteriorPoint => "grainflow's interior point",
-                            ConicSolver::Clarabel => "Clarabel",
-                        };
+                        let solver = contact.conic_solver_for(system).name();
                         format!("COCD (conic program per step, {solver})")
                     }
                     Method::Nscd { restitution } => {

@@ -130,6 +130,16 @@ pub enum ConicSolver {
     Clarabel,
 }
 
+impl ConicSolver {
+    /// Its name in the log and in `check`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ConicSolver::InteriorPoint => "grainflow's interior point",
+            ConicSolver::Clarabel => "Clarabel",
+        }
+    }
+}
+
 /// The step's program in Clarabel's standard form.
 pub struct ConicProgram {
     /// Diagonal of P = M̃ and the free velocity Ũ (q = −M̃Ũ).
