@@ -317,7 +317,7 @@ pub fn build(
     ConicProgram {
         mass,
         free,
-        a_matrix: CscMatrix::new_from_triplets(rows, columns, row_index, col_index, values),
+        a_matrix: csc_from_triplets(rows, columns, &row_index, &col_index, &values),
         b,
         linear_rows,
         cone_count,
@@ -326,6 +326,48 @@ pub fn build(
         dimension,
         scales: *scales,
     }
+}
+
+/// The CSC matrix of the triplets (r, c, v), repeated entries summed in
+/// the order given: what Clarabel's `new_from_triplets` builds, by a
+/// counting sort over the columns and a sort of each short column, instead
+/// of a sort of all the triplets (5 % of a 2D step at 2,000 discs).
+fn csc_from_triplets(
+    rows: usize,
+    columns: usize,
+    row_index: &[usize],
+    col_index: &[usize],
+    values: &[f64],
+) -> CscMatrix<f64> {
+    let mut start = vec![0usize; columns + 1];
+    for &c in col_index {
+        start[c + 1] += 1;
+    }
+    for c in 0..columns {
+        start[c + 1] += start[c];
+    }
+    let mut next = start.clone();
+    let mut entries = vec![(0usize, 0.0); values.len()];
+    for ((&r, &c), &v) in row_index.iter().zip(col_index).zip(values) {
+        entries[next[c]] = (r, v);
+        next[c] += 1;
+    }
+    let mut colptr = vec![0usize; columns + 1];
+    let (mut rowval, mut nzval) = (Vec::with_capacity(values.len()), Vec::with_capacity(values.len()));
+    for c in 0..columns {
+        let column = &mut entries[start[c]..start[c + 1]];
+        column.sort_by_key(|&(r, _)| r); // stable: repeated entries keep their order
+        for (k, &(r, v)) in column.iter().enumerate() {
+            if k > 0 && column[k - 1].0 == r {
+                *nzval.last_mut().expect("an entry before") += v;
+            } else {
+                rowval.push(r);
+                nzval.push(v);
+            }
+        }
+        colptr[c + 1] = rowval.len();
+    }
+    CscMatrix::new(rows, columns, colptr, rowval, nzval)
 }
 
 /// Solves the program with Clarabel: (x, z, iterations, reduced accuracy).
@@ -446,4 +488,32 @@ fn recover(
         out.tangential_impulse[a] = tangential * unit;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Repeated entries summed in the same order as Clarabel's builder, so
+    /// that a program is bitwise the same whichever builds it.
+    #[test]
+    fn triplets_make_the_same_matrix_as_clarabels_builder() {
+        let (rows, columns) = (7, 5);
+        let mut state = 12345u64;
+        let mut next = |bound: usize| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 33) as usize) % bound
+        };
+        let (mut r, mut c, mut v) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..60 {
+            r.push(next(rows));
+            c.push(next(columns));
+            v.push(0.1 + k as f64 / 7.0);
+        }
+        let ours = csc_from_triplets(rows, columns, &r, &c, &v);
+        let clarabels = CscMatrix::new_from_triplets(rows, columns, r, c, v);
+        assert_eq!(ours.colptr, clarabels.colptr);
+        assert_eq!(ours.rowval, clarabels.rowval);
+        assert_eq!(ours.nzval, clarabels.nzval);
+    }
 }
