@@ -28,7 +28,7 @@
 //! the data and the duality gap relative to the objective, all below ε.
 
 use crate::cocd::ConicProgram;
-use crate::normal_factor::NormalFactor;
+use crate::normal_factor::{is_factorised_whole, NormalFactor};
 use clarabel::algebra::CscMatrix;
 
 /// Fraction of the distance to the boundary of the cone taken by a step.
@@ -45,8 +45,10 @@ struct NormalPattern {
     pair_position: Vec<usize>,
     diagonal_position: Vec<usize>,
     matrix: CscMatrix<f64>,
-    /// Unknown of the program of each column (the AMD order).
+    /// Unknown of the program of each column (the AMD order where the
+    /// factor is whole, else the program's).
     order: Vec<usize>,
+    ordered: bool,
 }
 
 impl NormalPattern {
@@ -73,16 +75,24 @@ impl NormalPattern {
         // The unknowns renumbered by a fill-reducing ordering (AMD) of the
         // normal matrix's graph, once per step: the factor then takes the
         // matrix as assembled, with no permutation at each iteration.
-        let (colptr, rowval) = upper_pattern(&row_start, &row_column, columns);
-        let order = minimum_degree_order(&colptr, &rowval, columns);
-        let mut label = vec![0usize; columns];
-        for (new, &old) in order.iter().enumerate() {
-            label[old] = new;
-        }
-        for c in row_column.iter_mut() {
-            *c = label[*c];
-        }
-        let (colptr, rowval) = upper_pattern(&row_start, &row_column, columns);
+        // A split factor orders each half itself: the unknowns keep their
+        // numbers.
+        let (mut colptr, mut rowval) = upper_pattern(&row_start, &row_column, columns);
+        let ordered = is_factorised_whole(columns);
+        let order = if ordered {
+            let order = minimum_degree_order(&colptr, &rowval, columns);
+            let mut label = vec![0usize; columns];
+            for (new, &old) in order.iter().enumerate() {
+                label[old] = new;
+            }
+            for c in row_column.iter_mut() {
+                *c = label[*c];
+            }
+            (colptr, rowval) = upper_pattern(&row_start, &row_column, columns);
+            order
+        } else {
+            (0..columns).collect()
+        };
         let position = |row: usize, col: usize| -> usize {
             let range = colptr[col]..colptr[col + 1];
             range.start
@@ -112,6 +122,7 @@ impl NormalPattern {
             diagonal_position,
             matrix: CscMatrix::new(columns, columns, colptr, rowval, vec![0.0; nnz]),
             order,
+            ordered,
         }
     }
 
@@ -278,7 +289,7 @@ pub fn solve(
 
     // The symbolic factorisation, once per step.
     pattern.assemble(&mass, &vec![1.0; m]);
-    let mut factor = NormalFactor::new(&pattern.matrix).map_err(fail)?;
+    let mut factor = NormalFactor::new(&pattern.matrix, pattern.ordered).map_err(fail)?;
     factor.factorise(&pattern.matrix).map_err(fail)?;
 
     // Start: the minimiser of ½xᵀPx + qᵀx + ½|Ax − b|², then s and z

@@ -55,6 +55,13 @@ const SPLIT_FROM_UNKNOWNS: usize = 20_000;
 const LARGEST_SEPARATOR_FRACTION: f64 = 0.02;
 const LARGEST_SEPARATOR: usize = 1_500;
 
+/// Whether a normal matrix of `unknowns` is factorised whole, so that the
+/// interior point assembles it in a fill-reducing order once per step
+/// (larger ones are split, and each half orders its own interior).
+pub(crate) fn is_factorised_whole(unknowns: usize) -> bool {
+    unknowns < SPLIT_FROM_UNKNOWNS
+}
+
 /// faer's view of the upper-triangle pattern of a CSC matrix.
 fn symbolic_pattern(matrix: &CscMatrix<f64>) -> SymbolicSparseColMatRef<'_, usize> {
     SymbolicSparseColMatRef::new_checked(matrix.n, matrix.n, &matrix.colptr, None, &matrix.rowval)
@@ -96,22 +103,25 @@ pub(crate) enum NormalFactor {
 
 impl NormalFactor {
     /// Ordering and symbolic analysis for the pattern of `matrix` (upper
-    /// triangle, CSC).
-    pub(crate) fn new(matrix: &CscMatrix<f64>) -> Result<Self, String> {
-        Self::with_split_from(matrix, SPLIT_FROM_UNKNOWNS)
+    /// triangle, CSC). `ordered`: its unknowns are already in a
+    /// fill-reducing order (see [`is_factorised_whole`]); otherwise a
+    /// whole factor orders them by AMD and permutes at each factorisation.
+    pub(crate) fn new(matrix: &CscMatrix<f64>, ordered: bool) -> Result<Self, String> {
+        Self::with_split_from(matrix, SPLIT_FROM_UNKNOWNS, ordered)
     }
 
     /// As `new`, splitting matrices of at least `split_from` unknowns.
     pub(crate) fn with_split_from(
         matrix: &CscMatrix<f64>,
         split_from: usize,
+        ordered: bool,
     ) -> Result<Self, String> {
         if matrix.n >= split_from {
             if let Some(split) = SplitFactor::new(matrix)? {
                 return Ok(NormalFactor::Split(Box::new(split)));
             }
         }
-        Ok(NormalFactor::Whole(Box::new(WholeFactor::new(matrix)?)))
+        Ok(NormalFactor::Whole(Box::new(WholeFactor::new(matrix, ordered)?)))
     }
 
     /// Factorises `matrix` (the pattern given to `new`).
@@ -131,8 +141,8 @@ impl NormalFactor {
     }
 }
 
-/// One sparse Cholesky of the whole matrix, taken in the order given (the
-/// interior point numbers its unknowns by AMD): symbolic analysis once,
+/// One sparse Cholesky of the whole matrix, in the order given (the
+/// interior point numbers its unknowns by AMD) or by AMD: symbolic analysis once,
 /// numeric factorisations per iteration. faer picks simplicial or
 /// supernodal by the factor's density; on a 2D packing of 2,000 discs
 /// forcing supernodal doubled the step.
@@ -143,11 +153,16 @@ pub(crate) struct WholeFactor {
 }
 
 impl WholeFactor {
-    fn new(matrix: &CscMatrix<f64>) -> Result<Self, String> {
+    fn new(matrix: &CscMatrix<f64>, ordered: bool) -> Result<Self, String> {
+        let ordering = if ordered {
+            SymmetricOrdering::Identity
+        } else {
+            SymmetricOrdering::Amd
+        };
         let symbolic = factorize_symbolic_cholesky(
             symbolic_pattern(matrix),
             Side::Upper,
-            SymmetricOrdering::Identity,
+            ordering,
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| format!("symbolic factorisation: {e:?}"))?;
@@ -796,8 +811,8 @@ mod tests {
         let b: Vec<f64> = (0..n)
             .map(|k| ((k * 7919) % 1000) as f64 / 500.0 - 1.0)
             .collect();
-        let mut whole = NormalFactor::with_split_from(&matrix, usize::MAX).unwrap();
-        let mut split = NormalFactor::with_split_from(&matrix, 0).unwrap();
+        let mut whole = NormalFactor::with_split_from(&matrix, usize::MAX, false).unwrap();
+        let mut split = NormalFactor::with_split_from(&matrix, 0, false).unwrap();
         let NormalFactor::Split(parts) = &split else {
             panic!("the grid was not split");
         };
@@ -827,7 +842,7 @@ mod tests {
                 .build()
                 .unwrap();
             pool.install(|| {
-                let mut split = NormalFactor::with_split_from(&matrix, 0).unwrap();
+                let mut split = NormalFactor::with_split_from(&matrix, 0, false).unwrap();
                 assert!(matches!(split, NormalFactor::Split(_)));
                 solve_with(&mut split, &matrix, &b)
             })
