@@ -24,17 +24,19 @@ fn final_groups(dir: &std::path::Path) -> [usize; 2] {
     counts
 }
 
-/// The paper's finding in 2D (section 5.1.1, Fig. 9c): on a slope of 22°
-/// the flow goes farther on an erodible layer than on the rigid bed, the
-/// more the thicker the layer (its largest gain, from h_i = 0 to 3 d).
-/// Measured on this scene (deterministic, any number of threads): at
-/// t = 2 s the front has run (r_f − R0)/R0 = 4.53 on the rigid bed and
-/// 5.46 on three diameters (+21 %); it must gain at least 10 %. Both runs
-/// keep the hard-contact certificates, and the deposit is the one the
-/// case describes: a column of aspect ratio 0.7 (the paper's) and a layer
-/// of 3 d, each within 5 %.
+/// The release of the reduced scene on the rigid bed and on three
+/// diameters: both runs keep the hard-contact certificates, each grain
+/// keeps the group it was rained in, the deposit is the one the case
+/// describes (a column of aspect ratio 0.7, the paper's, and a layer of
+/// 3 d, each within 5 %), and the flow sets the layer moving.
+///
+/// The paper's trends (a longer runout and a slow phase on the layer) are
+/// not asserted: single runs of this scene spread more than the layer's
+/// effect. With gravity perturbed by 1e-7, the runout at 2 s spread over
+/// 4.5–6.7 R0 on the rigid bed and 4.9–5.4 R0 on the layer, and the slow
+/// phase came and went (docs/validation.md §11).
 #[test]
-fn a_column_runs_farther_on_an_erodible_layer_than_on_the_rigid_bed() {
+fn a_release_on_an_erodible_layer_keeps_its_certificates_groups_and_deposit() {
     let deposits = [
         "data/erodible_bed_2d_no_layer.csv",
         "data/erodible_bed_2d.csv",
@@ -52,7 +54,6 @@ fn a_column_runs_farther_on_an_erodible_layer_than_on_the_rigid_bed() {
             .collect();
         runs.into_iter().map(|r| r.join().unwrap()).collect()
     });
-    let mut runouts = Vec::new();
     for (deposit, (summary, dir)) in deposits.iter().zip(&summaries) {
         assert!(metric(summary, "max_coulomb_violation") < 1e-8);
         assert!(metric(summary, "max_penetration") < 1e-8);
@@ -72,11 +73,11 @@ fn a_column_runs_farther_on_an_erodible_layer_than_on_the_rigid_bed() {
             // The flow sets the layer moving.
             assert!(metric(summary, "bed_max_kinetic_to_potential") > 0.0);
         }
-        let runout = metric(summary, "runout");
-        println!("{deposit}: runout {runout:.3} at t = 2 s");
-        runouts.push(runout);
+        println!(
+            "{deposit}: runout {:.3} at t = 2 s",
+            metric(summary, "runout")
+        );
     }
-    assert!(runouts[1] > 1.1 * runouts[0], "{runouts:?}");
 }
 
 /// An erodible-bed analysis needs exactly one gate (the column between

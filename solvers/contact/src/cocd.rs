@@ -353,7 +353,10 @@ fn csc_from_triplets(
         next[c] += 1;
     }
     let mut colptr = vec![0usize; columns + 1];
-    let (mut rowval, mut nzval) = (Vec::with_capacity(values.len()), Vec::with_capacity(values.len()));
+    let (mut rowval, mut nzval) = (
+        Vec::with_capacity(values.len()),
+        Vec::with_capacity(values.len()),
+    );
     for c in 0..columns {
         let column = &mut entries[start[c]..start[c + 1]];
         column.sort_by_key(|&(r, _)| r); // stable: repeated entries keep their order
@@ -501,7 +504,9 @@ mod tests {
         let (rows, columns) = (7, 5);
         let mut state = 12345u64;
         let mut next = |bound: usize| {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((state >> 33) as usize) % bound
         };
         let (mut r, mut c, mut v) = (Vec::new(), Vec::new(), Vec::new());

@@ -179,9 +179,9 @@ fn upper_pattern(
     let rows = row_start.len() - 1;
     let pairs = |r: usize| {
         let cols = &row_column[row_start[r]..row_start[r + 1]];
-        cols.iter().enumerate().flat_map(move |(k, &ck)| {
-            cols[k..].iter().map(move |&cl| (ck.min(cl), ck.max(cl)))
-        })
+        cols.iter()
+            .enumerate()
+            .flat_map(move |(k, &ck)| cols[k..].iter().map(move |&cl| (ck.min(cl), ck.max(cl))))
     };
     // A counting sort by column, then each short column sorted.
     let mut start = vec![1usize; columns + 1];
@@ -231,9 +231,8 @@ fn upper_pattern(
 fn minimum_degree_order(colptr: &[usize], rowval: &[usize], columns: usize) -> Vec<usize> {
     use faer::dyn_stack::{MemBuffer, MemStack};
     use faer::sparse::linalg::amd;
-    let pattern = faer::sparse::SymbolicSparseColMatRef::new_checked(
-        columns, columns, colptr, None, rowval,
-    );
+    let pattern =
+        faer::sparse::SymbolicSparseColMatRef::new_checked(columns, columns, colptr, None, rowval);
     let (mut order, mut inverse) = (vec![0usize; columns], vec![0usize; columns]);
     let mut work = MemBuffer::new(amd::order_scratch::<usize>(columns, rowval.len()));
     match amd::order(

@@ -121,7 +121,9 @@ impl NormalFactor {
                 return Ok(NormalFactor::Split(Box::new(split)));
             }
         }
-        Ok(NormalFactor::Whole(Box::new(WholeFactor::new(matrix, ordered)?)))
+        Ok(NormalFactor::Whole(Box::new(WholeFactor::new(
+            matrix, ordered,
+        )?)))
     }
 
     /// Factorises `matrix` (the pattern given to `new`).
