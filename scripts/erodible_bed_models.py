@@ -21,11 +21,10 @@ run side by side on two cores (--jobs 2) with comparable wall times.
 """
 import argparse
 import concurrent.futures
-import csv
 import math
 import os
 
-from erodible_bed_study import FIELDS, release
+from erodible_bed_study import FIELDS, release, write_tables
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -123,16 +122,7 @@ def main():
             r["label"] = label
         series += fronts
     fields = ["label"] + FIELDS + ["front_error", "travel_error_at_end", "wall_seconds_per_simulated_second"]
-    with open(args.out, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
-        w.writeheader()
-        w.writerows(rows)
-    if series:
-        with open(args.out.replace(".csv", "_fronts.csv"), "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(series[0].keys()))
-            w.writeheader()
-            w.writerows(series)
-
+    write_tables(args.out, fields, rows, series)
 
 if __name__ == "__main__":
     main()

@@ -136,6 +136,20 @@ def release(binary, work, deposit, radius, length, thickness, slope, model, dt, 
     return row, fronts
 
 
+def write_tables(out, fields, rows, fronts):
+    """One row per run to `out`, and every run's front series beside it
+    (`_fronts.csv`)."""
+    with open(out, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+    if fronts:
+        with open(out.replace(".csv", "_fronts.csv"), "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(fronts[0].keys()))
+            w.writeheader()
+            w.writerows(fronts)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--binary", default=os.path.join(HERE, "..", "target", "release", "grainflow"))
@@ -173,15 +187,7 @@ def main():
         results = list(pool.map(run, jobs))
     rows = [row for row, _ in results]
     fronts = [r for _, front in results for r in front]
-    with open(args.out, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=FIELDS, extrasaction="ignore")
-        w.writeheader()
-        w.writerows(rows)
-    if fronts:
-        with open(args.out.replace(".csv", "_fronts.csv"), "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(fronts[0].keys()))
-            w.writeheader()
-            w.writerows(fronts)
+    write_tables(args.out, FIELDS, rows, fronts)
 
 
 if __name__ == "__main__":
