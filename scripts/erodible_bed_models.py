@@ -69,6 +69,8 @@ def errors(fronts, reference):
     t, y = travel(fronts)
     diff = sum((interpolate(t, y, s) - r) ** 2 for s, r in zip(t_ref, y_ref))
     norm = sum(r * r for r in y_ref)
+    if norm == 0.0:
+        raise SystemExit("the reference run's front did not move: run longer (--end)")
     end = interpolate(t, y, t_ref[-1])
     return math.sqrt(diff / norm), abs(end - y_ref[-1]) / y_ref[-1]
 
