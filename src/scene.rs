@@ -410,6 +410,7 @@ pub fn hard_contact(case: &Case) -> Option<HardContact> {
     if c.conic_solver.as_deref() == Some("clarabel") {
         hard.conic_solver = ConicSolver::Clarabel;
     }
+    hard.whole_list = c.candidates.as_deref() == Some("listed");
     Some(hard)
 }
 

@@ -48,6 +48,16 @@ fn hard_contact_keys_are_checked_and_nothing_is_written() {
             "contact.model",
         ),
         (
+            "static_box.toml",
+            vec!["contact.candidates=\"all\""],
+            "contact.candidates",
+        ),
+        (
+            "column_collapse_2d.toml",
+            vec!["contact.candidates=\"listed\""],
+            "contact.candidates",
+        ),
+        (
             "column_collapse_2d.toml",
             vec!["contact.tolerance=1e-6"],
             "contact.tolerance",

@@ -186,6 +186,12 @@ pub struct ContactSection {
     /// reference; always used for 3D frictional contacts).
     #[serde(default)]
     pub conic_solver: Option<String>,
+    /// Hard: which listed pairs enter the step's program: "reachable"
+    /// (those the step's motion can bring to their constraint, the others
+    /// checked at the solution; the default) or "listed" (every pair
+    /// within the threshold: the reference).
+    #[serde(default)]
+    pub candidates: Option<String>,
 }
 
 impl ContactSection {

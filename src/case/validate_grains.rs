@@ -340,6 +340,7 @@ impl Case {
             ("contact.max_iterations", c.max_iterations.is_some()),
             ("contact.threshold", c.threshold.is_some()),
             ("contact.conic_solver", c.conic_solver.is_some()),
+            ("contact.candidates", c.candidates.is_some()),
         ] {
             if given {
                 return Err(invalid(
@@ -454,6 +455,17 @@ impl Case {
         }
         if let Some(threshold) = c.threshold {
             positive("contact.threshold", threshold)?;
+        }
+        if let Some(other) = c
+            .candidates
+            .as_deref()
+            .filter(|v| !matches!(*v, "reachable" | "listed"))
+        {
+            return Err(invalid(
+                "contact.candidates",
+                other,
+                "allowed: \"reachable\" or \"listed\"",
+            ));
         }
         match (c.model.as_str(), c.conic_solver.as_deref()) {
             (_, None) | ("cocd", Some("interior_point" | "clarabel")) => {}

@@ -32,6 +32,11 @@ pub struct HardRecord {
     pub iterations: u64,
     pub max_iterations: u32,
     pub candidates: u64,
+    /// Programs solved again because a pair left out of the first would
+    /// have overlapped (saved apart, so that checkpoints written before it
+    /// was counted still load).
+    #[serde(skip)]
+    pub extra_programs: u64,
     pub closed: u64,
     pub unconverged_steps: u64,
     /// Steps Clarabel took over from grainflow's interior point.
@@ -48,6 +53,7 @@ impl HardRecord {
         self.iterations += report.iterations as u64;
         self.max_iterations = self.max_iterations.max(report.iterations);
         self.candidates += report.candidates as u64;
+        self.extra_programs += u64::from(report.programs.saturating_sub(1));
         self.closed += report.closed as u64;
         self.unconverged_steps += u64::from(report.unconverged);
         self.fallback_steps += u64::from(report.fell_back);
@@ -65,6 +71,7 @@ impl HardRecord {
             ("mean_iterations", json!(self.iterations as f64 / steps)),
             ("max_iterations", json!(self.max_iterations)),
             ("mean_candidates", json!(self.candidates as f64 / steps)),
+            ("extra_programs", json!(self.extra_programs)),
             ("mean_closed_contacts", json!(self.closed as f64 / steps)),
             ("unconverged_steps", json!(self.unconverged_steps)),
             ("fallback_steps", json!(self.fallback_steps)),
@@ -199,6 +206,7 @@ impl DryStepper {
         if let DryStepper::Hard { contact, record } = self {
             contact.save_state(state);
             state.put_value("hard_contact.record", record);
+            state.put_u64("hard_contact.extra_programs", record.extra_programs);
         }
     }
 
@@ -206,6 +214,9 @@ impl DryStepper {
         if let DryStepper::Hard { contact, record } = self {
             contact.restore_state(state)?;
             *record = state.take_value("hard_contact.record")?;
+            if state.contains("hard_contact.extra_programs") {
+                record.extra_programs = state.take_u64("hard_contact.extra_programs")?;
+            }
         }
         Ok(())
     }

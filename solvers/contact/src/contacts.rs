@@ -223,6 +223,13 @@ pub fn gather(
     free_velocity: &[Vec3],
     free_spin: &[Vec3],
 ) -> (ContactSet, Bodies) {
+    with_bodies(system, listed(system, threshold), free_velocity, free_spin)
+}
+
+/// Every pair and grain–wall pair of the neighbour list with gap below
+/// `threshold`, without bodies (`body_i`, `body_j` empty), in the order of
+/// the list: grain by grain, its pairs, then its walls.
+pub fn listed(system: &DemSystem, threshold: f64) -> ContactSet {
     let p = &system.particles;
     let n_owned = p.n_owned;
     let list = &system.neighbours;
@@ -284,7 +291,36 @@ pub fn gather(
             }
         }
     }
+    contacts
+}
 
+impl ContactSet {
+    /// The contacts `a` with `keep[a]`, in order, without bodies.
+    pub fn subset(&self, keep: &[bool]) -> ContactSet {
+        let mut kept = ContactSet::default();
+        for a in (0..self.len()).filter(|&a| keep[a]) {
+            kept.grain.push(self.grain[a]);
+            kept.partner.push(self.partner[a]);
+            kept.normal.push(self.normal[a]);
+            kept.gap.push(self.gap[a]);
+            kept.lever_i.push(self.lever_i[a]);
+            kept.lever_j.push(self.lever_j[a]);
+            kept.friction.push(self.friction[a]);
+        }
+        kept
+    }
+}
+
+/// The bodies `contacts` move (the moving grains with at least one of
+/// them, one column each, in grain order), with the contacts' columns set.
+pub fn with_bodies(
+    system: &DemSystem,
+    mut contacts: ContactSet,
+    free_velocity: &[Vec3],
+    free_spin: &[Vec3],
+) -> (ContactSet, Bodies) {
+    let p = &system.particles;
+    let n_owned = p.n_owned;
     let mut bodies = Bodies {
         column: vec![STATIC; n_owned],
         ..Bodies::default()

@@ -26,8 +26,11 @@
 //!
 //! Candidates ([`contacts`]) are the pairs and grain–wall pairs whose gap
 //! is below a threshold D (section 3.3), widened when grains are fast
-//! enough to close a larger gap within the step.
+//! enough to close a larger gap within the step. The program holds those
+//! a pair's own motion can close; the others are checked at the solution
+//! and join it if they would overlap ([`candidates`]).
 
+pub mod candidates;
 pub mod certificate;
 pub mod cocd;
 pub mod contacts;

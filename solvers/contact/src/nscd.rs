@@ -32,16 +32,26 @@ pub fn normal_bounds(
 ) -> Vec<f64> {
     (0..contacts.len())
         .map(|a| {
-            let gap_bound = -contacts.gap[a] / dt;
             let start = contacts.relative_velocity(a, &bodies.start_velocity, &bodies.start_spin);
-            let approach = start.dot(&contacts.normal[a]);
-            if contacts.gap[a] + dt * approach <= 0.0 {
-                gap_bound.max(-restitution * approach)
-            } else {
-                gap_bound
-            }
+            normal_bound(
+                contacts.gap[a],
+                start.dot(&contacts.normal[a]),
+                dt,
+                restitution,
+            )
         })
         .collect()
+}
+
+/// b_α of a contact of gap `gap` approaching at `approach` = v_n⁻ at the
+/// start of the step.
+pub fn normal_bound(gap: f64, approach: f64, dt: f64, restitution: f64) -> f64 {
+    let gap_bound = -gap / dt;
+    if gap + dt * approach <= 0.0 {
+        gap_bound.max(-restitution * approach)
+    } else {
+        gap_bound
+    }
 }
 
 /// Solves the step by Gauss–Seidel from the impulses `initial` (a warm

@@ -8,9 +8,10 @@
 //! 4. the contact law's residual at the solution;
 //! 5. c^{k+1} = c^k + Δt v^{k+1}; the largest overlap after the move.
 
+use crate::candidates::{self, LeftOutLaw};
 use crate::certificate;
 use crate::cocd::{self, ConicSolver, Solution};
-use crate::contacts::{self, Partner, Scales, STATIC};
+use crate::contacts::{self, Bodies, ContactSet, Partner, Scales};
 use crate::nscd;
 use grainflow_core::Vec3;
 use grainflow_dem::{DemSystem, StepDiagnostics};
@@ -29,8 +30,11 @@ pub enum Method {
 /// What one step did and how well its contact law holds.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct StepReport {
-    /// Candidate contacts and those that carry a force.
+    /// Candidate contacts in the program and those that carry a force.
     pub candidates: usize,
+    /// Programs solved: more than one where a pair left out would have
+    /// overlapped ([`candidates`]).
+    pub programs: u32,
     pub closed: usize,
     /// Interior-point iterations (COCD) or Gauss–Seidel sweeps (NSCD).
     pub iterations: u32,
@@ -65,6 +69,10 @@ pub struct HardContact {
     /// COCD: the interior-point code (Clarabel wherever the cones are not
     /// linear).
     pub conic_solver: ConicSolver,
+    /// Every listed pair enters the program, instead of those within reach
+    /// and the left-out ones that would break their law
+    /// ([`candidates`]): the reference the selection is measured against.
+    pub whole_list: bool,
     /// NSCD warm start: the impulses of the last step's contacts, by the
     /// ids of their grains (u64::MAX − wall for a wall).
     previous_impulses: HashMap<(u64, u64), (f64, Vec3)>,
@@ -116,6 +124,7 @@ impl HardContact {
             max_iterations,
             threshold,
             conic_solver: ConicSolver::InteriorPoint,
+            whole_list: false,
             previous_impulses: HashMap::new(),
         }
     }
@@ -165,7 +174,9 @@ impl HardContact {
         };
 
         // 2. Candidates: a pair approaches by at most 2 v_max Δt within the
-        // step; 1.5 for the speed the contacts themselves may add.
+        // step; 1.5 for the speed the contacts themselves may add. The list
+        // reaches that far; the program starts from the pairs their own
+        // motion can close and takes in the others that would overlap.
         let fastest = free_velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
         let threshold = self.threshold.max(3.0 * fastest * dt);
         if threshold > system.neighbours.gap {
@@ -173,67 +184,59 @@ impl HardContact {
             system.rebuild();
             return self.step(system, dt);
         }
-        let (contacts, bodies) = contacts::gather(system, threshold, &free_velocity, &free_spin);
-        let scales = Scales::of(&bodies, dt, &gravity);
+        let listed = contacts::listed(system, threshold);
+        let mut in_program =
+            candidates::within_reach(&listed, (&free_velocity, &free_spin), self.threshold, dt);
+        if self.whole_list {
+            in_program.fill(true);
+        }
+        let left_out_law = match self.method {
+            Method::Cocd => LeftOutLaw::Cone { dt },
+            Method::Nscd { restitution } => LeftOutLaw::Signorini { dt, restitution },
+        };
 
-        // 3. Solve.
+        // 3. Solve, until no pair left out would overlap.
         let started = Instant::now();
-        let (solution, bounds, unconverged) = match self.method {
-            Method::Cocd => {
-                let bounds: Vec<f64> = contacts.gap.iter().map(|d| -d / dt).collect();
-                let solution = if contacts.is_empty() {
-                    Solution {
-                        velocity: bodies.free_velocity.clone(),
-                        spin: bodies.free_spin.clone(),
-                        ..Solution::default()
-                    }
-                } else {
-                    cocd::solve(
-                        &contacts,
-                        &bodies,
-                        system.dimension(),
-                        &scales,
-                        self.tolerance,
-                        self.max_iterations,
-                        self.conic_solver,
-                    )?
-                };
-                let reduced = solution.reduced_accuracy;
-                (solution, bounds, reduced)
+        let mut programs = 0;
+        let (contacts, scales, solution, bounds, unconverged, end_motion) = loop {
+            programs += 1;
+            let (contacts, bodies) = contacts::with_bodies(
+                system,
+                listed.subset(&in_program),
+                &free_velocity,
+                &free_spin,
+            );
+            let scales = Scales::of(&bodies, dt, &gravity);
+            let (solution, bounds, unconverged) =
+                self.solve(system, &contacts, &bodies, &scales, dt)?;
+            let end_motion =
+                candidates::end_motion(system, &bodies, &solution, &free_velocity, &free_spin);
+            let p = &system.particles;
+            let broken = candidates::broken(
+                &listed,
+                &in_program,
+                left_out_law,
+                (&end_motion.0, &end_motion.1),
+                (&p.velocity[..n], &p.angular_velocity[..n]),
+            );
+            if broken.is_empty() {
+                break (contacts, scales, solution, bounds, unconverged, end_motion);
             }
-            Method::Nscd { restitution } => {
-                let bounds = nscd::normal_bounds(&contacts, &bodies, dt, restitution);
-                let ids = &system.particles.id;
-                let key = |a: usize| pair_key(ids, contacts.grain[a], contacts.partner[a]);
-                let initial: Vec<(f64, Vec3)> = (0..contacts.len())
-                    .map(|a| {
-                        let (key, sign) = key(a);
-                        self.previous_impulses
-                            .get(&key)
-                            .map_or((0.0, Vec3::zeros()), |&(p_n, p_t)| (p_n, sign * p_t))
-                    })
-                    .collect();
-                let (solution, converged) = nscd::solve(
-                    &contacts,
-                    &bodies,
-                    &scales,
-                    &bounds,
-                    &initial,
-                    self.tolerance,
-                    self.max_iterations,
+            if programs == candidates::ROUNDS {
+                in_program.fill(true);
+            } else {
+                let near = candidates::within_reach(
+                    &listed,
+                    (&end_motion.0, &end_motion.1),
+                    self.threshold,
+                    dt,
                 );
-                self.previous_impulses = (0..contacts.len())
-                    .filter(|&a| solution.normal_impulse[a] > 0.0)
-                    .map(|a| {
-                        let (key, sign) = key(a);
-                        let impulses = (
-                            solution.normal_impulse[a],
-                            sign * solution.tangential_impulse[a],
-                        );
-                        (key, impulses)
-                    })
-                    .collect();
-                (solution, bounds, !converged)
+                for (a, near) in near.into_iter().enumerate() {
+                    in_program[a] |= near;
+                }
+                for a in broken {
+                    in_program[a] = true;
+                }
             }
         };
         let seconds_solve = started.elapsed().as_secs_f64();
@@ -253,19 +256,12 @@ impl HardContact {
         // End-of-step velocities; the force and torque written out are the
         // step's mean ones, m (u^{k+1} − u^k)/Δt (contacts and gravity).
         let p = &mut system.particles;
+        let (end_velocity, end_spin) = end_motion;
         for k in 0..n {
             if p.is_fixed(k) {
                 continue;
             }
-            let column = bodies.column[k];
-            let (v, w) = if column == STATIC {
-                (free_velocity[k], free_spin[k])
-            } else {
-                (
-                    solution.velocity[column as usize],
-                    solution.spin[column as usize],
-                )
-            };
+            let (v, w) = (end_velocity[k], end_spin[k]);
             p.force[k] = p.mass[k] * (v - p.velocity[k]) / dt;
             p.torque[k] = (w - p.angular_velocity[k]) / (p.inverse_inertia[k] * dt);
             p.velocity[k] = v;
@@ -309,6 +305,7 @@ impl HardContact {
         };
         Ok(StepReport {
             candidates: contacts.len(),
+            programs,
             closed,
             iterations: solution.iterations,
             unconverged,
@@ -320,6 +317,76 @@ impl HardContact {
             seconds_solve,
             non_finite,
         })
+    }
+
+    /// One program over `contacts`: the solution, the normal bound b_α of
+    /// each contact and whether the solver stopped short of its tolerance.
+    fn solve(
+        &mut self,
+        system: &DemSystem,
+        contacts: &ContactSet,
+        bodies: &Bodies,
+        scales: &Scales,
+        dt: f64,
+    ) -> Result<(Solution, Vec<f64>, bool), String> {
+        match self.method {
+            Method::Cocd => {
+                let bounds: Vec<f64> = contacts.gap.iter().map(|d| -d / dt).collect();
+                let solution = if contacts.is_empty() {
+                    Solution {
+                        velocity: bodies.free_velocity.clone(),
+                        spin: bodies.free_spin.clone(),
+                        ..Solution::default()
+                    }
+                } else {
+                    cocd::solve(
+                        contacts,
+                        bodies,
+                        system.dimension(),
+                        scales,
+                        self.tolerance,
+                        self.max_iterations,
+                        self.conic_solver,
+                    )?
+                };
+                let reduced = solution.reduced_accuracy;
+                Ok((solution, bounds, reduced))
+            }
+            Method::Nscd { restitution } => {
+                let bounds = nscd::normal_bounds(contacts, bodies, dt, restitution);
+                let ids = &system.particles.id;
+                let key = |a: usize| pair_key(ids, contacts.grain[a], contacts.partner[a]);
+                let initial: Vec<(f64, Vec3)> = (0..contacts.len())
+                    .map(|a| {
+                        let (key, sign) = key(a);
+                        self.previous_impulses
+                            .get(&key)
+                            .map_or((0.0, Vec3::zeros()), |&(p_n, p_t)| (p_n, sign * p_t))
+                    })
+                    .collect();
+                let (solution, converged) = nscd::solve(
+                    contacts,
+                    bodies,
+                    scales,
+                    &bounds,
+                    &initial,
+                    self.tolerance,
+                    self.max_iterations,
+                );
+                self.previous_impulses = (0..contacts.len())
+                    .filter(|&a| solution.normal_impulse[a] > 0.0)
+                    .map(|a| {
+                        let (key, sign) = key(a);
+                        let impulses = (
+                            solution.normal_impulse[a],
+                            sign * solution.tangential_impulse[a],
+                        );
+                        (key, impulses)
+                    })
+                    .collect();
+                Ok((solution, bounds, !converged))
+            }
+        }
     }
 }
 
