@@ -68,7 +68,7 @@ pub fn report(case: &Case) -> Result<String, RunError> {
         Some(Method::Cocd) => {
             let solver = hard
                 .as_ref()
-                .map_or(ConicSolver::Clarabel, |h| h.conic_solver_for(&system))
+                .map_or(ConicSolver::Clarabel, |h| h.conic_solver)
                 .name();
             format!("hard contact: COCD, one conic program per step ({solver}), inelastic, Coulomb's cone")
         }

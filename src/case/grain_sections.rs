@@ -181,9 +181,8 @@ pub struct ContactSection {
     /// fastest grain closes in a step).
     #[serde(default)]
     pub threshold: Option<f64>,
-    /// cocd: "interior_point" (grainflow's, on the normal equations, where
-    /// the cones are linear: 2D discs; the default) or "clarabel" (the
-    /// reference; always used for 3D frictional contacts).
+    /// cocd: "interior_point" (grainflow's, on the normal equations, 2D
+    /// and 3D; the default) or "clarabel" (the reference).
     #[serde(default)]
     pub conic_solver: Option<String>,
     /// Hard: which listed pairs enter the step's program: "reachable"

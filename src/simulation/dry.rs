@@ -126,7 +126,7 @@ impl DryModel {
                 None,
             ));
         }
-        description.push(stepper.describe(dt, &system));
+        description.push(stepper.describe(dt));
         warnings.extend(warning);
 
         let last_removal = system

@@ -110,7 +110,7 @@ impl DryStepper {
     }
 
     /// One line for the log naming the model and its step.
-    pub fn describe(&self, dt: f64, system: &DemSystem) -> String {
+    pub fn describe(&self, dt: f64) -> String {
         match self {
             DryStepper::Soft { contact_time } => format!(
                 "soft-sphere DEM; dt = {dt:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s)",
@@ -119,7 +119,7 @@ impl DryStepper {
             DryStepper::Hard { contact, .. } => {
                 let scheme = match contact.method {
                     Method::Cocd => {
-                        let solver = contact.conic_solver_for(system).name();
+                        let solver = contact.conic_solver.name();
                         format!("COCD (conic program per step, {solver})")
                     }
                     Method::Nscd { restitution } => {

@@ -1,5 +1,7 @@
 //! COCD: one conic program per step (Martin et al. 2022, eq. 10 and 13),
-//! solved by Clarabel's primal–dual interior-point method.
+//! solved by grainflow's interior point on the normal equations
+//! ([`crate::interior_point`]) or, on request and where it fails, by
+//! Clarabel's (the reference).
 //!
 //! In the units of [`Scales`] (ũ = v/V for translations, ω L/V for
 //! rotations; masses over m̄, inertias over m̄ L²; κ = VΔt/L) the program
@@ -123,8 +125,8 @@ fn jacobian_row(
 /// Which interior-point code solves the conic program.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ConicSolver {
-    /// grainflow's own, on the normal equations M̃ + H̃ᵀΘH̃ (linear cones:
-    /// 2D discs, frictionless contacts); see [`crate::interior_point`].
+    /// grainflow's own, on the normal equations M̃ + H̃ᵀΘH̃ (linear and
+    /// second-order cones); see [`crate::interior_point`].
     InteriorPoint,
     /// Clarabel (any cone), the reference.
     Clarabel,
@@ -181,8 +183,8 @@ impl ConicProgram {
     }
 }
 
-/// Solves the step's conic program with `solver` (Clarabel where the cones
-/// are not linear). `tolerance`: the relative gap and feasibility
+/// Solves the step's conic program with `solver` (Clarabel taking over a
+/// step grainflow's interior point fails). `tolerance`: the relative gap and feasibility
 /// tolerances (ε of section 3.2).
 pub fn solve(
     contacts: &ContactSet,
@@ -196,24 +198,22 @@ pub fn solve(
     let program = build(contacts, bodies, dimension, scales);
     // Should grainflow's interior point fail on a step, Clarabel takes it
     // over (and stops the run if it fails too).
-    let (x, z, iterations, reduced_accuracy) =
-        if solver == ConicSolver::InteriorPoint && program.cone_count == 0 {
-            match crate::interior_point::solve(&program, tolerance, max_iterations) {
-                Ok(solution) => solution,
-                Err(why) => solve_with_clarabel(&program, tolerance, max_iterations)
-                    .map_err(|again| format!("{why}; then {again}"))?,
+    let mut fell_back = false;
+    let (x, z, iterations, reduced_accuracy) = if solver == ConicSolver::InteriorPoint {
+        match crate::interior_point::solve(&program, tolerance, max_iterations) {
+            Ok(solution) => solution,
+            Err(why) => {
+                fell_back = true;
+                solve_with_clarabel(&program, tolerance, max_iterations)
+                    .map_err(|again| format!("{why}; then {again}"))?
             }
-        } else {
-            solve_with_clarabel(&program, tolerance, max_iterations)?
-        };
-    Ok(recover(
-        contacts,
-        &program,
-        &x,
-        &z,
-        iterations,
-        reduced_accuracy,
-    ))
+        }
+    } else {
+        solve_with_clarabel(&program, tolerance, max_iterations)?
+    };
+    let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
+    solution.fell_back = fell_back;
+    Ok(solution)
 }
 
 /// Assembles the program of the step.

@@ -1,14 +1,16 @@
-//! grainflow's interior point for COCD programs whose cones are linear
-//! (2D discs, where each Coulomb cone {|x| ≤ y} is two half-planes, and
-//! frictionless contacts): a primal–dual method with Mehrotra's
+//! grainflow's interior point for COCD programs: linear cones (2D discs,
+//! where each Coulomb cone {|x| ≤ y} is two half-planes; frictionless
+//! contacts) and second-order cones of size 3 (3D Coulomb cones), a
+//! primal–dual method with Nesterov–Todd scaling and Mehrotra's
 //! predictor–corrector on
 //!
-//!   min ½ xᵀPx + qᵀx   subject to   Ax + s = b,  s ≥ 0,
+//!   min ½ xᵀPx + qᵀx   subject to   Ax + s = b,  s ∈ K,
 //!
 //! P = M̃ diagonal. Each Newton step eliminates s and the multipliers z
 //! and solves the normal equations
 //!
-//!   (P + AᵀΘA) Δx = −r_d + Aᵀ ((r_c − z∘r_p) / s),   Θ = diag(z/s),
+//!   (P + AᵀW⁻²A) Δx = rhs,   W⁻² = diag(z/s) on the linear rows and a
+//!   3 × 3 block per cone ([`crate::second_order_cone`]),
 //!
 //! an SPD matrix of the size of the unknowns (three per disc), at least M̃,
 //! whose pattern is the contact graph: a sparse Cholesky (faer) with the
@@ -29,6 +31,7 @@
 
 use crate::cocd::ConicProgram;
 use crate::normal_factor::{is_factorised_whole, NormalFactor};
+use crate::second_order_cone::{self, Cone3, NtScaling};
 use clarabel::algebra::CscMatrix;
 
 /// Fraction of the distance to the boundary of the cone taken by a step.
@@ -140,6 +143,32 @@ impl NormalPattern {
             for (k, &vk) in vals.iter().enumerate() {
                 for &vl in &vals[k..] {
                     values[self.pair_position[pair]] += t * vk * vl;
+                    pair += 1;
+                }
+            }
+        }
+    }
+
+    /// Adds the blocks of the second-order cones, Aᵀ_c W_c⁻² A_c for the
+    /// three rows of cone c from `first_cone_row` on, as the Gram matrix
+    /// (W_c⁻¹ A_c)ᵀ (W_c⁻¹ A_c): W⁻² formed explicitly loses its small
+    /// eigenvalue to cancellation near the cone's boundary and made the
+    /// normal matrix indefinite. The three rows share their columns (a
+    /// contact's two bodies), so their pairs are those of the first row.
+    fn add_cone_blocks(&mut self, first_cone_row: usize, scaling: &[NtScaling]) {
+        let values = &mut self.matrix.nzval;
+        let mut scaled: Vec<Cone3> = Vec::new();
+        for (c, w) in scaling.iter().enumerate() {
+            let r = first_cone_row + 3 * c;
+            let len = self.row_start[r + 1] - self.row_start[r];
+            let rows = [r, r + 1, r + 2].map(|q| &self.row_value[self.row_start[q]..][..len]);
+            scaled.clear();
+            scaled.extend((0..len).map(|k| w.inverse_times(&[rows[0][k], rows[1][k], rows[2][k]])));
+            let mut pair = self.pair_start[r];
+            for (k, b_k) in scaled.iter().enumerate() {
+                for b_l in &scaled[k..] {
+                    values[self.pair_position[pair]] +=
+                        b_k[0] * b_l[0] + b_k[1] * b_l[1] + b_k[2] * b_l[2];
                     pair += 1;
                 }
             }
@@ -265,29 +294,90 @@ fn step_to_boundary(v: &[f64], dv: &[f64]) -> f64 {
         .fold(1.0, f64::min)
 }
 
-/// Solves a program with linear cones only: (x, z, iterations, reduced
-/// accuracy) in Clarabel's units, so that the two solvers are
-/// interchangeable.
+/// The three entries of cone c of a vector whose cones follow `linear`
+/// rows.
+fn cone_of(v: &[f64], linear: usize, c: usize) -> Cone3 {
+    let r = linear + 3 * c;
+    [v[r], v[r + 1], v[r + 2]]
+}
+
+fn set_cone(v: &mut [f64], linear: usize, c: usize, value: &Cone3) {
+    let r = linear + 3 * c;
+    v[r..r + 3].copy_from_slice(value);
+}
+
+/// Largest α ≤ 1 keeping v + α Δv in the cones (linear rows first).
+fn step_in_cones(v: &[f64], dv: &[f64], linear: usize, cones: usize) -> f64 {
+    (0..cones).fold(step_to_boundary(&v[..linear], &dv[..linear]), |alpha, c| {
+        alpha.min(second_order_cone::step_to_boundary(
+            &cone_of(v, linear, c),
+            &cone_of(dv, linear, c),
+        ))
+    })
+}
+
+/// Shifts v into the interior of the cones along their identity where its
+/// lowest eigenvalue is not positive (as CVXOPT's coneqp starts).
+fn shift_inside(v: &mut [f64], linear: usize, cones: usize) {
+    let lowest = (0..cones)
+        .map(|c| second_order_cone::lowest_eigenvalue(&cone_of(v, linear, c)))
+        .chain(v[..linear].iter().copied())
+        .fold(f64::INFINITY, f64::min);
+    if lowest <= 0.0 {
+        v[..linear].iter_mut().for_each(|e| *e += 1.0 - lowest);
+        for c in 0..cones {
+            v[linear + 3 * c] += 1.0 - lowest;
+        }
+    }
+}
+
+/// Solves a COCD program, linear rows first and then second-order cones
+/// of size 3: (x, z, iterations, reduced accuracy) in Clarabel's units,
+/// so that the two solvers are interchangeable.
+///
+/// Each Newton step scales the cones by Nesterov–Todd (W, with
+/// W⁻¹s = Wz = λ; W = diag(√(s/z)) on the linear rows), linearises the
+/// complementarity as λ ∘ (W Δz + W⁻¹ Δs) = −r_c, and eliminates Δs and Δz:
+///
+///   (P + AᵀW⁻²A) Δx = −r_d − Aᵀ (W⁻² r_p − W⁻¹ (λ ∘⁻¹ r_c)),
+///   Δs = −r_p − A Δx,   Δz = −W⁻¹ (λ ∘⁻¹ r_c) − W⁻² Δs,
+///
+/// with r_c = λ ∘ λ for the predictor and λ ∘ λ + (W⁻¹Δs_a) ∘ (WΔz_a) − σμe
+/// for Mehrotra's corrector.
 pub fn solve(
     program: &ConicProgram,
     tolerance: f64,
     max_iterations: u32,
 ) -> Result<(Vec<f64>, Vec<f64>, u32, bool), String> {
-    assert_eq!(program.cone_count, 0, "linear cones only");
     let n = program.mass.len();
     let m = program.b.len();
+    let linear = program.linear_rows;
+    let cones = program.cone_count;
+    let degree = (linear + cones) as f64;
     let kappa = program.row_scale();
     let b: Vec<f64> = program.b.iter().map(|v| v / kappa).collect();
     let mut pattern = NormalPattern::new(&program.a_matrix, kappa, n);
+    let fail = |what: String| format!("the interior point ({m} rows, {n} unknowns): {what}");
+    for c in 0..cones {
+        let r = linear + 3 * c;
+        let columns =
+            |q: usize| &pattern.row_column[pattern.row_start[q]..pattern.row_start[q + 1]];
+        if columns(r + 1) != columns(r) || columns(r + 2) != columns(r) {
+            return Err(fail(format!(
+                "the rows of cone {c} do not share their columns"
+            )));
+        }
+    }
     // x, P and q in the pattern's order of the unknowns.
     let order = pattern.order.clone();
     let mass: Vec<f64> = order.iter().map(|&u| program.mass[u]).collect();
     let q_program = program.q();
     let q: Vec<f64> = order.iter().map(|&u| q_program[u]).collect();
-    let fail = |what: String| format!("the interior point ({m} rows, {n} unknowns): {what}");
 
     // The symbolic factorisation, once per step.
-    pattern.assemble(&mass, &vec![1.0; m]);
+    let unit = NtScaling::new(&[1.0, 0.0, 0.0], &[1.0, 0.0, 0.0]);
+    pattern.assemble(&mass, &vec![1.0; linear]);
+    pattern.add_cone_blocks(linear, &vec![unit; cones]);
     let mut factor = NormalFactor::new(&pattern.matrix, pattern.ordered).map_err(fail)?;
     factor.factorise(&pattern.matrix).map_err(fail)?;
 
@@ -303,12 +393,8 @@ pub fn solve(
     pattern.times(&x, &mut ax);
     let mut s: Vec<f64> = b.iter().zip(&ax).map(|(bi, axi)| bi - axi).collect();
     let mut z: Vec<f64> = s.iter().map(|v| -v).collect();
-    for v in [&mut s, &mut z] {
-        let lowest = v.iter().cloned().fold(f64::INFINITY, f64::min);
-        if lowest <= 0.0 {
-            v.iter_mut().for_each(|e| *e += 1.0 - lowest);
-        }
-    }
+    shift_inside(&mut s, linear, cones);
+    shift_inside(&mut z, linear, cones);
 
     let size = program.size();
     let norm_b = infinity_norm(&b);
@@ -324,6 +410,9 @@ pub fn solve(
     );
     let mut rc = vec![0.0; m];
     let mut adx = vec![0.0; m];
+    let mut scaling = vec![NtScaling::default(); cones];
+    let mut lambda = vec![[0.0; 3]; cones];
+    let mut cone_theta = vec![[[0.0; 3]; 3]; cones];
     for iteration in 0..=max_iterations {
         // Residuals and the stopping test.
         pattern.times(&x, &mut ax);
@@ -355,13 +444,21 @@ pub fn solve(
         if iteration == max_iterations {
             break;
         }
-        let mu = gap / m as f64;
+        let mu = gap / degree;
 
-        // Normal matrix for this iterate.
-        for i in 0..m {
+        // Normal matrix for this iterate: Θ = z/s on the linear rows, W⁻²
+        // on the cones.
+        for i in 0..linear {
             theta[i] = z[i] / s[i];
         }
-        pattern.assemble(&mass, &theta);
+        for c in 0..cones {
+            let (s_c, z_c) = (cone_of(&s, linear, c), cone_of(&z, linear, c));
+            scaling[c] = NtScaling::new(&s_c, &z_c);
+            lambda[c] = scaling[c].times(&z_c);
+            cone_theta[c] = scaling[c].inverse_squared();
+        }
+        pattern.assemble(&mass, &theta[..linear]);
+        pattern.add_cone_blocks(linear, &scaling);
         factor
             .factorise(&pattern.matrix)
             .map_err(|e| fail(format!("iteration {iteration}: {e}")))?;
@@ -369,8 +466,20 @@ pub fn solve(
         // Predictor (affine) then corrector with the same factor.
         let mut direction =
             |rc: &[f64], dx: &mut Vec<f64>, ds: &mut Vec<f64>, dz: &mut Vec<f64>| {
-                for i in 0..m {
+                // theta = −(W⁻² r_p − W⁻¹ (λ ∘⁻¹ r_c)), row by row.
+                for i in 0..linear {
                     theta[i] = (rc[i] - z[i] * r_p[i]) / s[i];
+                }
+                let mut scaled_rc = vec![[0.0; 3]; cones];
+                for c in 0..cones {
+                    let d = second_order_cone::jordan_divide(&lambda[c], &cone_of(rc, linear, c));
+                    let w_inv_d = scaling[c].inverse_times(&d);
+                    let r = cone_of(&r_p, linear, c);
+                    let t = &cone_theta[c];
+                    let value: Cone3 = [0, 1, 2]
+                        .map(|p| w_inv_d[p] - (t[p][0] * r[0] + t[p][1] * r[1] + t[p][2] * r[2]));
+                    set_cone(&mut theta, linear, c, &value);
+                    scaled_rc[c] = w_inv_d;
                 }
                 pattern.transpose_times(&theta, &mut rhs);
                 for c in 0..n {
@@ -380,24 +489,54 @@ pub fn solve(
                 pattern.times(dx, &mut adx);
                 for i in 0..m {
                     ds[i] = -r_p[i] - adx[i];
+                }
+                for i in 0..linear {
                     dz[i] = (-rc[i] - z[i] * ds[i]) / s[i];
                 }
+                for c in 0..cones {
+                    let ds_c = cone_of(ds, linear, c);
+                    let t = &cone_theta[c];
+                    let value: Cone3 = [0, 1, 2].map(|p| {
+                        -scaled_rc[c][p]
+                            - (t[p][0] * ds_c[0] + t[p][1] * ds_c[1] + t[p][2] * ds_c[2])
+                    });
+                    set_cone(dz, linear, c, &value);
+                }
             };
-        for i in 0..m {
+        for i in 0..linear {
             rc[i] = s[i] * z[i];
         }
+        for (c, l) in lambda.iter().enumerate() {
+            set_cone(&mut rc, linear, c, &second_order_cone::jordan_product(l, l));
+        }
         direction(&rc, &mut dx, &mut ds, &mut dz);
-        let alpha = step_to_boundary(&s, &ds).min(step_to_boundary(&z, &dz));
+        let alpha =
+            step_in_cones(&s, &ds, linear, cones).min(step_in_cones(&z, &dz, linear, cones));
         let affine_gap: f64 = (0..m)
             .map(|i| (s[i] + alpha * ds[i]) * (z[i] + alpha * dz[i]))
             .sum();
         let sigma = (affine_gap / gap).powi(3).min(1.0);
-        for i in 0..m {
+        for i in 0..linear {
             rc[i] = s[i] * z[i] + ds[i] * dz[i] - sigma * mu;
         }
+        for c in 0..cones {
+            let w = &scaling[c];
+            let second = second_order_cone::jordan_product(
+                &w.inverse_times(&cone_of(&ds, linear, c)),
+                &w.times(&cone_of(&dz, linear, c)),
+            );
+            let first = second_order_cone::jordan_product(&lambda[c], &lambda[c]);
+            let value = [
+                first[0] + second[0] - sigma * mu,
+                first[1] + second[1],
+                first[2] + second[2],
+            ];
+            set_cone(&mut rc, linear, c, &value);
+        }
         direction(&rc, &mut dx, &mut ds, &mut dz);
-        let alpha =
-            (STEP_FRACTION * step_to_boundary(&s, &ds).min(step_to_boundary(&z, &dz))).min(1.0);
+        let alpha = (STEP_FRACTION
+            * step_in_cones(&s, &ds, linear, cones).min(step_in_cones(&z, &dz, linear, cones)))
+        .min(1.0);
         for c in 0..n {
             x[c] += alpha * dx[c];
         }

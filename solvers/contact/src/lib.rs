@@ -11,9 +11,9 @@
 //!   D_α + Δt ∇D_α·u ≥ μ Δt |P_α A_α u|  (eq. 9),
 //!   a second-order cone (eq. 13). Inelastic, Coulomb's full cone; the
 //!   contact forces are the cone's dual variables ([`cocd`]). Solved by
-//!   grainflow's interior point on the normal equations where the cones
-//!   are linear (2D discs: [`interior_point`]), by Clarabel otherwise and
-//!   on request (the reference).
+//!   grainflow's interior point on the normal equations
+//!   ([`interior_point`]: half-planes in 2D, second-order cones in 3D),
+//!   by Clarabel on request (the reference) or where it fails.
 //! - **NSCD** (non-smooth contact dynamics, Moreau–Jean, section 3.5): the
 //!   same Euler step with Signorini's condition on the predicted gap,
 //!   D_α + Δt v_n ≥ 0 ⊥ f_n ≥ 0, and Coulomb's law with its sliding rule,
@@ -37,6 +37,7 @@ pub mod contacts;
 pub mod interior_point;
 mod normal_factor;
 pub mod nscd;
+pub mod second_order_cone;
 pub mod step;
 
 pub use cocd::ConicSolver;

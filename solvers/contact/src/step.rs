@@ -66,8 +66,8 @@ pub struct HardContact {
     pub max_iterations: u32,
     /// Candidate threshold D on the gap [m] (section 3.3).
     pub threshold: f64,
-    /// COCD: the interior-point code (Clarabel wherever the cones are not
-    /// linear).
+    /// COCD: the interior-point code (Clarabel takes over a step that
+    /// grainflow's fails).
     pub conic_solver: ConicSolver,
     /// Every listed pair enters the program, instead of those within reach
     /// and the left-out ones that would break their law
@@ -126,19 +126,6 @@ impl HardContact {
             conic_solver: ConicSolver::InteriorPoint,
             whole_list: false,
             previous_impulses: HashMap::new(),
-        }
-    }
-
-    /// The interior-point code that solves `system`'s COCD programs:
-    /// grainflow's where every cone is linear (2D discs, or no friction
-    /// with grains nor walls), Clarabel where 3D cones are second-order.
-    pub fn conic_solver_for(&self, system: &DemSystem) -> ConicSolver {
-        let linear_cones = system.dimension() == grainflow_core::Dimension::Two
-            || (system.law.friction == 0.0 && system.walls.iter().all(|w| w.friction == 0.0));
-        if linear_cones {
-            self.conic_solver
-        } else {
-            ConicSolver::Clarabel
         }
     }
 

@@ -93,6 +93,10 @@ fn on_incline(
     let mut separation: f64 = 0.0;
     for _ in 0..steps {
         let report = contact.step(&mut system, dt).unwrap();
+        assert!(
+            !report.fell_back,
+            "grainflow's interior point failed a step"
+        );
         assert!(report.coulomb_violation < TOLERANCE && report.penetration < TOLERANCE);
         assert!(report.complementarity < complementarity_bound(method));
         let gap = system.walls[0].distance(&system.particles.position[0]) - RADIUS;
