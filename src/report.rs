@@ -147,6 +147,13 @@ pub fn text(case: &Case, summary: &Value, out: &Path) -> String {
     if !others.is_empty() {
         let _ = writeln!(text, "  metrics: {}", others.join(", "));
     }
+    if let Some(first) = summary["metrics"]["first_fallback"].as_str() {
+        let _ = writeln!(
+            text,
+            "  Clarabel took over {} step(s) grainflow's interior point failed; the first at {first}",
+            summary["metrics"]["fallback_steps"]
+        );
+    }
     let _ = writeln!(
         text,
         "  outputs in {} (summary.json holds all of it)",

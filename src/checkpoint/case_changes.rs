@@ -3,7 +3,8 @@
 //! physics of the steps to come may differ: when it ends, what it writes
 //! and how often, when it checkpoints, its wall-clock limit, its threads
 //! and how it is shared among ranks (results do not depend on them beyond
-//! round-off). Any other change is refused,
+//! round-off), and how a hard-contact step's program is solved (the same
+//! solution to the solver's tolerance). Any other change is refused,
 //! naming the keys, since it would silently change the physics.
 
 /// The keys a resumed run may change, and the sections it may change
@@ -19,6 +20,10 @@ pub const SAFE_KEYS: &[&str] = &[
     "parallel.threads",
     "parallel.process_grid",
     "parallel.shared_memory",
+    // Which code solves a hard-contact step's program, and which listed
+    // pairs enter it: the same program's solution, to the tolerance.
+    "contact.conic_solver",
+    "contact.candidates",
 ];
 pub const SAFE_SECTIONS: &[&str] = &["checkpoint"];
 

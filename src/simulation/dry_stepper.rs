@@ -39,8 +39,12 @@ pub struct HardRecord {
     pub extra_programs: u64,
     pub closed: u64,
     pub unconverged_steps: u64,
-    /// Steps Clarabel took over from grainflow's interior point.
+    /// Steps Clarabel took over from grainflow's interior point, and the
+    /// first of them: when, and why the interior point failed (saved
+    /// apart, as `extra_programs`).
     pub fallback_steps: u64,
+    #[serde(skip)]
+    pub first_fallback: Option<String>,
     pub seconds_solve: f64,
 }
 
@@ -75,6 +79,7 @@ impl HardRecord {
             ("mean_closed_contacts", json!(self.closed as f64 / steps)),
             ("unconverged_steps", json!(self.unconverged_steps)),
             ("fallback_steps", json!(self.fallback_steps)),
+            ("first_fallback", json!(self.first_fallback)),
             ("seconds_per_solve", json!(self.seconds_solve / steps)),
         ] {
             metrics.insert(key.into(), value);
@@ -170,6 +175,17 @@ impl DryStepper {
                 )),
                 Ok(report) => {
                     record.add(&report);
+                    if report.fell_back && record.first_fallback.is_none() {
+                        record.first_fallback = Some(format!(
+                            "step {}, t = {:.6e} s: {}",
+                            system.steps,
+                            system.time,
+                            contact
+                                .last_fallback
+                                .as_deref()
+                                .unwrap_or("(no reason given)")
+                        ));
+                    }
                     if report.non_finite {
                         Some(format!(
                             "unstable at t = {:.6e} s (step {}): a position or velocity is not finite",
@@ -207,6 +223,7 @@ impl DryStepper {
             contact.save_state(state);
             state.put_value("hard_contact.record", record);
             state.put_u64("hard_contact.extra_programs", record.extra_programs);
+            state.put_value("hard_contact.first_fallback", &record.first_fallback);
         }
     }
 
@@ -216,6 +233,9 @@ impl DryStepper {
             *record = state.take_value("hard_contact.record")?;
             if state.contains("hard_contact.extra_programs") {
                 record.extra_programs = state.take_u64("hard_contact.extra_programs")?;
+            }
+            if state.contains("hard_contact.first_fallback") {
+                record.first_fallback = state.take_value("hard_contact.first_fallback")?;
             }
         }
         Ok(())

@@ -39,8 +39,10 @@ pub struct Solution {
     pub iterations: u32,
     /// Whether the solver stopped at reduced accuracy.
     pub reduced_accuracy: bool,
-    /// Whether Clarabel took over a step grainflow's interior point failed.
+    /// Whether Clarabel took over a step grainflow's interior point failed,
+    /// and why it failed.
     pub fell_back: bool,
+    pub fallback_reason: Option<String>,
 }
 
 /// The rows a contact contributes and the cone they form.
@@ -198,12 +200,12 @@ pub fn solve(
     let program = build(contacts, bodies, dimension, scales);
     // Should grainflow's interior point fail on a step, Clarabel takes it
     // over (and stops the run if it fails too).
-    let mut fell_back = false;
+    let mut fell_back = None;
     let (x, z, iterations, reduced_accuracy) = if solver == ConicSolver::InteriorPoint {
         match crate::interior_point::solve(&program, tolerance, max_iterations) {
             Ok(solution) => solution,
             Err(why) => {
-                fell_back = true;
+                fell_back = Some(why.clone());
                 solve_with_clarabel(&program, tolerance, max_iterations)
                     .map_err(|again| format!("{why}; then {again}"))?
             }
@@ -212,7 +214,8 @@ pub fn solve(
         solve_with_clarabel(&program, tolerance, max_iterations)?
     };
     let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
-    solution.fell_back = fell_back;
+    solution.fell_back = fell_back.is_some();
+    solution.fallback_reason = fell_back;
     Ok(solution)
 }
 
@@ -461,6 +464,7 @@ fn recover(
         iterations,
         reduced_accuracy,
         fell_back: false,
+        fallback_reason: None,
     };
     for body in 0..bodies {
         let first = body * d;

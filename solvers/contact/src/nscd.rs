@@ -136,6 +136,7 @@ pub fn solve(
             iterations: sweeps,
             reduced_accuracy: !converged,
             fell_back: false,
+            fallback_reason: None,
         },
         converged,
     )

@@ -73,6 +73,9 @@ pub struct HardContact {
     /// and the left-out ones that would break their law
     /// ([`candidates`]): the reference the selection is measured against.
     pub whole_list: bool,
+    /// Why grainflow's interior point failed the last step Clarabel took
+    /// over.
+    pub last_fallback: Option<String>,
     /// NSCD warm start: the impulses of the last step's contacts, by the
     /// ids of their grains (u64::MAX − wall for a wall).
     previous_impulses: HashMap<(u64, u64), (f64, Vec3)>,
@@ -125,6 +128,7 @@ impl HardContact {
             threshold,
             conic_solver: ConicSolver::InteriorPoint,
             whole_list: false,
+            last_fallback: None,
             previous_impulses: HashMap::new(),
         }
     }
@@ -227,6 +231,9 @@ impl HardContact {
             }
         };
         let seconds_solve = started.elapsed().as_secs_f64();
+        if solution.fell_back {
+            self.last_fallback = solution.fallback_reason.clone();
+        }
 
         // 4. The contact law at the solution.
         let residual = certificate::contact_law_residual(
