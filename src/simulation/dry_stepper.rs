@@ -16,7 +16,7 @@ pub enum DryStepper {
         contact_time: f64,
     },
     Hard {
-        contact: HardContact,
+        contact: Box<HardContact>,
         record: HardRecord,
     },
 }
@@ -101,7 +101,7 @@ impl DryStepper {
                 contact.prepare(system);
                 let dt = case.time.dt.expect("validated: hard contact has time.dt");
                 let stepper = DryStepper::Hard {
-                    contact,
+                    contact: Box::new(contact),
                     record: HardRecord::default(),
                 };
                 Ok((stepper, dt, None))
