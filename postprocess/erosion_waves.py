@@ -17,14 +17,15 @@ above 40 cm/s over a bed below 15 cm/s, and waves for 0.9 s < t < 2.2 s
 For each frame, in a window of --window metres behind the front r_f
 (front.csv):
 
-- the bed's top z_b(x): in bins one mean diameter wide, the 90th
+- the bed's top z_b(x): every mean diameter d along x, the 90th
   percentile of the tops of the grains that started in the layer (group
-  2), so that a few grains carried up into the flow do not set it;
+  2) within 3 d, so that a few grains carried up into the flow do not set
+  it;
 - u1, u2: the mean x velocity of the grains above and below z_b;
 - Φ1, Φ2: the grains' area (2D) over the area between the rigid bed and
   z_b, and between z_b and the surface (the top of the highest grain);
 - λ: the wavelength of the largest peak of the power spectrum of z_b
-  less its linear trend (zero-padded, wavelengths from 4 d to half the
+  less its linear trend (zero-padded, wavelengths from 10 d to half the
   window), its amplitude the rms of the detrended z_b, and the peak's
   power over the spectrum's mean (a wave train stands out; noise does
   not);
@@ -46,6 +47,12 @@ from read_output import particle_frames  # noqa: E402
 
 BED_GROUP = 2
 TOP_PERCENTILE = 90.0
+# The bed's top at each diameter along x is taken over a window of this
+# many diameters (a single grain's top is its own roughness), and waves
+# shorter than SHORTEST_DIAMETERS are not sought: the paper's are about
+# 40 diameters long.
+SMOOTHING_DIAMETERS = 3.0
+SHORTEST_DIAMETERS = 10.0
 
 
 def read_front(run):
@@ -56,16 +63,15 @@ def read_front(run):
             np.array([float(r["front"]) for r in rows]))
 
 
-def bed_top(x, top, edges):
-    """The TOP_PERCENTILE of `top` in each bin of `edges` (NaN where the
-    bin holds fewer than two grains)."""
-    index = np.digitize(x, edges) - 1
-    out = np.full(len(edges) - 1, np.nan)
-    for b in range(len(edges) - 1):
-        tops = top[index == b]
-        if len(tops) >= 2:
-            out[b] = np.percentile(tops, TOP_PERCENTILE)
-    return out
+def bed_top(x, top, centres, half_width):
+    """At each of `centres`, the TOP_PERCENTILE of `top` over the grains
+    within `half_width` along x (NaN where fewer than three)."""
+    order = np.argsort(x)
+    x, top = x[order], top[order]
+    lo = np.searchsorted(x, centres - half_width)
+    hi = np.searchsorted(x, centres + half_width)
+    return np.array([np.percentile(top[a:b], TOP_PERCENTILE) if b - a >= 3 else np.nan
+                     for a, b in zip(lo, hi)])
 
 
 def dominant_wave(z, spacing, shortest, longest):
@@ -100,10 +106,11 @@ def measure(frame, front, window, gravity):
     rigid_top = float(np.max(y[fixed] + radius[fixed])) if fixed.any() else 0.0
     d = 2.0 * float(np.mean(radius[~fixed]))
     edges = np.arange(front - window, front + 0.5 * d, d)
+    centres = 0.5 * (edges[1:] + edges[:-1])
     mobile = ~fixed
     bed = mobile & (group == BED_GROUP)
-    z_b = bed_top(x[bed], y[bed] + radius[bed], edges)
-    lam, amplitude, contrast = dominant_wave(z_b, d, 4.0 * d, 0.5 * window)
+    z_b = bed_top(x[bed], y[bed] + radius[bed], centres, SMOOTHING_DIAMETERS / 2 * d)
+    lam, amplitude, contrast = dominant_wave(z_b, d, SHORTEST_DIAMETERS * d, 0.5 * window)
     # Grains in the window above and below the bed's top of their bin.
     inside = mobile & (x >= edges[0]) & (x < edges[-1])
     index = np.clip(np.digitize(x, edges) - 1, 0, len(edges) - 2)
@@ -141,8 +148,7 @@ def measure(frame, front, window, gravity):
         "kh_threshold": threshold,
         "unstable": int(u1 - u2 > threshold) if math.isfinite(threshold) else "",
     }
-    centres = 0.5 * (edges[1:] + edges[:-1]) - front
-    return row, (centres, z_b - rigid_top)
+    return row, (centres - front, z_b - rigid_top)
 
 
 def main():
@@ -160,8 +166,12 @@ def main():
     front_t, front_x = read_front(args.run)
     rows, profiles = [], {}
     chart_times = [float(t) for t in args.times.split(",") if t]
+    seen = set()
     for frame in particle_frames(args.run):
         after = frame.time - args.release
+        if round(after, 9) in seen:
+            continue  # the final frame repeats the last scheduled one
+        seen.add(round(after, 9))
         if after < args.start - 1e-9 or after > args.end + 1e-9:
             continue
         front = float(np.interp(after, front_t, front_x))
