@@ -77,6 +77,23 @@ impl ContactSet {
         self.friction.push(friction);
     }
 
+    /// The contacts `a` with `keep[a]`, in order, without bodies.
+    pub fn subset(&self, keep: &[bool]) -> ContactSet {
+        let mut kept = ContactSet::default();
+        for a in (0..self.len()).filter(|&a| keep[a]) {
+            kept.push(
+                self.grain[a] as usize,
+                self.partner[a],
+                self.normal[a],
+                self.gap[a],
+                self.lever_i[a],
+                self.lever_j[a],
+                self.friction[a],
+            );
+        }
+        kept
+    }
+
     /// Relative velocity A_α u at the contact points.
     #[inline]
     pub fn relative_velocity(&self, a: usize, velocity: &[Vec3], spin: &[Vec3]) -> Vec3 {
@@ -292,23 +309,6 @@ pub fn listed(system: &DemSystem, threshold: f64) -> ContactSet {
         }
     }
     contacts
-}
-
-impl ContactSet {
-    /// The contacts `a` with `keep[a]`, in order, without bodies.
-    pub fn subset(&self, keep: &[bool]) -> ContactSet {
-        let mut kept = ContactSet::default();
-        for a in (0..self.len()).filter(|&a| keep[a]) {
-            kept.grain.push(self.grain[a]);
-            kept.partner.push(self.partner[a]);
-            kept.normal.push(self.normal[a]);
-            kept.gap.push(self.gap[a]);
-            kept.lever_i.push(self.lever_i[a]);
-            kept.lever_j.push(self.lever_j[a]);
-            kept.friction.push(self.friction[a]);
-        }
-        kept
-    }
 }
 
 /// The bodies `contacts` move (the moving grains with at least one of
