@@ -85,14 +85,12 @@ pub fn end_motion(
 /// Relative velocity A_α u of listed pair `a` from the velocity and spin
 /// of every owned grain (a wall does not move).
 pub fn relative_velocity(listed: &ContactSet, a: usize, velocity: &[Vec3], spin: &[Vec3]) -> Vec3 {
-    let n = listed.normal[a];
     let i = listed.grain[a] as usize;
-    let mut relative = velocity[i] - listed.lever_i[a] * spin[i].cross(&n);
-    if let Partner::Grain(j) = listed.partner[a] {
-        let j = j as usize;
-        relative -= velocity[j] + listed.lever_j[a] * spin[j].cross(&n);
-    }
-    relative
+    let j = match listed.partner[a] {
+        Partner::Grain(j) => Some((velocity[j as usize], spin[j as usize])),
+        Partner::Wall(_) => None,
+    };
+    listed.relative_velocity_of(a, Some((velocity[i], spin[i])), j)
 }
 
 /// The law a left-out pair must meet with no impulse.

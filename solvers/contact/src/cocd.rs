@@ -39,9 +39,8 @@ pub struct Solution {
     pub iterations: u32,
     /// Whether the solver stopped at reduced accuracy.
     pub reduced_accuracy: bool,
-    /// Whether Clarabel took over a step grainflow's interior point failed,
-    /// and why it failed.
-    pub fell_back: bool,
+    /// Why grainflow's interior point failed, where Clarabel took the step
+    /// over.
     pub fallback_reason: Option<String>,
 }
 
@@ -200,12 +199,12 @@ pub fn solve(
     let program = build(contacts, bodies, dimension, scales);
     // Should grainflow's interior point fail on a step, Clarabel takes it
     // over (and stops the run if it fails too).
-    let mut fell_back = None;
+    let mut fallback_reason = None;
     let (x, z, iterations, reduced_accuracy) = if solver == ConicSolver::InteriorPoint {
         match crate::interior_point::solve(&program, tolerance, max_iterations) {
             Ok(solution) => solution,
             Err(why) => {
-                fell_back = Some(why.clone());
+                fallback_reason = Some(why.clone());
                 solve_with_clarabel(&program, tolerance, max_iterations)
                     .map_err(|again| format!("{why}; then {again}"))?
             }
@@ -214,8 +213,7 @@ pub fn solve(
         solve_with_clarabel(&program, tolerance, max_iterations)?
     };
     let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
-    solution.fell_back = fell_back.is_some();
-    solution.fallback_reason = fell_back;
+    solution.fallback_reason = fallback_reason;
     Ok(solution)
 }
 
@@ -463,7 +461,6 @@ fn recover(
         tangential_impulse: vec![Vec3::zeros(); contacts.len()],
         iterations,
         reduced_accuracy,
-        fell_back: false,
         fallback_reason: None,
     };
     for body in 0..bodies {

@@ -94,20 +94,30 @@ impl ContactSet {
         kept
     }
 
-    /// Relative velocity A_α u at the contact points.
+    /// Relative velocity A_α u at the contact points, u by body column.
     #[inline]
     pub fn relative_velocity(&self, a: usize, velocity: &[Vec3], spin: &[Vec3]) -> Vec3 {
+        let motion =
+            |body: u32| (body != STATIC).then(|| (velocity[body as usize], spin[body as usize]));
+        self.relative_velocity_of(a, motion(self.body_i[a]), motion(self.body_j[a]))
+    }
+
+    /// Relative velocity of contact α from the velocity and spin of i and
+    /// of j (None for a side that does not move).
+    #[inline]
+    pub fn relative_velocity_of(
+        &self,
+        a: usize,
+        motion_i: Option<(Vec3, Vec3)>,
+        motion_j: Option<(Vec3, Vec3)>,
+    ) -> Vec3 {
         let n = self.normal[a];
         let mut relative = Vec3::zeros();
-        let bi = self.body_i[a];
-        if bi != STATIC {
-            let b = bi as usize;
-            relative += velocity[b] - self.lever_i[a] * spin[b].cross(&n);
+        if let Some((v, w)) = motion_i {
+            relative += v - self.lever_i[a] * w.cross(&n);
         }
-        let bj = self.body_j[a];
-        if bj != STATIC {
-            let b = bj as usize;
-            relative -= velocity[b] + self.lever_j[a] * spin[b].cross(&n);
+        if let Some((v, w)) = motion_j {
+            relative -= v + self.lever_j[a] * w.cross(&n);
         }
         relative
     }

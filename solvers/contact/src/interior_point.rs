@@ -413,6 +413,8 @@ pub fn solve(
     let mut scaling = vec![NtScaling::default(); cones];
     let mut lambda = vec![[0.0; 3]; cones];
     let mut cone_theta = vec![[[0.0; 3]; 3]; cones];
+    // W⁻¹ (λ ∘⁻¹ r_c) of each cone in the last direction.
+    let mut scaled_rc = vec![[0.0; 3]; cones];
     for iteration in 0..=max_iterations {
         // Residuals and the stopping test.
         pattern.times(&x, &mut ax);
@@ -470,7 +472,6 @@ pub fn solve(
                 for i in 0..linear {
                     theta[i] = (rc[i] - z[i] * r_p[i]) / s[i];
                 }
-                let mut scaled_rc = vec![[0.0; 3]; cones];
                 for c in 0..cones {
                     let d = second_order_cone::jordan_divide(&lambda[c], &cone_of(rc, linear, c));
                     let w_inv_d = scaling[c].inverse_times(&d);

@@ -135,7 +135,6 @@ pub fn solve(
             tangential_impulse,
             iterations: sweeps,
             reduced_accuracy: !converged,
-            fell_back: false,
             fallback_reason: None,
         },
         converged,

@@ -231,7 +231,7 @@ impl HardContact {
             }
         };
         let seconds_solve = started.elapsed().as_secs_f64();
-        if solution.fell_back {
+        if solution.fallback_reason.is_some() {
             self.last_fallback = solution.fallback_reason.clone();
         }
 
@@ -306,7 +306,7 @@ impl HardContact {
             complementarity: residual.complementarity,
             coulomb_violation: residual.coulomb,
             penetration,
-            fell_back: solution.fell_back,
+            fell_back: solution.fallback_reason.is_some(),
             threshold,
             seconds_solve,
             non_finite,
