@@ -78,6 +78,25 @@ impl Pouring {
         self.pours.iter().map(|p| p.count - p.poured).sum()
     }
 
+    /// Batches released so far, over all pours.
+    pub fn batches_released(&self) -> usize {
+        self.pours.iter().map(|p| p.batches).sum()
+    }
+
+    /// The pours still going on: grains per batch (the mean), their
+    /// shortest interval (s), and whether any waits for the previous batch
+    /// to land. None once every pour is done.
+    pub fn pace(&self, dimension: Dimension) -> Option<(usize, f64, bool)> {
+        let going: Vec<&Pour> = self.pours.iter().filter(|p| p.poured < p.count).collect();
+        if going.is_empty() {
+            return None;
+        }
+        let batch = going.iter().map(|p| p.batch_size(dimension)).sum::<usize>() / going.len();
+        let interval = going.iter().map(|p| p.interval).fold(f64::INFINITY, f64::min);
+        let waits = going.iter().any(|p| p.settled_speed.is_some());
+        Some((batch.max(1), interval, waits))
+    }
+
     /// One line per pour for the log: what it releases and how.
     pub fn describe(&self, dimension: Dimension) -> Vec<String> {
         self.pours

@@ -197,6 +197,30 @@ fn a_batch_waits_until_the_previous_one_has_landed() {
     assert!(wait > 0.03 + 0.01, "third batch {wait} s after the second");
 }
 
+/// `check`'s estimate of a pour runs the scene through its first batches as
+/// `grainflow run` does: the probe sees the releases the run makes, at the
+/// same times, and hands on what is left of the pour.
+#[test]
+fn checks_probe_of_a_pour_sees_the_releases_of_the_run() {
+    let case = case("settled_speed = 0.05", 0.4);
+    let (_, batches) = pour(&case);
+    let (probe, plan) = grainflow::check::pour_cost::run_first_batches(&case)
+        .unwrap()
+        .expect("a pour to probe");
+    // The probe stops at its third release here: the pour is done.
+    assert_eq!(probe.releases.len(), batches.len());
+    for (seen, made) in probe.releases.iter().zip(&batches) {
+        assert!((seen - made.time).abs() < 1e-12, "{seen} {}", made.time);
+    }
+    assert_eq!(probe.moving, 500);
+    assert_eq!((plan.remaining, plan.batch, plan.waits_for_landing), (0, 192, true));
+    assert!((plan.interval - 0.03).abs() < 1e-15 && (plan.dt - 5e-6).abs() < 1e-18);
+    // Each timed step knows the grains it moved: 192, then 384, then 500.
+    let counts: Vec<f64> = probe.steps.iter().map(|s| s.0).collect();
+    assert_eq!(counts[0], 192.0);
+    assert_eq!(*counts.last().unwrap(), 384.0);
+}
+
 #[test]
 fn a_pour_that_cannot_run_is_refused_before_anything_is_written() {
     let pour = |extra: &str| {

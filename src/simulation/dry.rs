@@ -168,6 +168,11 @@ impl DryModel {
         })
     }
 
+    /// The pours and how far they have gone.
+    pub fn pouring(&self) -> &pouring::Pouring {
+        &self.pouring
+    }
+
     pub fn dt(&self) -> f64 {
         self.dt
     }

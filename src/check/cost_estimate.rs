@@ -125,7 +125,7 @@ fn estimate(times: &[f64], steps: f64, evolution: Evolution) -> Option<Estimate>
 }
 
 /// `seconds` as h:mm:ss.
-fn clock(seconds: f64) -> String {
+pub(super) fn clock(seconds: f64) -> String {
     let s = seconds.round() as u64;
     format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
 }

@@ -3,9 +3,9 @@
 //! time estimated by timing a few steps of the scene itself.
 
 use crate::case::Case;
-use crate::cfl_steps::SpeedScales;
-use crate::check::Settling;
-use crate::cost_estimate::{self, Evolution};
+use crate::check::cfl_steps::SpeedScales;
+use super::Settling;
+use super::cost_estimate::{self, Evolution};
 use crate::simulation::coupled as coupled_simulation;
 use crate::{axisymmetric_scene, RunError};
 use grainflow_core::{Communicator, Dimension};
@@ -66,7 +66,7 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
     let dt = case.time.dt.expect("validated");
     let h = core.min(grid.dz);
     let moving = (0..p.n_owned).filter(|&k| !p.is_fixed(k));
-    let mut settling_from_rest = crate::cfl_steps::Settling::default();
+    let mut settling_from_rest = crate::check::cfl_steps::Settling::default();
     if let Some(k) = moving.min_by(|&a, &b| p.mass[a].total_cmp(&p.mass[b])) {
         let (rho, mu) = (f.density, f.viscosity);
         let diameter = 2.0 * p.radius[k];
@@ -92,7 +92,7 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
             settling.write(&mut out, dt, h);
             let added_mass = added_mass_coefficient(Dimension::Three);
             settling_from_rest =
-                crate::cfl_steps::Settling::from_rest(rho, rho_p, mu, diameter, g, added_mass);
+                crate::check::cfl_steps::Settling::from_rest(rho, rho_p, mu, diameter, g, added_mass);
         }
     }
     let _ = writeln!(out, "time:");
@@ -109,7 +109,7 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
                 driven: None,
             };
             let steps = scales.steps(case.time.end, dt, cfl, h);
-            let _ = writeln!(out, "{}", crate::check::scales_line(&scales, cfl, steps));
+            let _ = writeln!(out, "{}", super::scales_line(&scales, cfl, steps));
             (steps, format!("steps adapted to CFL {cfl}"))
         }
         None => ((case.time.end / dt).ceil(), "steps".to_string()),

@@ -1,0 +1,160 @@
+//! `check` of grains in a flow.
+
+use super::cost_estimate::{self, Evolution};
+use super::{cfl_steps, coupled_simulation, memory_line, scales_line, Settling};
+use crate::case::Case;
+use crate::{scene, RunError};
+use std::fmt::Write;
+
+/// `check` of grains in a fluid: the models, the dimensionless numbers of
+/// the lightest grain (density ratio, Archimedes, Schiller–Naumann terminal
+/// Reynolds and Stokes numbers), resolution, the fluid step against the
+/// CFL limit at that terminal velocity, the DEM sub-step, lubrication.
+pub(super) fn report(case: &Case) -> Result<String, RunError> {
+    let building = std::time::Instant::now();
+    let (system, contact_time) = coupled_simulation::build(case).map_err(RunError::Case)?;
+    let setup = building.elapsed().as_secs_f64();
+    let warning = coupled_simulation::check_dem_substep(system.dem_dt, contact_time)?;
+    let density_warning = coupled_simulation::check_density_ratio(
+        system.smallest_density_ratio(),
+        system.coupling,
+        system.flow.grid.dim(),
+    )?;
+    let f = case.fluid_section();
+    let grid = &system.flow.grid;
+    let dim = grid.dim();
+    let cells: usize = grid.cells.iter().product();
+    let p = &system.dem.particles;
+    let n = p.n_owned;
+    let mut out = String::new();
+    let _ = writeln!(out, "models:");
+    let _ = writeln!(
+        out,
+        "  {dim}D incompressible Navier–Stokes, staggered grid, RK3 + Crank–Nicolson, direct \
+         pressure solve"
+    );
+    let _ = writeln!(
+        out,
+        "  immersed boundaries: tanh solid fraction (eq. 8–10), direct forcing at every stage \
+         (eq. 7), loads {:?}",
+        system.coupling
+    );
+    let _ = writeln!(
+        out,
+        "  {dim}D soft-sphere DEM sub-cycled within each stage, hydrodynamic loads held fixed"
+    );
+    match &system.dem.lubrication {
+        Some(l) => {
+            let _ = writeln!(
+                out,
+                "  lubrication (eq. 19): eta/R = {:e}, acting up to gaps of {} R, implicit per pair",
+                l.roughness, l.range
+            );
+        }
+        None => {
+            let _ = writeln!(out, "  no lubrication ([lubrication] absent)");
+        }
+    }
+    match system.immersed.forcing_step {
+        Some(step) => {
+            let _ = writeln!(
+                out,
+                "  direct forcing: the transition layer relaxed as eq. 7 does at a step of \
+                 {step:.4e} s, whatever the fluid step (coupling.forcing_step)"
+            );
+        }
+        None => {
+            let _ = writeln!(out, "  direct forcing: eq. 7 at every stage");
+        }
+    }
+    let h = grid.spacing[..dim]
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let _ = writeln!(
+        out,
+        "fluid: {:?} cells ({cells}), spacing {:?} m; density {} kg/m3, viscosity {} Pa s",
+        &grid.cells[..dim],
+        &grid.spacing[..dim],
+        f.density,
+        f.viscosity
+    );
+    let _ = writeln!(out, "particles: {n}");
+    let moving: Vec<usize> = (0..n).filter(|&k| !p.is_fixed(k)).collect();
+    let dt = case.time.dt.expect("validated");
+    if let Some(&k) = moving
+        .iter()
+        .min_by(|&&a, &&b| p.mass[a].total_cmp(&p.mass[b]))
+    {
+        let rho = f.density;
+        let diameter = 2.0 * p.radius[k];
+        let rho_p = p.mass[k] / grainflow_ibm::particle_volume(system.dem.dimension(), p.radius[k]);
+        let g = system.dem.domain.gravity.norm();
+        let mu = f.viscosity;
+        let _ = writeln!(
+            out,
+            "  lightest grain: D = {diameter:.4e} m, D/dx = {:.1}, density ratio rho_p/rho = {:.4}",
+            diameter / h,
+            rho_p / rho
+        );
+        if dim == 3 && g > 0.0 && rho_p != rho {
+            let settling = Settling {
+                rho,
+                rho_p,
+                mu,
+                diameter,
+                g,
+            };
+            let velocity = settling.write(&mut out, dt, h);
+            let layer_step = system.immersed.forcing_step.unwrap_or(dt);
+            if let Some(w) = coupled_simulation::forcing_step_warning(velocity * layer_step / h) {
+                let _ = writeln!(out, "{w}");
+            }
+        }
+    }
+    let _ = writeln!(out, "time:");
+    let _ = writeln!(
+        out,
+        "  DEM sub-step <= {:.4e} s = {:.4} t_c (t_c = {contact_time:.4e} s): {:.0} sub-steps per fluid step",
+        system.dem_dt,
+        system.dem_dt / contact_time,
+        (dt / system.dem_dt).ceil()
+    );
+    let steps = (case.time.end / dt).ceil();
+    let _ = writeln!(
+        out,
+        "  end = {} s: {steps:.0} fluid steps, {:.3e} cell-steps",
+        case.time.end,
+        steps * cells as f64
+    );
+    let overlap_warning = scene::glued_overlap_warning(case).map_err(RunError::Case)?;
+    for w in warning
+        .iter()
+        .chain(&density_warning)
+        .chain(&overlap_warning)
+    {
+        let _ = writeln!(out, "{w}");
+    }
+    let dt = case
+        .time
+        .dt
+        .expect("validated: grains in a fluid have time.dt");
+    let (steps, what) = match case.time.cfl {
+        Some(cfl) => {
+            let scales = cfl_steps::speed_scales(&system);
+            let steps = scales.steps(case.time.end, dt, cfl, h);
+            let _ = writeln!(out, "{}", scales_line(&scales, cfl, steps));
+            (steps, format!("steps adapted to CFL {cfl}"))
+        }
+        None => ((case.time.end / dt).ceil(), "steps".to_string()),
+    };
+    let mut system = system;
+    let estimate = cost_estimate::probe(setup, steps, Evolution::Contacts, || {
+        system.step(dt).is_ok()
+    });
+    if let Some(estimate) = estimate {
+        let _ = writeln!(out, "{}", estimate.line(steps, &what));
+    }
+    let _ = writeln!(out, "{}", memory_line(case));
+    Ok(out)
+}

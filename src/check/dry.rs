@@ -1,0 +1,205 @@
+//! `check` of grains without a fluid: the contact model, the time step
+//! against the contact time, the threads, what the run will cost (a pour
+//! included) and its memory.
+
+use super::cost_estimate::{self, Evolution};
+use super::{memory_line, pour_cost};
+use crate::case::Case;
+use crate::simulation::dry::{check_time_step, time_step};
+use crate::simulation::dry_stepper::DryStepper;
+use crate::{scene, stability, RunError};
+use grainflow_contact::{ConicSolver, Method};
+use std::fmt::Write;
+
+/// `check` of a dry scene.
+pub(super) fn report(case: &Case) -> Result<String, RunError> {
+    let building = std::time::Instant::now();
+    let mut system = scene::build(case).map_err(RunError::Case)?;
+    let setup = building.elapsed().as_secs_f64();
+    // The first batch of a pour is there at t = 0: its grains count in the
+    // time step.
+    let (pouring, pour_lines) = crate::pouring::start(case, &mut system).map_err(RunError::Case)?;
+    let hard = scene::hard_contact(case);
+    let p = &system.particles;
+    let n = p.n_owned;
+    let glued = (0..n).filter(|&k| p.is_fixed(k)).count();
+    let mut out = String::new();
+    let dim = system.domain.dimension.count();
+    let _ = writeln!(out, "models:");
+    let model = match hard.as_ref().map(|h| h.method) {
+        None => "soft-sphere DEM (linear spring-dashpot, tangential history, Coulomb)".to_string(),
+        Some(Method::Cocd) => {
+            let solver = hard
+                .as_ref()
+                .map_or(ConicSolver::Clarabel, |h| h.conic_solver)
+                .name();
+            format!("hard contact: COCD, one conic program per step ({solver}), inelastic, Coulomb's cone")
+        }
+        Some(Method::Nscd { restitution }) => format!(
+            "hard contact: NSCD, Gauss-Seidel over the contacts, Newton restitution {restitution}, Coulomb"
+        ),
+    };
+    let _ = writeln!(out, "  {dim}D {model}");
+    let _ = writeln!(
+        out,
+        "  dry scene: no [fluid] table, so no fluid grid is allocated and no lubrication"
+    );
+    let _ = writeln!(out, "  walls: {}", system.walls.len());
+    for w in &system.walls {
+        let removal = w
+            .remove_at
+            .map(|t| format!(", removed at t = {t} s"))
+            .unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "    {} normal {:?} friction {}{}{}",
+            w.name,
+            w.normal.as_slice(),
+            w.friction,
+            if w.two_sided { ", two-sided" } else { "" },
+            removal
+        );
+    }
+    let periodic: Vec<&str> = ["x", "y", "z"]
+        .iter()
+        .zip(system.domain.periodic)
+        .filter(|(_, p)| *p)
+        .map(|(a, _)| *a)
+        .collect();
+    let _ = writeln!(
+        out,
+        "  periodic axes: {}",
+        if periodic.is_empty() {
+            "none".into()
+        } else {
+            periodic.join(", ")
+        }
+    );
+    let _ = writeln!(out, "particles: {n} ({glued} glued) at t = 0");
+    if !pour_lines.is_empty() {
+        let _ = writeln!(
+            out,
+            "  {} more to be poured during the run",
+            pouring.remaining()
+        );
+        for line in &pour_lines {
+            let _ = writeln!(out, "  {line}");
+        }
+    }
+    let masses: Vec<f64> = (0..n).map(|k| p.mass[k]).collect();
+    let (m_min, m_max) = (
+        masses.iter().cloned().fold(f64::MAX, f64::min),
+        masses.iter().cloned().fold(0.0, f64::max),
+    );
+    let _ = writeln!(
+        out,
+        "  mass: {m_min:.4e} .. {m_max:.4e} kg{}",
+        if dim == 2 { " per metre" } else { "" }
+    );
+    if let Some(hard) = &hard {
+        let dt = case.time.dt.expect("validated: hard contact has time.dt");
+        let _ = writeln!(out, "contact:");
+        let _ = writeln!(
+            out,
+            "  friction = {}, tolerance = {:.1e}, at most {} {} per step",
+            system.law.friction,
+            hard.tolerance,
+            hard.max_iterations,
+            if hard.method == Method::Cocd {
+                "interior-point iterations"
+            } else {
+                "Gauss-Seidel sweeps"
+            }
+        );
+        let _ = writeln!(
+            out,
+            "  candidate threshold D = {:.4e} m (widened to 3 v_max dt when grains are faster)",
+            hard.threshold
+        );
+        let _ = writeln!(out, "time:");
+        let steps = (case.time.end / dt).ceil();
+        let _ = writeln!(
+            out,
+            "  dt = {dt:.4e} s (no contact time: grains do not overlap); end = {} s: {steps:.0} steps",
+            case.time.end
+        );
+    } else {
+        let (dt, contact_time) = time_step(case, &system);
+        let warning = check_time_step(dt, contact_time)?;
+        let (k_lo, g_lo) = system.law.normal.coefficients(0.5 * m_min);
+        let _ = writeln!(out, "contact:");
+        let _ = writeln!(
+            out,
+            "  k_n = {k_lo:.4e} N/m, gamma_n = {g_lo:.4e} N s/m (lightest pair)"
+        );
+        let _ = writeln!(
+            out,
+            "  k_t/k_n = {}, friction = {}",
+            system.law.tangential_ratio, system.law.friction
+        );
+        let _ = writeln!(out, "  shortest contact time t_c = {contact_time:.4e} s");
+        let _ = writeln!(out, "time:");
+        let _ = writeln!(out, "  dt = {dt:.4e} s = {:.4} t_c", dt / contact_time);
+        let _ = writeln!(
+            out,
+            "  limits: accurate (restitution within 1 %) dt <= {:.4e} s; stable dt <= {:.4e} s",
+            stability::ACCURATE_DT_OVER_TC * contact_time,
+            stability::STABLE_DT_OVER_TC * contact_time
+        );
+        let steps = (case.time.end / dt).ceil();
+        let _ = writeln!(
+            out,
+            "  end = {} s: {steps:.0} steps, {:.3e} particle-steps",
+            case.time.end,
+            steps * n as f64
+        );
+        if let Some(w) = warning {
+            let _ = writeln!(out, "{w}");
+        }
+    }
+    if let Some(w) = scene::glued_overlap_warning(case).map_err(RunError::Case)? {
+        let _ = writeln!(out, "{w}");
+    }
+    // As `grainflow run` chooses them, on one rank.
+    let threads = grainflow_dem::threads::choose_threads(
+        n + pouring.remaining(),
+        rayon::current_num_threads(),
+        1,
+        case.parallel.as_ref().and_then(|p| p.threads),
+    );
+    let _ = writeln!(out, "threads: {} ({})", threads.threads, threads.why);
+    if pouring.remaining() > 0 {
+        // The pour's grains are still to come: its first batches are run
+        // as `grainflow run` would, and the rest summed batch by batch.
+        if let Some((probe, plan)) = pour_cost::run_first_batches(case)? {
+            if let Some(estimate) = pour_cost::estimate(&probe, &plan, setup) {
+                let _ = writeln!(out, "{}", estimate.lines(&probe, &plan));
+            }
+        }
+        let _ = writeln!(out, "{}", memory_line(case));
+        return Ok(out);
+    }
+    let (mut stepper, dt, _) = DryStepper::new(case, &mut system)?;
+    let steps = (case.time.end / dt).ceil();
+    let limit = case.time.overlap_limit;
+    // Timed on the threads the run would use.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.threads)
+        .build()
+        .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
+    let estimate = pool.install(|| {
+        cost_estimate::probe(setup, steps, Evolution::Contacts, || {
+            stepper.step(&mut system, dt, limit).is_none()
+        })
+    });
+    if let Some(estimate) = estimate {
+        let what = if case.time.rest_speed.is_some() {
+            "steps to time.end (at most: the run stops at rest)"
+        } else {
+            "steps to time.end"
+        };
+        let _ = writeln!(out, "{}", estimate.line(steps, what));
+    }
+    let _ = writeln!(out, "{}", memory_line(case));
+    Ok(out)
+}
