@@ -100,7 +100,7 @@ pub fn run_first_batches(case: &Case) -> Result<Option<(PourProbe, PourPlan)>, R
             probe.steps.push((grains as f64, clock.elapsed().as_secs_f64()));
             let after = model.pouring().batches_released();
             if after > before {
-                probe.releases.extend(std::iter::repeat(model.system.time).take(after - before));
+                probe.releases.extend(std::iter::repeat_n(model.system.time, after - before));
                 grains = moving(&model);
             }
         }
