@@ -80,6 +80,7 @@ fn factorise_numeric(
     values: &mut [f64],
     work: &mut MemBuffer,
     matrix: &CscMatrix<f64>,
+    par: Par,
 ) -> Result<(), String> {
     symbolic
         .factorize_numeric_llt(
@@ -87,7 +88,7 @@ fn factorise_numeric(
             SparseColMatRef::new(symbolic_pattern(matrix), &matrix.nzval),
             Side::Upper,
             no_regularisation(),
-            Par::Seq,
+            par,
             MemStack::new(work),
             Default::default(),
         )
@@ -145,13 +146,15 @@ impl NormalFactor {
 
 /// One sparse Cholesky of the whole matrix, in the order given (the
 /// interior point numbers its unknowns by AMD) or by AMD: symbolic analysis once,
-/// numeric factorisations per iteration. faer picks simplicial or
+/// numeric factorisations per iteration, on the threads of the pool it
+/// is built in. faer picks simplicial or
 /// supernodal by the factor's density; on a 2D packing of 2,000 discs
 /// forcing supernodal doubled the step.
 pub(crate) struct WholeFactor {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
     work: MemBuffer,
+    par: Par,
 }
 
 impl WholeFactor {
@@ -168,19 +171,31 @@ impl WholeFactor {
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| format!("symbolic factorisation: {e:?}"))?;
+        // faer runs the dense blocks of a supernodal factor on the threads
+        // (the supernodes in turn): the same arithmetic in the same order,
+        // so the factor is the same bit for bit on any number of threads.
+        // On the 3D column of 2,700 spheres (16,000 unknowns, not split) 8
+        // steps took 41 s against 45 s sequential on two threads.
+        let threads = rayon::current_num_threads();
+        let par = if threads > 1 {
+            Par::rayon(threads)
+        } else {
+            Par::Seq
+        };
         let scratch = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, par),
         ]);
         Ok(WholeFactor {
             values: vec![0.0; symbolic.len_val()],
             symbolic,
             work: MemBuffer::new(scratch),
+            par,
         })
     }
 
     fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
-        factorise_numeric(&self.symbolic, &mut self.values, &mut self.work, matrix)
+        factorise_numeric(&self.symbolic, &mut self.values, &mut self.work, matrix, self.par)
     }
 
     fn solve(&mut self, rhs: &mut [f64]) {
@@ -436,6 +451,7 @@ impl Half {
             &mut self.values,
             &mut self.work,
             &self.matrix,
+            Par::Seq,
         )?;
         let first = self.interior;
         let mut lambda = std::mem::replace(&mut self.lambda, Mat::new());
@@ -678,9 +694,16 @@ mod tests {
     /// θ_r spread over twelve orders of magnitude, as late in an interior
     /// point.
     fn grid_normal_matrix(nx: usize, ny: usize) -> CscMatrix<f64> {
-        let node = |i: usize, j: usize| i + nx * j;
+        lattice_normal_matrix([nx, ny, 1], &[[1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    }
+
+    /// The same on an nx × ny × nz lattice with the given neighbours.
+    fn lattice_normal_matrix(size: [usize; 3], offsets: &[[usize; 3]]) -> CscMatrix<f64> {
+        let [nx, ny, nz] = size;
+        let node = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
+        let nodes = nx * ny * nz;
         let mut entries: BTreeMap<(usize, usize), f64> = BTreeMap::new();
-        for u in 0..3 * nx * ny {
+        for u in 0..3 * nodes {
             entries.insert((u, u), 1.0);
         }
         let mut pseudo_random = 12345u64;
@@ -690,32 +713,34 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (pseudo_random >> 11) as f64 / (1u64 << 53) as f64
         };
-        for j in 0..ny {
-            for i in 0..nx {
-                for (di, dj) in [(1, 0), (0, 1), (1, 1)] {
-                    if i + di >= nx || j + dj >= ny {
-                        continue;
-                    }
-                    let (a, b) = (node(i, j), node(i + di, j + dj));
-                    let theta = 10f64.powf(12.0 * next() - 6.0);
-                    let mut row = Vec::with_capacity(6);
-                    for d in 0..3 {
-                        row.push((3 * a + d, next() - 0.5));
-                    }
-                    for d in 0..3 {
-                        row.push((3 * b + d, next() - 0.5));
-                    }
-                    for &(c, vc) in &row {
-                        for &(r, vr) in &row {
-                            if r <= c {
-                                *entries.entry((c, r)).or_insert(0.0) += theta * vc * vr;
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    for &[di, dj, dk] in offsets {
+                        if i + di >= nx || j + dj >= ny || k + dk >= nz {
+                            continue;
+                        }
+                        let (a, b) = (node(i, j, k), node(i + di, j + dj, k + dk));
+                        let theta = 10f64.powf(12.0 * next() - 6.0);
+                        let mut row = Vec::with_capacity(6);
+                        for d in 0..3 {
+                            row.push((3 * a + d, next() - 0.5));
+                        }
+                        for d in 0..3 {
+                            row.push((3 * b + d, next() - 0.5));
+                        }
+                        for &(c, vc) in &row {
+                            for &(r, vr) in &row {
+                                if r <= c {
+                                    *entries.entry((c, r)).or_insert(0.0) += theta * vc * vr;
+                                }
                             }
                         }
                     }
                 }
             }
         }
-        let n = 3 * nx * ny;
+        let n = 3 * nodes;
         let mut colptr = vec![0usize; n + 1];
         for &(c, _) in entries.keys() {
             colptr[c + 1] += 1;
@@ -850,6 +875,39 @@ mod tests {
             })
         };
         let (one, two) = (on(1), on(2));
+        assert!(one
+            .iter()
+            .zip(&two)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+
+    #[test]
+    fn the_whole_supernodal_factor_is_the_same_on_any_number_of_threads() {
+        // A 3D lattice: dense supernodes, whose blocks faer runs on the threads.
+        let matrix = lattice_normal_matrix(
+            [14, 14, 14],
+            &[[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [0, 1, 1]],
+        );
+        let b: Vec<f64> = (0..matrix.n).map(|k| (k as f64).cos()).collect();
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut whole = NormalFactor::with_split_from(&matrix, usize::MAX, false).unwrap();
+                let NormalFactor::Whole(factor) = &whole else {
+                    panic!("split");
+                };
+                assert!(matches!(
+                    factor.symbolic.raw(),
+                    SymbolicCholeskyRaw::Supernodal(_)
+                ));
+                solve_with(&mut whole, &matrix, &b)
+            })
+        };
+        let (one, two) = (on(1), on(2));
+        assert!(backward_error(&matrix, &one, &b) < 1e-14);
         assert!(one
             .iter()
             .zip(&two)
