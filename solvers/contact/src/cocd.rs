@@ -154,6 +154,9 @@ pub struct ConicProgram {
     /// Rows in the nonnegative cone, then second-order cones of size 3.
     pub linear_rows: usize,
     pub cone_count: usize,
+    /// The position of each column's body: where the factor's ordering
+    /// cuts the packing.
+    pub column_position: Vec<[f64; 3]>,
     kinds: Vec<Rows>,
     first_row: Vec<usize>,
     dimension: Dimension,
@@ -322,6 +325,14 @@ pub fn build(
         b,
         linear_rows,
         cone_count,
+        column_position: (0..columns)
+            .map(|c| {
+                bodies
+                    .position
+                    .get(c / d)
+                    .map_or([0.0; 3], |x| [x.x, x.y, x.z])
+            })
+            .collect(),
         kinds,
         first_row,
         dimension,

@@ -174,6 +174,9 @@ pub struct Bodies {
     pub column: Vec<u32>,
     /// Owned grain of each column.
     pub grain: Vec<u32>,
+    /// Centre at the start of the step (the factor's ordering cuts the
+    /// packing by planes).
+    pub position: Vec<Vec3>,
     pub radius: Vec<f64>,
     pub mass: Vec<f64>,
     pub inverse_mass: Vec<f64>,
@@ -352,6 +355,7 @@ pub fn with_bodies(
         }
         bodies.column[k] = bodies.grain.len() as u32;
         bodies.grain.push(k as u32);
+        bodies.position.push(p.position[k]);
         bodies.radius.push(p.radius[k]);
         bodies.mass.push(p.mass[k]);
         bodies.inverse_mass.push(p.inverse_mass[k]);

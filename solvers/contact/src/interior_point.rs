@@ -378,7 +378,8 @@ pub fn solve(
     let unit = NtScaling::new(&[1.0, 0.0, 0.0], &[1.0, 0.0, 0.0]);
     pattern.assemble(&mass, &vec![1.0; linear]);
     pattern.add_cone_blocks(linear, &vec![unit; cones]);
-    let mut factor = NormalFactor::new(&pattern.matrix, pattern.ordered).map_err(fail)?;
+    let mut factor = NormalFactor::new(&pattern.matrix, pattern.ordered, &program.column_position)
+        .map_err(fail)?;
     factor.factorise(&pattern.matrix).map_err(fail)?;
 
     // Start: the minimiser of ½xᵀPx + qᵀx + ½|Ax − b|², then s and z

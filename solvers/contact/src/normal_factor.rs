@@ -3,9 +3,12 @@
 //! pattern), refactorised at every iteration with the same pattern.
 //!
 //! Small programs are factorised whole: one sparse Cholesky (faer) in the
-//! order the interior point gave the unknowns (AMD), on one thread.
+//! order the interior point gave the unknowns (AMD). Large ones that no
+//! small separator splits (3D packings, whose separators are slices of
+//! grains) are factorised whole too, in nested-dissection order
+//! ([`crate::dissection`]), faer running the dense blocks on the threads.
 //!
-//! Large ones are split in two by a separator S of the matrix graph (a
+//! Large ones (2D packings) are split in two by a separator S of the matrix graph (a
 //! level of a breadth-first search from a peripheral unknown, cut at half
 //! the unknowns): K = [K₁₁ 0 K₁S; 0 K₂₂ K₂S; K_S1 K_S2 K_SS]. Each side
 //! i = 1, 2 factorises its own matrix M_i = [K_ii K_iS; K_Si K_SS] (a
@@ -106,9 +109,15 @@ impl NormalFactor {
     /// Ordering and symbolic analysis for the pattern of `matrix` (upper
     /// triangle, CSC). `ordered`: its unknowns are already in a
     /// fill-reducing order (see [`is_factorised_whole`]); otherwise a
-    /// whole factor orders them by AMD and permutes at each factorisation.
-    pub(crate) fn new(matrix: &CscMatrix<f64>, ordered: bool) -> Result<Self, String> {
-        Self::with_split_from(matrix, SPLIT_FROM_UNKNOWNS, ordered)
+    /// whole factor orders them by nested dissection (by planes through
+    /// `positions`, each unknown's body, when given) and permutes at each
+    /// factorisation.
+    pub(crate) fn new(
+        matrix: &CscMatrix<f64>,
+        ordered: bool,
+        positions: &[[f64; 3]],
+    ) -> Result<Self, String> {
+        Self::with_split_from(matrix, SPLIT_FROM_UNKNOWNS, ordered, positions)
     }
 
     /// As `new`, splitting matrices of at least `split_from` unknowns.
@@ -116,6 +125,7 @@ impl NormalFactor {
         matrix: &CscMatrix<f64>,
         split_from: usize,
         ordered: bool,
+        positions: &[[f64; 3]],
     ) -> Result<Self, String> {
         if matrix.n >= split_from {
             if let Some(split) = SplitFactor::new(matrix)? {
@@ -123,7 +133,7 @@ impl NormalFactor {
             }
         }
         Ok(NormalFactor::Whole(Box::new(WholeFactor::new(
-            matrix, ordered,
+            matrix, ordered, positions,
         )?)))
     }
 
@@ -145,7 +155,8 @@ impl NormalFactor {
 }
 
 /// One sparse Cholesky of the whole matrix, in the order given (the
-/// interior point numbers its unknowns by AMD) or by AMD: symbolic analysis once,
+/// interior point numbers its unknowns by AMD) or by nested dissection:
+/// symbolic analysis once,
 /// numeric factorisations per iteration, on the threads of the pool it
 /// is built in. faer picks simplicial or
 /// supernodal by the factor's density; on a 2D packing of 2,000 discs
@@ -158,11 +169,25 @@ pub(crate) struct WholeFactor {
 }
 
 impl WholeFactor {
-    fn new(matrix: &CscMatrix<f64>, ordered: bool) -> Result<Self, String> {
-        let ordering = if ordered {
-            SymmetricOrdering::Identity
-        } else {
-            SymmetricOrdering::Amd
+    fn new(matrix: &CscMatrix<f64>, ordered: bool, positions: &[[f64; 3]]) -> Result<Self, String> {
+        // Below the split's size the interior point has ordered the
+        // unknowns by AMD; above it nested dissection, by planes where the
+        // bodies' positions are known (see [`crate::dissection`]).
+        let dissected = (!ordered).then(|| {
+            let positions = (positions.len() == matrix.n).then_some(positions);
+            let forward =
+                crate::dissection::order(&matrix.colptr, &matrix.rowval, matrix.n, positions);
+            let mut inverse = vec![0usize; matrix.n];
+            for (new, &old) in forward.iter().enumerate() {
+                inverse[old] = new;
+            }
+            (forward, inverse)
+        });
+        let ordering = match &dissected {
+            None => SymmetricOrdering::Identity,
+            Some((forward, inverse)) => SymmetricOrdering::Custom(
+                faer::perm::PermRef::new_checked(forward, inverse, matrix.n),
+            ),
         };
         let symbolic = factorize_symbolic_cholesky(
             symbolic_pattern(matrix),
@@ -195,7 +220,13 @@ impl WholeFactor {
     }
 
     fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
-        factorise_numeric(&self.symbolic, &mut self.values, &mut self.work, matrix, self.par)
+        factorise_numeric(
+            &self.symbolic,
+            &mut self.values,
+            &mut self.work,
+            matrix,
+            self.par,
+        )
     }
 
     fn solve(&mut self, rhs: &mut [f64]) {
@@ -838,8 +869,8 @@ mod tests {
         let b: Vec<f64> = (0..n)
             .map(|k| ((k * 7919) % 1000) as f64 / 500.0 - 1.0)
             .collect();
-        let mut whole = NormalFactor::with_split_from(&matrix, usize::MAX, false).unwrap();
-        let mut split = NormalFactor::with_split_from(&matrix, 0, false).unwrap();
+        let mut whole = NormalFactor::with_split_from(&matrix, usize::MAX, false, &[]).unwrap();
+        let mut split = NormalFactor::with_split_from(&matrix, 0, false, &[]).unwrap();
         let NormalFactor::Split(parts) = &split else {
             panic!("the grid was not split");
         };
@@ -869,7 +900,7 @@ mod tests {
                 .build()
                 .unwrap();
             pool.install(|| {
-                let mut split = NormalFactor::with_split_from(&matrix, 0, false).unwrap();
+                let mut split = NormalFactor::with_split_from(&matrix, 0, false, &[]).unwrap();
                 assert!(matches!(split, NormalFactor::Split(_)));
                 solve_with(&mut split, &matrix, &b)
             })
@@ -895,7 +926,8 @@ mod tests {
                 .build()
                 .unwrap();
             pool.install(|| {
-                let mut whole = NormalFactor::with_split_from(&matrix, usize::MAX, false).unwrap();
+                let mut whole =
+                    NormalFactor::with_split_from(&matrix, usize::MAX, false, &[]).unwrap();
                 let NormalFactor::Whole(factor) = &whole else {
                     panic!("split");
                 };
