@@ -1,0 +1,168 @@
+#!/usr/bin/env python3
+"""One COCD step on a 3D packing of spheres at rest: grainflow's interior
+point on 1 and 2 threads, at each tolerance, and optionally Clarabel (the
+in-process reference, contact.conic_solver = "clarabel") on the same
+program.
+
+The packing: spheres of d = 1 mm +- 10 % (rho = 2500 kg/m3) on a jittered
+lattice in a square box (side chosen for --spheres), packed by the soft DEM
+to rest (e = 0.2, t_c = 2e-4 s, mu = 0.3); their radii are then shrunk by
+1.5 % (the soft contacts overlap by up to 5 % of a radius, which hard
+contact refuses) and ten COCD steps of 1 ms settle them. From that state
+one step of 1 ms is timed per configuration (`seconds_per_solve`, the
+conic solve with its assembly), --repeats times, alternating the
+configurations. Prints the table and writes it as JSON.
+
+usage: scripts/bench/cocd_step_3d.py [--spheres 10000] [--tolerances 1e-8,1e-5]
+         [--threads 1,2] [--repeats 2] [--clarabel] [--work DIR] [--json FILE]
+"""
+import argparse, json, math, os, subprocess, sys
+
+BOX = """[domain]
+dimension = 3
+lower = [0.0, 0.0, 0.0]
+upper = [{side}, {side}, {height}]
+gravity = [0.0, 0.0, -9.81]
+
+[particles]
+density = 2500.0
+radius = 5.0e-4
+radius_spread = 0.1
+seed = 3
+
+{block}
+
+[contact]
+{contact}
+
+[[walls]]
+name = "floor"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[walls]]
+point = [0.0, 0.0, 0.0]
+normal = [1.0, 0.0, 0.0]
+[[walls]]
+point = [{side}, 0.0, 0.0]
+normal = [-1.0, 0.0, 0.0]
+[[walls]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+[[walls]]
+point = [0.0, {side}, 0.0]
+normal = [0.0, -1.0, 0.0]
+
+[time]
+{time}
+
+[output]
+interval = 1.0
+"""
+
+SPACING = 0.0011
+
+
+def write(path, text):
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def run(binary, case, out, *sets, threads=2):
+    args = [binary, "run", case, "--out", out, "--threads", str(threads), "--json"]
+    for s in sets:
+        args += ["--set", s]
+    subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
+    with open(os.path.join(out, "summary.json")) as f:
+        return json.load(f)
+
+
+def packing(binary, work, spheres):
+    """The packing at rest after the hard settling: a CSV of the spheres."""
+    rest = os.path.join(work, "rest.csv")
+    if os.path.exists(rest):
+        return rest
+    # Lattice sites: a square base of k x k, layers to reach the count.
+    per_side = max(4, round((spheres / 1.5) ** (1 / 3)))
+    layers = math.ceil(spheres / per_side**2)
+    side = (per_side + 0.1) * SPACING
+    top = 0.0006 + (layers - 1) * SPACING + 1e-6
+    lattice = (f'[[particles.block]]\nkind = "lattice"\nlower = [0.0006, 0.0006, 0.0006]\n'
+               f'upper = [{side - 0.0006 + 1e-6}, {side - 0.0006 + 1e-6}, {top}]\n'
+               f'spacing = {SPACING}\njitter = 0.3')
+    fill = os.path.join(work, "fill.toml")
+    write(fill, BOX.format(side=side, height=2 * top + 0.01, block=lattice,
+                           contact='model = "soft"\nrestitution = 0.2\ncontact_time = 2.0e-4\nfriction = 0.3',
+                           time="end = 2.0\ndt_over_contact_time = 0.1\nrest_speed = 1.0e-3\nrest_after = 0.4"))
+    run(binary, fill, os.path.join(work, "fill"), threads=2)
+    # Shrink the radii by 1.5 %, at rest.
+    shrunk = os.path.join(work, "shrunk.csv")
+    with open(os.path.join(work, "fill", "final_particles.csv")) as f:
+        lines = f.read().splitlines()
+    rows = [lines[0]]
+    for line in lines[1:]:
+        x = line.split(",")
+        x[3] = repr(float(x[3]) * 0.985)
+        x[4] = x[5] = x[6] = "0.0"
+        rows.append(",".join(x))
+    write(shrunk, "\n".join(rows) + "\n")
+    settle = os.path.join(work, "settle.toml")
+    write(settle, step_case(side, 2 * top + 0.01, "shrunk.csv", "end = 1.0e-2\ndt = 1.0e-3"))
+    run(binary, settle, os.path.join(work, "settle"))
+    os.replace(os.path.join(work, "settle", "final_particles.csv"), rest)
+    write(os.path.join(work, "box.json"), json.dumps({"side": side, "height": 2 * top + 0.01}))
+    return rest
+
+
+def step_case(side, height, csv, time):
+    block = f'[[particles.block]]\nkind = "file"\npath = "{csv}"'
+    return BOX.format(side=side, height=height, block=block,
+                      contact='model = "cocd"\nfriction = 0.3', time=time)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--spheres", type=int, default=10000)
+    ap.add_argument("--tolerances", default="1e-8,1e-5")
+    ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--clarabel", action="store_true")
+    ap.add_argument("--work", default="/tmp/grainflow_cocd3d_bench")
+    ap.add_argument("--binary", default="target/release/grainflow")
+    ap.add_argument("--json")
+    a = ap.parse_args()
+    binary = os.path.abspath(a.binary)
+    work = os.path.join(a.work, str(a.spheres))
+    os.makedirs(work, exist_ok=True)
+    packing(binary, work, a.spheres)
+    with open(os.path.join(work, "box.json")) as f:
+        box = json.load(f)
+    case = os.path.join(work, "step.toml")
+    write(case, step_case(box["side"], box["height"], "rest.csv", "end = 1.0e-3\ndt = 1.0e-3"))
+    configs = [("interior_point", t, float(e)) for e in a.tolerances.split(",")
+               for t in map(int, a.threads.split(","))]
+    if a.clarabel:
+        configs += [("clarabel", 2, float(e)) for e in a.tolerances.split(",")]
+    results = {c: [] for c in configs}
+    for _ in range(a.repeats):
+        for c in configs:
+            solver, threads, tol = c
+            s = run(binary, case, os.path.join(work, "step"), f"contact.tolerance={tol}",
+                    f'contact.conic_solver="{solver}"', threads=threads)
+            results[c].append(s["metrics"])
+    table = []
+    print(f"{'solver':15} {'threads':>7} {'eps':>7} {'s per step':>22} {'iterations':>10} {'candidates':>10}")
+    for (solver, threads, tol), ms in results.items():
+        times = [m["seconds_per_solve"] for m in ms]
+        print(f"{solver:15} {threads:7d} {tol:7.0e} {', '.join(f'{t:.1f}' for t in times):>22} "
+              f"{ms[0]['mean_iterations']:10.0f} {ms[0]['mean_candidates']:10.0f}")
+        table.append({"solver": solver, "threads": threads, "tolerance": tol,
+                      "seconds_per_solve": times, "iterations": ms[0]["mean_iterations"],
+                      "candidates": ms[0]["mean_candidates"],
+                      "max_penetration": max(m["max_penetration"] for m in ms),
+                      "max_coulomb_violation": max(m["max_coulomb_violation"] for m in ms)})
+    if a.json:
+        write(a.json, json.dumps({"spheres": a.spheres, "results": table}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
