@@ -11,7 +11,7 @@ a bar spans their through-film readings.
 
 Filled markers joined by lines: the rebound read through the film (its
 peak after the stages less the loss the film of eq. 19 would still take on
-the way out, src/coupled_analysis.rs); open markers: the peak itself, read
+the way out, src/analysis/sphere_in_fluid.rs); open markers: the peak itself, read
 after every stage; crosses: the same runs read at the ends of fluid steps
 only. Dash-dotted: the answer of
 the lubrication film alone (eq. 19 from gap R/2 in to contact and out

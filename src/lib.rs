@@ -4,26 +4,18 @@
 //! lives in the solver crates (`grainflow-dem`, `grainflow-fluid`, ...). A
 //! run goes case file → [`case::Case`] (typed, validated) →
 //! [`simulation::model::Model`] (grains from [`scene::build`], a fluid from
-//! [`fluid_scene::build`], or both) → [`simulation::run`]: one time loop
+//! [`scene::fluid::build`], or both) → [`simulation::run`]: one time loop
 //! ([`simulation::time_loop`]) that calls the writers of [`output`] and the
 //! analyses on a schedule, and writes [`checkpoint`]s to resume from.
 
 pub mod analysis;
-pub mod axisymmetric_scene;
-pub mod bed_analysis;
 pub mod case;
 pub mod check;
 pub mod checkpoint;
-pub mod coupled_analysis;
-pub mod deposit;
-pub mod fluid_scene;
 pub mod footprint;
-pub mod grain_pairs;
 #[cfg(feature = "hdf5")]
 pub mod hdf5_output;
-pub mod initial_overlaps;
 pub mod output;
-pub mod pouring;
 pub mod progress;
 pub mod report;
 pub mod scene;

@@ -177,7 +177,7 @@ fn a_flow_gives_the_same_bits_on_one_and_two_threads() {
     );
     let run = |threads: usize| {
         on_threads(threads, || {
-            let mut solver = grainflow::fluid_scene::build(&case).unwrap();
+            let mut solver = grainflow::scene::fluid::build(&case).unwrap();
             for _ in 0..5 {
                 solver.step(0.01).unwrap();
             }

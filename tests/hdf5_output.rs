@@ -49,7 +49,7 @@ mod with_hdf5 {
         assert_eq!(case.output.format, OutputFormat::Hdf5);
         let dir = tempfile::tempdir().unwrap();
         let serial = Communicator::serial();
-        let mut solver = grainflow::fluid_scene::build(&case).unwrap();
+        let mut solver = grainflow::scene::fluid::build(&case).unwrap();
         let mut fields = Hdf5Fields::create(dir.path(), &case, &serial, Default::default())
             .unwrap()
             .expect("output.format = \"hdf5\" writes fields");
@@ -92,7 +92,7 @@ mod with_hdf5 {
         )
         .unwrap();
         let dir = tempfile::tempdir().unwrap();
-        let mut solver = grainflow::fluid_scene::build(&case).unwrap();
+        let mut solver = grainflow::scene::fluid::build(&case).unwrap();
         let mut fields = Hdf5Fields::create(
             dir.path(),
             &case,
@@ -272,7 +272,7 @@ mod on_two_ranks {
     /// Writes a field frame after two steps and a particle frame into `out`.
     fn write_frames(out: &Path, communicator: Communicator) {
         let case = flow_case();
-        let mut solver = grainflow::fluid_scene::build_on(&case, communicator.clone()).unwrap();
+        let mut solver = grainflow::scene::fluid::build_on(&case, communicator.clone()).unwrap();
         solver.step(0.01).unwrap();
         solver.step(0.01).unwrap();
         let mut fields = Hdf5Fields::create(out, &case, &communicator, Default::default())

@@ -6,7 +6,7 @@ mod common;
 
 use common::run_cli;
 use grainflow::case::Case;
-use grainflow::{pouring, scene};
+use grainflow::{scene::pouring, scene};
 use grainflow_dem::DemSystem;
 
 /// A 4 × 4 cm box, grains of 2 mm ± 10 %, batches of 8 × 8 × 3 sites.
@@ -213,7 +213,10 @@ fn checks_probe_of_a_pour_sees_the_releases_of_the_run() {
         assert!((seen - made.time).abs() < 1e-12, "{seen} {}", made.time);
     }
     assert_eq!(probe.moving, 500);
-    assert_eq!((plan.remaining, plan.batch, plan.waits_for_landing), (0, 192, true));
+    assert_eq!(
+        (plan.remaining, plan.batch, plan.waits_for_landing),
+        (0, 192, true)
+    );
     assert!((plan.interval - 0.03).abs() < 1e-15 && (plan.dt - 5e-6).abs() < 1e-18);
     // Each timed step knows the grains it moved: 192, then 384, then 500.
     let counts: Vec<f64> = probe.steps.iter().map(|s| s.0).collect();

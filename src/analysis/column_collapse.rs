@@ -1,7 +1,7 @@
 //! The collapse of a granular column released by removing its gates:
 //! its initial aspect ratio, its runout at rest and its height profiles.
 
-use crate::deposit;
+use crate::scene::deposit;
 use grainflow_core::Vec3;
 use grainflow_dem::DemSystem;
 use grainflow_io::write_whole;

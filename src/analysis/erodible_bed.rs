@@ -32,7 +32,7 @@
 
 use super::channel_grains::{raised_front, static_flowing, velocity_layers, Bins, Grains};
 use super::front_phases::{front_phases, FrontPhases};
-use crate::deposit;
+use crate::scene::deposit;
 use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::DemSystem;
 use grainflow_io::write_whole;

@@ -1,10 +1,12 @@
 //! Case-specific measurements, reported under `"metrics"` in `summary.json`
 //! and as CSV tables beside it.
 
+pub mod bed;
 mod channel_grains;
 mod column_collapse;
 mod erodible_bed;
 mod front_phases;
+pub mod sphere_in_fluid;
 
 use crate::case::AnalysisSection;
 pub use column_collapse::ColumnCollapse;

@@ -217,7 +217,7 @@ pub enum AnalysisSection {
     BouncingSphere,
     /// Grains in a fluid flowing down an inclined plane along x (section
     /// 4.2): profiles of the fluid and the grains, the bed's motion and the
-    /// Shields number at its surface ([`crate::bed_analysis`]).
+    /// Shields number at its surface ([`crate::analysis::bed`]).
     InclinedBed {
         /// Height of the slabs the grains are averaged over [m] (default
         /// half their mean diameter).

@@ -232,7 +232,7 @@ impl Case {
                 "an axisymmetric scene clusters radial cells at its wall only: \"upper_wall\"",
             ));
         }
-        crate::axisymmetric_scene::radial_faces(self)
+        crate::scene::axisymmetric::radial_faces(self)
             .map(|_| ())
             .map_err(|message| invalid("fluid.stretching", "(the radial cells given)", &message))
     }

@@ -347,7 +347,7 @@ impl Case {
                 ))
             }
         }
-        crate::fluid_scene::try_grid(self)
+        crate::scene::fluid::try_grid(self)
             .map_err(|message| invalid("fluid.stretching.faces", "(the faces given)", &message))?;
         Ok(())
     }

@@ -2,12 +2,12 @@
 //! dimensionless numbers of the lightest grain, the steps, and the wall
 //! time estimated by timing a few steps of the scene itself.
 
+use super::cost_estimate::{self, Evolution};
+use super::Settling;
 use crate::case::Case;
 use crate::check::cfl_steps::SpeedScales;
-use super::Settling;
-use super::cost_estimate::{self, Evolution};
 use crate::simulation::coupled as coupled_simulation;
-use crate::{axisymmetric_scene, RunError};
+use crate::{scene::axisymmetric as axisymmetric_scene, RunError};
 use grainflow_core::{Communicator, Dimension};
 use grainflow_ibm::settling::added_mass_coefficient;
 use std::fmt::Write;
@@ -91,8 +91,9 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
             };
             settling.write(&mut out, dt, h);
             let added_mass = added_mass_coefficient(Dimension::Three);
-            settling_from_rest =
-                crate::check::cfl_steps::Settling::from_rest(rho, rho_p, mu, diameter, g, added_mass);
+            settling_from_rest = crate::check::cfl_steps::Settling::from_rest(
+                rho, rho_p, mu, diameter, g, added_mass,
+            );
         }
     }
     let _ = writeln!(out, "time:");

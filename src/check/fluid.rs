@@ -4,7 +4,7 @@
 use super::cost_estimate::{self, Evolution};
 use super::memory_line;
 use crate::case::Case;
-use crate::{fluid_scene, RunError};
+use crate::{scene::fluid as fluid_scene, RunError};
 use grainflow_fluid::{ViscousScheme, CFL_LIMIT, EXPLICIT_VISCOUS_LIMIT};
 use std::fmt::Write;
 

@@ -9,8 +9,8 @@
 
 mod axisymmetric;
 pub mod cfl_steps;
-mod coupled;
 pub mod cost_estimate;
+mod coupled;
 mod dry;
 mod fluid;
 pub mod pour_cost;

@@ -97,10 +97,14 @@ pub fn run_first_batches(case: &Case) -> Result<Option<(PourProbe, PourPlan)>, R
             let before = model.pouring().batches_released();
             let clock = Instant::now();
             model.advance().map_err(RunError::Unstable)?;
-            probe.steps.push((grains as f64, clock.elapsed().as_secs_f64()));
+            probe
+                .steps
+                .push((grains as f64, clock.elapsed().as_secs_f64()));
             let after = model.pouring().batches_released();
             if after > before {
-                probe.releases.extend(std::iter::repeat_n(model.system.time, after - before));
+                probe
+                    .releases
+                    .extend(std::iter::repeat_n(model.system.time, after - before));
                 grains = moving(&model);
             }
         }
@@ -176,10 +180,18 @@ pub fn batch_time(probe: &PourProbe, plan: &PourPlan) -> (f64, bool) {
     if !plan.waits_for_landing {
         return (plan.interval, true);
     }
-    let landings: Vec<f64> = probe.releases.windows(2).skip(1).map(|w| w[1] - w[0]).collect();
+    let landings: Vec<f64> = probe
+        .releases
+        .windows(2)
+        .skip(1)
+        .map(|w| w[1] - w[0])
+        .collect();
     if landings.is_empty() {
         // Since the second release, or since the start: at least that long.
-        let since = probe.releases.get(1).map_or(probe.time, |&t| probe.time - t);
+        let since = probe
+            .releases
+            .get(1)
+            .map_or(probe.time, |&t| probe.time - t);
         return (since.max(plan.interval), false);
     }
     let mean = landings.iter().sum::<f64>() / landings.len() as f64;
@@ -257,7 +269,10 @@ impl PourEstimate {
     pub fn lines(&self, probe: &PourProbe, plan: &PourPlan) -> String {
         let clock = super::cost_estimate::clock;
         let landing = match (plan.waits_for_landing, self.measured) {
-            (false, _) => format!("one batch every {:.4} s (the pour's interval)", self.batch_time),
+            (false, _) => format!(
+                "one batch every {:.4} s (the pour's interval)",
+                self.batch_time
+            ),
             (true, true) => format!(
                 "one batch landing every {:.4} s, measured on the first {} batches",
                 self.batch_time,
@@ -322,7 +337,9 @@ mod tests {
                 probe.releases.push(t);
                 moving += 100;
             }
-            probe.steps.push((moving as f64, 1e-3 + 1e-6 * moving as f64));
+            probe
+                .steps
+                .push((moving as f64, 1e-3 + 1e-6 * moving as f64));
         }
         probe.time = 0.4;
         probe.wall = probe.steps.iter().map(|s| s.1).sum();
@@ -374,18 +391,32 @@ mod tests {
         let e = estimate(&probe, &plan(), 2.0).unwrap();
         // Ten batches of 100 steps each, the k-th with 500 + 100 k grains,
         // then 100 steps of settling with all 1,500.
-        let batches: f64 = (1..=10).map(|k| 100.0 * (1e-3 + 1e-6 * (500.0 + 100.0 * k as f64))).sum();
+        let batches: f64 = (1..=10)
+            .map(|k| 100.0 * (1e-3 + 1e-6 * (500.0 + 100.0 * k as f64)))
+            .sum();
         let settling = 100.0 * (1e-3 + 1e-6 * 1500.0);
         let expected = 2.0 + probe.wall + batches + settling;
-        assert!((e.seconds - expected).abs() < 1e-9 * expected, "{} {expected}", e.seconds);
+        assert!(
+            (e.seconds - expected).abs() < 1e-9 * expected,
+            "{} {expected}",
+            e.seconds
+        );
         assert!((e.steps - 1500.0).abs() < 1e-9);
         assert!((e.pour_ends - 1.4).abs() < 1e-9);
         assert!((e.high - 2.0 - probe.wall - 2.0 * (batches + settling)).abs() < 1e-9);
         // A time.end inside the pour stops the sum there.
-        let short = PourPlan { end: 0.65, ..plan() };
+        let short = PourPlan {
+            end: 0.65,
+            ..plan()
+        };
         let e = estimate(&probe, &short, 0.0).unwrap();
-        let expected = probe.wall + 100.0 * (1e-3 + 6e-4) + 100.0 * (1e-3 + 7e-4) + 50.0 * (1e-3 + 8e-4);
-        assert!((e.seconds - expected).abs() < 1e-9, "{} {expected}", e.seconds);
+        let expected =
+            probe.wall + 100.0 * (1e-3 + 6e-4) + 100.0 * (1e-3 + 7e-4) + 50.0 * (1e-3 + 8e-4);
+        assert!(
+            (e.seconds - expected).abs() < 1e-9,
+            "{} {expected}",
+            e.seconds
+        );
     }
 
     #[test]

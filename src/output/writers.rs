@@ -11,7 +11,7 @@
 use super::fields::FieldFiles;
 use super::grains::{grain_series_row, write_tracked, ParticleFiles, GRAIN_SERIES, TRACKED};
 use super::RunDirectory;
-use crate::bed_analysis::{BedRecord, InclinedBed};
+use crate::analysis::bed::{BedRecord, InclinedBed};
 use crate::case::{Case, OutputFormat};
 use crate::simulation::model::Model;
 use grainflow_core::Communicator;

@@ -9,8 +9,8 @@ use super::coupled::{
 };
 use super::fluid::cfl_overrun;
 use crate::case::Case;
-use crate::coupled_analysis::SphereInFluid;
-use crate::{axisymmetric_scene, RunError};
+use crate::analysis::sphere_in_fluid::SphereInFluid;
+use crate::{scene::axisymmetric as axisymmetric_scene, RunError};
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_fluid::time_step_for_cfl_rates;
 use grainflow_ibm::axisymmetric::AxisymmetricCoupledSystem;

@@ -3,7 +3,7 @@
 //! CFL number, and the metrics of the analytic flows.
 
 use crate::case::{AnalysisSection, Case};
-use crate::fluid_scene::{self, ChannelProfile, ExactFlow};
+use crate::scene::fluid::{self as fluid_scene, ChannelProfile, ExactFlow};
 use crate::{sharing, RunError};
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_fluid::{FlowSolver, Location, StepReport, ViscousScheme, CFL_LIMIT};

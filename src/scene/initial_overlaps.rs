@@ -10,7 +10,7 @@
 //! exert no force on each other, so overlaps between two of them are
 //! only worth a warning (a rough bed built of interpenetrating grains).
 
-use crate::grain_pairs::near_pairs;
+use crate::scene::grain_pairs::near_pairs;
 use grainflow_core::Domain;
 use grainflow_dem::particles::NewParticle;
 use std::ops::Range;

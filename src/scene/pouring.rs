@@ -92,7 +92,10 @@ impl Pouring {
             return None;
         }
         let batch = going.iter().map(|p| p.batch_size(dimension)).sum::<usize>() / going.len();
-        let interval = going.iter().map(|p| p.interval).fold(f64::INFINITY, f64::min);
+        let interval = going
+            .iter()
+            .map(|p| p.interval)
+            .fold(f64::INFINITY, f64::min);
         let waits = going.iter().any(|p| p.settled_speed.is_some());
         Some((batch.max(1), interval, waits))
     }

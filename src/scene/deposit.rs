@@ -15,7 +15,7 @@
 //! smaller than a grain instead let sparse grains ahead of a 3D front
 //! percolate: the 3D runouts read 40–60 % longer at a ≈ 0.6–1.)
 
-use crate::grain_pairs::near_pairs;
+use crate::scene::grain_pairs::near_pairs;
 use grainflow_core::{Domain, Vec3};
 
 /// Two grains are in contact when their surfaces are less than this

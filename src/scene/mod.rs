@@ -1,7 +1,18 @@
-//! Scene assembly: turns a validated [`Case`] into a [`DemSystem`].
+//! Scene assembly: turns a validated [`Case`] into what a run steps: the
+//! grains ([`build`], a [`DemSystem`]), the flow ([`fluid`]), the flow in
+//! (r, z) ([`axisymmetric`]); with the grains poured during a run
+//! ([`pouring`]), the deposits written once and read back ([`deposit`]),
+//! and the checks of grains placed in contact ([`initial_overlaps`],
+//! [`grain_pairs`]).
+
+pub mod axisymmetric;
+pub mod deposit;
+pub mod fluid;
+pub mod grain_pairs;
+pub mod initial_overlaps;
+pub mod pouring;
 
 use crate::case::{BlockSection, Case};
-use crate::initial_overlaps;
 use grainflow_contact::{ConicSolver, HardContact, Method};
 use grainflow_core::{fits, process_grid, Communicator, Dimension, Domain, Vec3};
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
