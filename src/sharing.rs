@@ -6,7 +6,7 @@
 //! the work, set the pace).
 
 use crate::case::Case;
-use crate::{scene::fluid as fluid_scene, scene};
+use crate::{scene, scene::fluid as fluid_scene};
 use grainflow_core::{fits, grains_per_box, Vec3};
 use grainflow_dem::DemSystem;
 use grainflow_fluid::{Grid, Partition};

@@ -6,7 +6,7 @@ mod common;
 
 use common::run_cli;
 use grainflow::case::Case;
-use grainflow::{scene::pouring, scene};
+use grainflow::{scene, scene::pouring};
 use grainflow_dem::DemSystem;
 
 /// A 4 × 4 cm box, grains of 2 mm ± 10 %, batches of 8 × 8 × 3 sites.

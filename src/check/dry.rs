@@ -18,7 +18,8 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
     let setup = building.elapsed().as_secs_f64();
     // The first batch of a pour is there at t = 0: its grains count in the
     // time step.
-    let (pouring, pour_lines) = crate::scene::pouring::start(case, &mut system).map_err(RunError::Case)?;
+    let (pouring, pour_lines) =
+        crate::scene::pouring::start(case, &mut system).map_err(RunError::Case)?;
     let hard = scene::hard_contact(case);
     let p = &system.particles;
     let n = p.n_owned;

@@ -8,8 +8,8 @@ use super::coupled::{
     CoupledCounts,
 };
 use super::fluid::cfl_overrun;
-use crate::case::Case;
 use crate::analysis::sphere_in_fluid::SphereInFluid;
+use crate::case::Case;
 use crate::{scene::axisymmetric as axisymmetric_scene, RunError};
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_fluid::time_step_for_cfl_rates;

@@ -5,10 +5,10 @@
 
 use super::dry::shortest_contact_time;
 use super::fluid::cfl_overrun;
-use crate::case::{AnalysisSection, Case};
 use crate::analysis::sphere_in_fluid::SphereInFluid;
+use crate::case::{AnalysisSection, Case};
 use crate::stability::TimeStepVerdict;
-use crate::{scene::fluid as fluid_scene, scene, sharing, stability, RunError};
+use crate::{scene, scene::fluid as fluid_scene, sharing, stability, RunError};
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_fluid::time_step_for_cfl_rates;
 use grainflow_ibm::forcing::WallLayer;

@@ -6,7 +6,7 @@ use super::dry_stepper::DryStepper;
 use crate::analysis::Analysis;
 use crate::case::Case;
 use crate::stability::{self, TimeStepVerdict};
-use crate::{scene::pouring, scene, sharing, RunError};
+use crate::{scene, scene::pouring, sharing, RunError};
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_dem::threads::{self, choose_threads, ThreadChoice};
 use grainflow_dem::DemSystem;
