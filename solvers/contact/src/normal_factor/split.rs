@@ -1,0 +1,478 @@
+//! The factor split in two halves and a dense separator (see the parent
+//! module for the algebra).
+
+use super::*;
+
+/// One half of a split: M_i = [K_ii K_iS; K_Si K_SS] in its own ordering
+/// (its interior by AMD, then the separator).
+pub(crate) struct Half {
+    /// Unknown of K of each column of M_i.
+    unknown: Vec<usize>,
+    /// Interior columns (the separator's follow).
+    interior: usize,
+    /// M_i's upper pattern and values, and the entry of K each value
+    /// copies.
+    matrix: CscMatrix<f64>,
+    source: Vec<usize>,
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+    work: MemBuffer,
+    /// Λ_i (lower triangular) and T_i = Λ_i Λ_iᵀ.
+    lambda: Mat<f64>,
+    schur_part: Mat<f64>,
+    /// w_i of the last forward solve.
+    forward_solution: Vec<f64>,
+}
+
+/// The matrix split in two halves and a dense separator.
+pub(crate) struct SplitFactor {
+    halves: [Half; 2],
+    /// Unknowns of the separator, in the order of Σ's rows.
+    pub(super) separator: Vec<usize>,
+    /// (row, column) of Σ and entry of K of each K_SS value (upper).
+    separator_entries: Vec<(usize, usize, usize)>,
+    /// Σ's Cholesky factor (lower).
+    schur: Mat<f64>,
+    dense_work: MemBuffer,
+}
+
+impl SplitFactor {
+    /// The split of `matrix`, or None where no separator small enough is
+    /// found.
+    pub(super) fn new(matrix: &CscMatrix<f64>) -> Result<Option<Self>, String> {
+        let n = matrix.n;
+        let neighbours = adjacency(matrix);
+        let Some(side_of) = bisect(&neighbours) else {
+            return Ok(None);
+        };
+        let separator: Vec<usize> = (0..n).filter(|&u| side_of[u] == SEPARATOR).collect();
+        if separator.len() > LARGEST_SEPARATOR
+            || separator.len() as f64 > LARGEST_SEPARATOR_FRACTION * n as f64
+        {
+            return Ok(None);
+        }
+        let ns = separator.len();
+        let mut position_in_separator = vec![usize::MAX; n];
+        for (k, &u) in separator.iter().enumerate() {
+            position_in_separator[u] = k;
+        }
+        let half = |which: u8| -> Result<Half, String> {
+            let interior: Vec<usize> = (0..n).filter(|&u| side_of[u] == which).collect();
+            Half::new(matrix, &interior, &separator)
+        };
+        let halves = [half(0)?, half(1)?];
+        let mut separator_entries = Vec::new();
+        for column in 0..n {
+            let c = position_in_separator[column];
+            if c == usize::MAX {
+                continue;
+            }
+            for k in matrix.colptr[column]..matrix.colptr[column + 1] {
+                let r = position_in_separator[matrix.rowval[k]];
+                if r != usize::MAX {
+                    separator_entries.push((r, c, k));
+                }
+            }
+        }
+        let dense_work = MemBuffer::new(
+            faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
+                ns,
+                Par::Seq,
+                Default::default(),
+            ),
+        );
+        Ok(Some(SplitFactor {
+            halves,
+            separator,
+            separator_entries,
+            schur: Mat::zeros(ns, ns),
+            dense_work,
+        }))
+    }
+
+    pub(super) fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
+        let [first, second] = &mut self.halves;
+        let (a, b) = rayon::join(|| first.factorise(matrix), || second.factorise(matrix));
+        a?;
+        b?;
+        // Σ = T₁ + T₂ − K_SS (lower triangle).
+        let ns = self.separator.len();
+        let (t1, t2) = (&self.halves[0].schur_part, &self.halves[1].schur_part);
+        for j in 0..ns {
+            for i in j..ns {
+                self.schur[(i, j)] = t1[(i, j)] + t2[(i, j)];
+            }
+        }
+        for &(r, c, k) in &self.separator_entries {
+            let (i, j) = (r.max(c), r.min(c));
+            self.schur[(i, j)] -= matrix.nzval[k];
+        }
+        faer::linalg::cholesky::llt::factor::cholesky_in_place(
+            self.schur.as_mut(),
+            no_regularisation(),
+            Par::Seq,
+            MemStack::new(&mut self.dense_work),
+            Default::default(),
+        )
+        .map(|_| ())
+        .map_err(|e| format!("the separator's Schur complement is not positive definite: {e:?}"))
+    }
+
+    pub(super) fn solve(&mut self, rhs: &mut [f64]) {
+        let ns = self.separator.len();
+        // 1. Forward solves, giving Λ_i w_S = −K_Si K_ii⁻¹ r_i.
+        let [first, second] = &mut self.halves;
+        let r: &[f64] = rhs;
+        let (lambda_w1, lambda_w2) = rayon::join(|| first.forward(r), || second.forward(r));
+        // 2. x_S = Σ⁻¹ (r_S − K_S1 K₁₁⁻¹ r₁ − K_S2 K₂₂⁻¹ r₂).
+        let mut x_s = Mat::<f64>::zeros(ns, 1);
+        for (k, &u) in self.separator.iter().enumerate() {
+            x_s[(k, 0)] = rhs[u] + lambda_w1[k] + lambda_w2[k];
+        }
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            self.schur.as_ref(),
+            x_s.as_mut(),
+            Par::Seq,
+        );
+        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+            self.schur.transpose(),
+            x_s.as_mut(),
+            Par::Seq,
+        );
+        // 3. Back solves of each side's interior.
+        let [first, second] = &mut self.halves;
+        let (x1, x2) = rayon::join(
+            || first.backward(x_s.as_ref()),
+            || second.backward(x_s.as_ref()),
+        );
+        for (half, x) in self.halves.iter().zip([x1, x2]) {
+            for (k, &u) in half.unknown[..half.interior].iter().enumerate() {
+                rhs[u] = x[k];
+            }
+        }
+        for (k, &u) in self.separator.iter().enumerate() {
+            rhs[u] = x_s[(k, 0)];
+        }
+    }
+}
+
+impl Half {
+    fn new(
+        matrix: &CscMatrix<f64>,
+        interior: &[usize],
+        separator: &[usize],
+    ) -> Result<Self, String> {
+        let n = matrix.n;
+        // The interior's own pattern, ordered by AMD.
+        let mut local = vec![usize::MAX; n];
+        for (k, &u) in interior.iter().enumerate() {
+            local[u] = k;
+        }
+        let (colptr, rowval, _) = restrict(matrix, &local, interior.len());
+        let ni = interior.len();
+        let mut forward = vec![0usize; ni];
+        let mut inverse = vec![0usize; ni];
+        let mut amd_work = MemBuffer::new(amd::order_scratch::<usize>(ni, rowval.len()));
+        amd::order(
+            &mut forward,
+            &mut inverse,
+            SymbolicSparseColMatRef::new_checked(ni, ni, &colptr, None, &rowval),
+            amd::Control::default(),
+            MemStack::new(&mut amd_work),
+        )
+        .map_err(|e| format!("ordering: {e:?}"))?;
+        // Columns of M_i: the interior in AMD order, then the separator.
+        let unknown: Vec<usize> = forward
+            .iter()
+            .map(|&k| interior[k])
+            .chain(separator.iter().copied())
+            .collect();
+        let mut local = vec![usize::MAX; n];
+        for (k, &u) in unknown.iter().enumerate() {
+            local[u] = k;
+        }
+        let size = unknown.len();
+        let (colptr, rowval, source) = restrict(matrix, &local, size);
+        let nnz = rowval.len();
+        let local_matrix = CscMatrix::new(size, size, colptr, rowval, vec![0.0; nnz]);
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_cholesky(
+            symbolic_pattern(&local_matrix),
+            faer::Side::Upper,
+            SymmetricOrdering::Identity,
+            params,
+        )
+        .map_err(|e| format!("symbolic factorisation: {e:?}"))?;
+        let SymbolicCholeskyRaw::Supernodal(supernodal) = symbolic.raw() else {
+            return Err("the split factor needs a supernodal factorisation".into());
+        };
+        let scratch = StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            supernodal.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        let ns = separator.len();
+        Ok(Half {
+            unknown,
+            interior: ni,
+            matrix: local_matrix,
+            source,
+            values: vec![0.0; symbolic.len_val()],
+            symbolic,
+            work: MemBuffer::new(scratch),
+            lambda: Mat::zeros(ns, ns),
+            schur_part: Mat::zeros(ns, ns),
+            forward_solution: vec![0.0; size],
+        })
+    }
+
+    fn supernodal(&self) -> SupernodalLltRef<'_, usize, f64> {
+        let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
+            unreachable!("forced supernodal")
+        };
+        SupernodalLltRef::new(supernodal, &self.values)
+    }
+
+    /// Factorises M_i, then reads Λ_i and forms T_i = Λ_i Λ_iᵀ.
+    fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
+        for (value, &k) in self.matrix.nzval.iter_mut().zip(&self.source) {
+            *value = matrix.nzval[k];
+        }
+        factorise_numeric(
+            &self.symbolic,
+            &mut self.values,
+            &mut self.work,
+            &self.matrix,
+            Par::Seq,
+        )?;
+        let first = self.interior;
+        let mut lambda = std::mem::replace(&mut self.lambda, Mat::new());
+        lambda.as_mut().fill(0.0);
+        let factor = self.supernodal();
+        let symbolic = factor.symbolic();
+        for s in 0..symbolic.n_supernodes() {
+            let node = factor.supernode(s);
+            let (start, columns) = (node.start(), node.val().ncols());
+            if start + columns <= first {
+                continue;
+            }
+            let rows: Vec<usize> = (start..start + columns)
+                .chain(node.pattern().iter().copied())
+                .collect();
+            for c in 0..columns {
+                let column = start + c;
+                if column < first {
+                    continue;
+                }
+                for (r, &row) in rows.iter().enumerate().skip(c) {
+                    lambda[(row - first, column - first)] = node.val()[(r, c)];
+                }
+            }
+        }
+        self.lambda = lambda;
+        faer::linalg::matmul::triangular::matmul(
+            self.schur_part.as_mut(),
+            faer::linalg::matmul::triangular::BlockStructure::TriangularLower,
+            Accum::Replace,
+            self.lambda.as_ref(),
+            faer::linalg::matmul::triangular::BlockStructure::TriangularLower,
+            self.lambda.transpose(),
+            faer::linalg::matmul::triangular::BlockStructure::TriangularUpper,
+            1.0,
+            Par::Seq,
+        );
+        Ok(())
+    }
+
+    /// w_i = L(M_i)⁻¹ [r_i; 0]; returns −(K_Si K_ii⁻¹ r_i) = Λ_i w_S.
+    fn forward(&mut self, rhs: &[f64]) -> Vec<f64> {
+        let size = self.unknown.len();
+        let mut w = std::mem::take(&mut self.forward_solution);
+        for (k, &u) in self.unknown.iter().enumerate() {
+            w[k] = if k < self.interior { rhs[u] } else { 0.0 };
+        }
+        let mut work = std::mem::replace(&mut self.work, MemBuffer::new(StackReq::empty()));
+        self.supernodal().l_solve_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(&mut w, size, 1),
+            Par::Seq,
+            MemStack::new(&mut work),
+        );
+        self.work = work;
+        let ns = size - self.interior;
+        let w_s = faer::MatRef::from_column_major_slice(&w[self.interior..], ns, 1);
+        let mut product = Mat::<f64>::zeros(ns, 1);
+        faer::linalg::matmul::matmul(
+            product.as_mut(),
+            Accum::Replace,
+            self.lambda.as_ref(),
+            w_s,
+            1.0,
+            Par::Seq,
+        );
+        self.forward_solution = w;
+        (0..ns).map(|k| product[(k, 0)]).collect()
+    }
+
+    /// The interior's x_i from the last forward solve and x_S.
+    fn backward(&mut self, x_s: faer::MatRef<'_, f64>) -> Vec<f64> {
+        let size = self.unknown.len();
+        let ns = size - self.interior;
+        let mut w = std::mem::take(&mut self.forward_solution);
+        let mut top = faer::MatMut::from_column_major_slice_mut(&mut w[self.interior..], ns, 1);
+        faer::linalg::matmul::matmul(
+            top.as_mut(),
+            Accum::Replace,
+            self.lambda.transpose(),
+            x_s,
+            1.0,
+            Par::Seq,
+        );
+        let mut work = std::mem::replace(&mut self.work, MemBuffer::new(StackReq::empty()));
+        self.supernodal().l_transpose_solve_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(&mut w, size, 1),
+            Par::Seq,
+            MemStack::new(&mut work),
+        );
+        self.work = work;
+        let x = w[..self.interior].to_vec();
+        self.forward_solution = w;
+        x
+    }
+}
+
+/// Neighbours of each unknown in the graph of the matrix.
+fn adjacency(matrix: &CscMatrix<f64>) -> Vec<Vec<usize>> {
+    let mut neighbours = vec![Vec::new(); matrix.n];
+    for column in 0..matrix.n {
+        for &row in &matrix.rowval[matrix.colptr[column]..matrix.colptr[column + 1]] {
+            if row != column {
+                neighbours[column].push(row);
+                neighbours[row].push(column);
+            }
+        }
+    }
+    neighbours
+}
+
+pub(super) const SEPARATOR: u8 = 2;
+
+/// Sides 0 and 1 and the separator (2) of each unknown: breadth-first
+/// levels from a peripheral unknown of the largest connected part (the
+/// last one reached from its first unknown), the first side holding the
+/// levels up to the one that reaches half the unknowns, the separator its
+/// unknowns of that level with a neighbour beyond. None if that part holds
+/// less than half the unknowns.
+pub(super) fn bisect(neighbours: &[Vec<usize>]) -> Option<Vec<u8>> {
+    let n = neighbours.len();
+    let levels = |start: usize| -> Vec<usize> {
+        let mut level = vec![usize::MAX; n];
+        let mut queue = std::collections::VecDeque::from([start]);
+        level[start] = 0;
+        while let Some(u) = queue.pop_front() {
+            for &v in &neighbours[u] {
+                if level[v] == usize::MAX {
+                    level[v] = level[u] + 1;
+                    queue.push_back(v);
+                }
+            }
+        }
+        level
+    };
+    // Start in the largest connected part (a grain touching only walls or
+    // glued grains is a part of its own).
+    let mut reached = vec![false; n];
+    let (mut largest, mut largest_size) = (0, 0);
+    for start in 0..n {
+        if reached[start] {
+            continue;
+        }
+        reached[start] = true;
+        let (mut queue, mut size) = (vec![start], 0);
+        while let Some(u) = queue.pop() {
+            size += 1;
+            for &v in &neighbours[u] {
+                if !reached[v] {
+                    reached[v] = true;
+                    queue.push(v);
+                }
+            }
+        }
+        if size > largest_size {
+            (largest, largest_size) = (start, size);
+        }
+    }
+    let from_start = levels(largest);
+    let peripheral = (0..n)
+        .filter(|&u| from_start[u] != usize::MAX)
+        .max_by_key(|&u| (from_start[u], std::cmp::Reverse(u)))?;
+    let level = levels(peripheral);
+    let deepest = level.iter().filter(|&&l| l != usize::MAX).max().copied()?;
+    let mut count = vec![0usize; deepest + 1];
+    for &l in level.iter().filter(|&&l| l != usize::MAX) {
+        count[l] += 1;
+    }
+    let mut reached = 0;
+    let mut cut = None;
+    for (l, &c) in count.iter().enumerate() {
+        reached += c;
+        if 2 * reached >= n {
+            cut = Some(l);
+            break;
+        }
+    }
+    let cut = cut?;
+    if cut == 0 || cut >= deepest {
+        return None;
+    }
+    // Unreached unknowns (other components) join the second side.
+    let side_of = (0..n)
+        .map(|u| {
+            if level[u] == usize::MAX || level[u] > cut {
+                1
+            } else if level[u] == cut && neighbours[u].iter().any(|&v| level[v] == cut + 1) {
+                SEPARATOR
+            } else {
+                0
+            }
+        })
+        .collect();
+    Some(side_of)
+}
+
+/// The upper pattern of `matrix` restricted to the unknowns with a local
+/// index (`local[u] < size`), in local numbering: (colptr, rowval, index
+/// in `matrix` of each entry), rows sorted in each column.
+fn restrict(
+    matrix: &CscMatrix<f64>,
+    local: &[usize],
+    size: usize,
+) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let mut entries: Vec<(usize, usize, usize)> = Vec::new();
+    for column in 0..matrix.n {
+        let c = local[column];
+        if c >= size {
+            continue;
+        }
+        for k in matrix.colptr[column]..matrix.colptr[column + 1] {
+            let r = local[matrix.rowval[k]];
+            if r < size {
+                entries.push((r.max(c), r.min(c), k));
+            }
+        }
+    }
+    entries.sort_unstable();
+    let mut colptr = vec![0usize; size + 1];
+    for &(c, _, _) in &entries {
+        colptr[c + 1] += 1;
+    }
+    for c in 0..size {
+        colptr[c + 1] += colptr[c];
+    }
+    let rowval = entries.iter().map(|e| e.1).collect();
+    let source = entries.iter().map(|e| e.2).collect();
+    (colptr, rowval, source)
+}

@@ -1,0 +1,221 @@
+use super::split::{bisect, SEPARATOR};
+use super::*;
+use std::collections::BTreeMap;
+
+/// The upper CSC of D + Σ θ_r a_r a_rᵀ: three unknowns on each node of
+/// an nx × ny grid, unit diagonal D, and for each pair of neighbouring
+/// nodes (right, up and diagonal) a row a_r over their six unknowns with
+/// θ_r spread over twelve orders of magnitude, as late in an interior
+/// point.
+fn grid_normal_matrix(nx: usize, ny: usize) -> CscMatrix<f64> {
+    lattice_normal_matrix([nx, ny, 1], &[[1, 0, 0], [0, 1, 0], [1, 1, 0]])
+}
+
+/// The same on an nx × ny × nz lattice with the given neighbours.
+fn lattice_normal_matrix(size: [usize; 3], offsets: &[[usize; 3]]) -> CscMatrix<f64> {
+    let [nx, ny, nz] = size;
+    let node = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
+    let nodes = nx * ny * nz;
+    let mut entries: BTreeMap<(usize, usize), f64> = BTreeMap::new();
+    for u in 0..3 * nodes {
+        entries.insert((u, u), 1.0);
+    }
+    let mut pseudo_random = 12345u64;
+    let mut next = || {
+        pseudo_random = pseudo_random
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (pseudo_random >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                for &[di, dj, dk] in offsets {
+                    if i + di >= nx || j + dj >= ny || k + dk >= nz {
+                        continue;
+                    }
+                    let (a, b) = (node(i, j, k), node(i + di, j + dj, k + dk));
+                    let theta = 10f64.powf(12.0 * next() - 6.0);
+                    let mut row = Vec::with_capacity(6);
+                    for d in 0..3 {
+                        row.push((3 * a + d, next() - 0.5));
+                    }
+                    for d in 0..3 {
+                        row.push((3 * b + d, next() - 0.5));
+                    }
+                    for &(c, vc) in &row {
+                        for &(r, vr) in &row {
+                            if r <= c {
+                                *entries.entry((c, r)).or_insert(0.0) += theta * vc * vr;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let n = 3 * nodes;
+    let mut colptr = vec![0usize; n + 1];
+    for &(c, _) in entries.keys() {
+        colptr[c + 1] += 1;
+    }
+    for c in 0..n {
+        colptr[c + 1] += colptr[c];
+    }
+    let rowval = entries.keys().map(|&(_, r)| r).collect();
+    let nzval = entries.values().copied().collect();
+    CscMatrix::new(n, n, colptr, rowval, nzval)
+}
+
+/// K x from the upper triangle.
+fn times(matrix: &CscMatrix<f64>, x: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; matrix.n];
+    for c in 0..matrix.n {
+        for k in matrix.colptr[c]..matrix.colptr[c + 1] {
+            let (r, v) = (matrix.rowval[k], matrix.nzval[k]);
+            y[r] += v * x[c];
+            if r != c {
+                y[c] += v * x[r];
+            }
+        }
+    }
+    y
+}
+
+fn infinity_norm(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+/// ‖K x − b‖∞ / (‖K‖∞ ‖x‖∞), the backward error of a solve.
+fn backward_error(matrix: &CscMatrix<f64>, x: &[f64], b: &[f64]) -> f64 {
+    let residual: Vec<f64> = times(matrix, x).iter().zip(b).map(|(y, b)| y - b).collect();
+    let abs = CscMatrix::new(
+        matrix.n,
+        matrix.n,
+        matrix.colptr.clone(),
+        matrix.rowval.clone(),
+        matrix.nzval.iter().map(|v| v.abs()).collect(),
+    );
+    let norm = infinity_norm(&times(&abs, &vec![1.0; matrix.n]));
+    infinity_norm(&residual) / (norm * infinity_norm(x))
+}
+
+fn solve_with(factor: &mut NormalFactor, matrix: &CscMatrix<f64>, b: &[f64]) -> Vec<f64> {
+    factor.factorise(matrix).unwrap();
+    let mut x = b.to_vec();
+    factor.solve(&mut x);
+    x
+}
+
+#[test]
+fn a_path_is_split_at_its_middle() {
+    let n: usize = 101;
+    let neighbours: Vec<Vec<usize>> = (0..n)
+        .map(|u: usize| {
+            [u.checked_sub(1), (u + 1 < n).then_some(u + 1)]
+                .into_iter()
+                .flatten()
+                .collect()
+        })
+        .collect();
+    let side_of = bisect(&neighbours).unwrap();
+    // From the far end (100): levels ≤ 50 hold half the path.
+    assert_eq!(side_of[50], SEPARATOR);
+    assert!(side_of[51..].iter().all(|&s| s == 0));
+    assert!(side_of[..50].iter().all(|&s| s == 1));
+}
+
+#[test]
+fn an_isolated_first_unknown_does_not_prevent_the_split() {
+    // Unknown 0 alone (a grain touching only a wall), then a path.
+    let n: usize = 102;
+    let neighbours: Vec<Vec<usize>> = (0..n)
+        .map(|u: usize| {
+            if u == 0 {
+                return Vec::new();
+            }
+            [(u > 1).then(|| u - 1), (u + 1 < n).then_some(u + 1)]
+                .into_iter()
+                .flatten()
+                .collect()
+        })
+        .collect();
+    let side_of = bisect(&neighbours).unwrap();
+    assert_eq!(side_of.iter().filter(|&&s| s == SEPARATOR).count(), 1);
+    assert_eq!(side_of[0], 1);
+}
+
+#[test]
+fn the_split_factor_solves_as_accurately_as_the_whole_one() {
+    let matrix = grid_normal_matrix(60, 40);
+    let n = matrix.n;
+    let b: Vec<f64> = (0..n)
+        .map(|k| ((k * 7919) % 1000) as f64 / 500.0 - 1.0)
+        .collect();
+    let mut whole = NormalFactor::with_split_from(&matrix, usize::MAX, false, &[]).unwrap();
+    let mut split = NormalFactor::with_split_from(&matrix, 0, false, &[]).unwrap();
+    let NormalFactor::Split(parts) = &split else {
+        panic!("the grid was not split");
+    };
+    // A 60 × 40 grid cut across its 40-node height: one line of nodes
+    // (measured: 120 unknowns).
+    let separator = parts.separator.len();
+    assert!(separator <= 3 * 40, "separator of {separator} unknowns");
+    let x_whole = solve_with(&mut whole, &matrix, &b);
+    let x_split = solve_with(&mut split, &matrix, &b);
+    // Both backward stable to round-off, θ spanning 1e-6 to 1e6
+    // (measured: 4e-17 whole, 9e-17 split).
+    let (e_whole, e_split) = (
+        backward_error(&matrix, &x_whole, &b),
+        backward_error(&matrix, &x_split, &b),
+    );
+    assert!(e_whole < 1e-14, "whole: {e_whole:e}");
+    assert!(e_split < 1e-14, "split: {e_split:e}");
+}
+
+/// K⁻¹ b on `threads` threads, from a factor splitting matrices from
+/// `split_from` unknowns (ordered by nested dissection when whole).
+fn solved_on(threads: usize, matrix: &CscMatrix<f64>, b: &[f64], split_from: usize) -> Vec<f64> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut factor = NormalFactor::with_split_from(matrix, split_from, false, &[]).unwrap();
+        match &factor {
+            NormalFactor::Split(_) => assert_eq!(split_from, 0),
+            // Dense supernodes, whose blocks faer runs on the threads.
+            NormalFactor::Whole(whole) => assert!(matches!(
+                whole.symbolic.raw(),
+                SymbolicCholeskyRaw::Supernodal(_)
+            )),
+        }
+        solve_with(&mut factor, matrix, b)
+    })
+}
+
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+#[test]
+fn the_split_solve_does_not_depend_on_the_number_of_threads() {
+    let matrix = grid_normal_matrix(60, 40);
+    let b: Vec<f64> = (0..matrix.n).map(|k| (k as f64).sin()).collect();
+    assert!(same_bits(
+        &solved_on(1, &matrix, &b, 0),
+        &solved_on(2, &matrix, &b, 0)
+    ));
+}
+
+#[test]
+fn the_whole_supernodal_factor_is_the_same_on_any_number_of_threads() {
+    let matrix = lattice_normal_matrix(
+        [14, 14, 14],
+        &[[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [0, 1, 1]],
+    );
+    let b: Vec<f64> = (0..matrix.n).map(|k| (k as f64).cos()).collect();
+    let one = solved_on(1, &matrix, &b, usize::MAX);
+    assert!(backward_error(&matrix, &one, &b) < 1e-14);
+    assert!(same_bits(&one, &solved_on(2, &matrix, &b, usize::MAX)));
+}
