@@ -39,6 +39,8 @@ pub struct PourProbe {
     pub wall: f64,
     /// Grains in motion at the end of the probe.
     pub moving: usize,
+    /// Why the probe stopped before its batches were out, if a step failed.
+    pub failed: Option<String>,
 }
 
 /// What is left of the pour when the probe ends, and how the run ends.
@@ -87,7 +89,7 @@ pub fn run_first_batches(case: &Case) -> Result<Option<(PourProbe, PourPlan)>, R
         ..PourProbe::default()
     };
     let started = Instant::now();
-    pool.install(|| -> Result<(), RunError> {
+    pool.install(|| {
         let mut grains = moving(&model);
         while probe.releases.len() < PROBE_BATCHES
             && started.elapsed().as_secs_f64() < PROBE_AT_MOST
@@ -96,7 +98,11 @@ pub fn run_first_batches(case: &Case) -> Result<Option<(PourProbe, PourPlan)>, R
         {
             let before = model.pouring().batches_released();
             let clock = Instant::now();
-            model.advance().map_err(RunError::Unstable)?;
+            // A failed step ends the probe; the run would stop there too.
+            if let Err(why) = model.advance() {
+                probe.failed = Some(why);
+                break;
+            }
             probe
                 .steps
                 .push((grains as f64, clock.elapsed().as_secs_f64()));
@@ -108,8 +114,7 @@ pub fn run_first_batches(case: &Case) -> Result<Option<(PourProbe, PourPlan)>, R
                 grains = moving(&model);
             }
         }
-        Ok(())
-    })?;
+    });
     probe.wall = started.elapsed().as_secs_f64();
     probe.time = model.system.time;
     probe.moving = moving(&model);
@@ -301,10 +306,15 @@ impl PourEstimate {
         } else {
             "and the steps to time.end"
         };
+        let failed = probe
+            .failed
+            .as_ref()
+            .map(|why| format!("; the probe stopped at a failed step ({why})"))
+            .unwrap_or_default();
         format!(
             "estimated wall time on this machine: {} ({} to {}) for about {:.0} steps: the first \
              {} batches run here ({} steps, t = {:.4} s, in {:.1} s), then {} more batches to \
-             t = {:.4} s {end}; {landing}; {cost}, fitted to the {} steps timed",
+             t = {:.4} s {end}; {landing}; {cost}, fitted to the {} steps timed{failed}",
             clock(self.seconds),
             clock(self.low),
             clock(self.high),
