@@ -11,8 +11,6 @@
 //! the levels that leave at least [`BALANCE`] of the part on either side,
 //! the smallest is taken.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::amd;
 use std::collections::VecDeque;
 
 /// Parts of at most this many unknowns are ordered by AMD.
@@ -29,15 +27,7 @@ pub(crate) fn order(
     columns: usize,
     positions: Option<&[[f64; 3]]>,
 ) -> Vec<usize> {
-    let mut neighbours = vec![Vec::new(); columns];
-    for column in 0..columns {
-        for &row in &rowval[colptr[column]..colptr[column + 1]] {
-            if row != column {
-                neighbours[column].push(row);
-                neighbours[row].push(column);
-            }
-        }
-    }
+    let neighbours = neighbours(colptr, rowval, columns);
     let mut dissection = Dissection {
         neighbours,
         positions,
@@ -48,6 +38,21 @@ pub(crate) fn order(
     };
     dissection.order_part((0..columns).collect(), 0);
     dissection.order
+}
+
+/// Neighbours of each unknown in the graph of a symmetric pattern given by
+/// its upper triangle (CSC).
+pub(crate) fn neighbours(colptr: &[usize], rowval: &[usize], columns: usize) -> Vec<Vec<usize>> {
+    let mut neighbours = vec![Vec::new(); columns];
+    for column in 0..columns {
+        for &row in &rowval[colptr[column]..colptr[column + 1]] {
+            if row != column {
+                neighbours[column].push(row);
+                neighbours[row].push(column);
+            }
+        }
+    }
+    neighbours
 }
 
 struct Dissection<'a> {
@@ -310,20 +315,8 @@ impl Dissection<'_> {
             colptr[c + 1] += colptr[c];
         }
         let rowval: Vec<usize> = entries.iter().map(|e| e.1).collect();
-        let pattern =
-            faer::sparse::SymbolicSparseColMatRef::new_checked(size, size, &colptr, None, &rowval);
-        let (mut local, mut inverse) = (vec![0usize; size], vec![0usize; size]);
-        let mut work = MemBuffer::new(amd::order_scratch::<usize>(size, rowval.len()));
-        match amd::order(
-            &mut local,
-            &mut inverse,
-            pattern,
-            amd::Control::default(),
-            MemStack::new(&mut work),
-        ) {
-            Ok(_) => self.order.extend(local.iter().map(|&k| members[k])),
-            Err(_) => self.order.extend_from_slice(members),
-        }
+        let local = crate::interior_point::minimum_degree_order(&colptr, &rowval, size);
+        self.order.extend(local.iter().map(|&k| members[k]));
     }
 }
 

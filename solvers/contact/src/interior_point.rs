@@ -257,7 +257,11 @@ fn upper_pattern(
 
 /// AMD ordering of the symmetric pattern given by its upper triangle:
 /// the unknown placed at each position.
-fn minimum_degree_order(colptr: &[usize], rowval: &[usize], columns: usize) -> Vec<usize> {
+pub(crate) fn minimum_degree_order(
+    colptr: &[usize],
+    rowval: &[usize],
+    columns: usize,
+) -> Vec<usize> {
     use faer::dyn_stack::{MemBuffer, MemStack};
     use faer::sparse::linalg::amd;
     let pattern =

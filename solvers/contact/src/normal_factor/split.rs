@@ -41,7 +41,7 @@ impl SplitFactor {
     /// found.
     pub(super) fn new(matrix: &CscMatrix<f64>) -> Result<Option<Self>, String> {
         let n = matrix.n;
-        let neighbours = adjacency(matrix);
+        let neighbours = crate::dissection::neighbours(&matrix.colptr, &matrix.rowval, matrix.n);
         let Some(side_of) = bisect(&neighbours) else {
             return Ok(None);
         };
@@ -342,20 +342,6 @@ impl Half {
         self.forward_solution = w;
         x
     }
-}
-
-/// Neighbours of each unknown in the graph of the matrix.
-fn adjacency(matrix: &CscMatrix<f64>) -> Vec<Vec<usize>> {
-    let mut neighbours = vec![Vec::new(); matrix.n];
-    for column in 0..matrix.n {
-        for &row in &matrix.rowval[matrix.colptr[column]..matrix.colptr[column + 1]] {
-            if row != column {
-                neighbours[column].push(row);
-                neighbours[row].push(column);
-            }
-        }
-    }
-    neighbours
 }
 
 pub(super) const SEPARATOR: u8 = 2;
