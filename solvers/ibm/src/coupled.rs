@@ -198,6 +198,9 @@ impl CoupledSystem {
             // The particles stand still until the DEM runs; their ghosts
             // take their latest motion.
             self.dem.refresh_ghosts();
+            // Where the last move started (before the stage's bodies,
+            // whose forcing sums wait for `apply`).
+            let (moved_from, moved_over) = self.inner_momentum_moved_from(&unknowns, stage_dt);
             let (bodies, before) = self.immersed.bodies_with_inner_momentum(
                 &self.dem.particles,
                 &self.flow.grid,
@@ -205,7 +208,6 @@ impl CoupledSystem {
                 &self.flow.velocity,
             );
             let before = before.summed_on_owners(&self.dem);
-            let (moved_from, moved_over) = self.inner_momentum_moved_from(&unknowns, stage_dt);
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);

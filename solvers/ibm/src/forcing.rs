@@ -144,6 +144,10 @@ pub struct Bodies {
     /// Local particles (the loads have one entry each).
     count: usize,
     pub(crate) list: Vec<Body>,
+    /// Whether the forcing's sums of eq. 7 over these bodies are made
+    /// already (`bodies_with_inner_momentum`), from the fractions before
+    /// their shares.
+    forcing_sums_made: bool,
 }
 
 /// The immersed spheres' action on the flow of one subdomain.
@@ -164,6 +168,8 @@ pub struct ImmersedBoundaries {
     pub(crate) total_fraction: Vec<Vec<f64>>,
     /// `Σ_p α_p U_p` on the faces of each component.
     solid_velocity: Vec<Vec<f64>>,
+    /// Whether the two sums above hold a stage's forcing until `apply`.
+    forcing_sums_pending: bool,
 }
 
 impl ImmersedBoundaries {
@@ -184,6 +190,7 @@ impl ImmersedBoundaries {
             dimension: grid.dimension,
             total_fraction: (0..dim).map(|_| grid.zeros()).collect(),
             solid_velocity: (0..dim).map(|_| grid.zeros()).collect(),
+            forcing_sums_pending: false,
         }
     }
 
@@ -218,8 +225,18 @@ impl ImmersedBoundaries {
 
     /// [`ImmersedBoundaries::bodies`] and their
     /// [`ImmersedBoundaries::inner_momentum`] in `velocity`, each body's
-    /// momentum measured as soon as its fractions are made (while they are
-    /// in cache: one pass over them the fewer).
+    /// momentum measured as soon as its fractions are final (while they
+    /// are in cache: one pass over them the fewer).
+    ///
+    /// With eq. 7 at every stage (no forcing step) the forcing's sums are
+    /// made here too, from the fractions before the shares: with
+    /// `T = Σ_q α_q` on a face, the shares `α_p / max(1, T)` give
+    /// `Σ_p share_p U_p = (Σ_p α_p U_p)/max(1, T)` and `Σ_p share_p =
+    /// T/max(1, T)`, so eq. 7 moves the face by the same
+    /// `(Σ α_p U_p − T V)/max(1, T)`, and `T` is the sum the shares are
+    /// made of. One pass over the faces makes both, where the shares
+    /// alone took three. [`ImmersedBoundaries::apply`] must follow,
+    /// before any other call that makes bodies.
     pub fn bodies_with_inner_momentum(
         &mut self,
         particles: &Particles,
@@ -241,15 +258,35 @@ impl ImmersedBoundaries {
                 (!pressed).then(|| body.inner_momentum(velocity, volume))
             })
             .collect();
-        self.share_overlaps(grid, &mut bodies, &pressed);
-        let per_body: Vec<(Vec3, Vec3)> = bodies
-            .list
-            .par_iter()
-            .zip(per_body)
-            .map(|(body, measured)| {
-                measured.unwrap_or_else(|| body.inner_momentum(velocity, volume))
-            })
-            .collect();
+        let per_body: Vec<(Vec3, Vec3)> = if self.forcing_step.is_none() {
+            self.add_forcing_sums(grid, &bodies, 1.0);
+            bodies.forcing_sums_made = true;
+            self.forcing_sums_pending = true;
+            let totals = &self.total_fraction;
+            bodies
+                .list
+                .par_iter_mut()
+                .zip(per_body)
+                .map(|(body, measured)| {
+                    measured.unwrap_or_else(|| {
+                        for (component, faces) in body.faces.iter_mut().enumerate() {
+                            faces.share(&totals[component]);
+                        }
+                        body.inner_momentum(velocity, volume)
+                    })
+                })
+                .collect()
+        } else {
+            self.share_overlaps(grid, &mut bodies, &pressed);
+            bodies
+                .list
+                .par_iter()
+                .zip(per_body)
+                .map(|(body, measured)| {
+                    measured.unwrap_or_else(|| body.inner_momentum(velocity, volume))
+                })
+                .collect()
+        };
         let momentum = self.gather(&bodies, &per_body);
         (bodies, momentum)
     }
@@ -289,14 +326,83 @@ impl ImmersedBoundaries {
             .map_or(1.0, |reference| step_dt / reference);
         let forced = |alpha: f64| forced_fraction(alpha, exponent);
 
-        // 1. Σ β_p and Σ β_p U_p on the faces. The planes of the slowest
-        // axis are shared among threads; each face sums its bodies in list
-        // order, whatever the number of threads.
+        // 1. Σ β_p and Σ β_p U_p on the faces, unless the bodies were
+        // made with them (eq. 7: β = α, summed before the shares).
+        if !bodies.forcing_sums_made {
+            self.add_forcing_sums(grid, bodies, exponent);
+        }
+        let touched: Vec<Option<Block>> = (0..dim)
+            .map(|component| touched_block(bodies, component))
+            .collect();
+
+        // 2. Loads, from the velocity before the forcing: the particle
+        // receives −f, the opposite of what it gives, `w_p (U_p − V)` on
+        // each face with `w_p = β_p / max(1, Σ_q β_q)`; with the sums made
+        // before the shares, `α_p` is that share already.
+        let total = &self.total_fraction;
+        let made_before_shares = bodies.forcing_sums_made;
+        let scale = -volume / stage_dt;
+        let per_body: Vec<(Vec3, Vec3)> = bodies
+            .list
+            .par_iter()
+            .map(|body| {
+                let (force, torque) = body.moments(|component, faces, row, alpha| {
+                    let (base, slope) = body.rigid_along(row, component, faces.step);
+                    let faces = row.first..row.first + row.len;
+                    let velocity = &velocity[component][faces.clone()];
+                    let load = |i: usize, weight: f64, v: f64| -> (f64, f64) {
+                        let q = weight * (base + i as f64 * slope - v);
+                        (q, i as f64 * q)
+                    };
+                    let (mut sum, mut along) = (0.0, 0.0);
+                    if made_before_shares {
+                        for (i, (alpha, v)) in alpha.iter().zip(velocity).enumerate() {
+                            let (q, moment) = load(i, *alpha, *v);
+                            sum += q;
+                            along += moment;
+                        }
+                    } else {
+                        let total = &total[component][faces];
+                        let faces = alpha.iter().zip(velocity.iter().zip(total));
+                        for (i, (alpha, (v, total))) in faces.enumerate() {
+                            let (q, moment) = load(i, forced(*alpha) / total.max(1.0), *v);
+                            sum += q;
+                            along += moment;
+                        }
+                    }
+                    (sum, along)
+                });
+                (force * scale, torque * scale)
+            })
+            .collect();
+
+        // 3. The forcing, V += Σ w_p (U_p − V), and the scratch cleared.
+        for component in 0..dim {
+            if let Some(block) = touched[component] {
+                force_block(
+                    grid,
+                    &block,
+                    &mut velocity[component],
+                    &mut self.total_fraction[component],
+                    &mut self.solid_velocity[component],
+                );
+            }
+        }
+        self.forcing_sums_pending = false;
+        self.gather(bodies, &per_body)
+    }
+
+    /// Adds `Σ_p β_p` and `Σ_p β_p U_p` of `bodies`, `β = 1 − (1 − α)^exponent`
+    /// of each body's fraction on the face, into the scratch sums the
+    /// forcing reads (`total_fraction`, `solid_velocity`). The planes of
+    /// the slowest axis are shared among threads; each face sums its
+    /// bodies in list order, whatever the number of threads.
+    fn add_forcing_sums(&mut self, grid: &Grid, bodies: &Bodies, exponent: f64) {
+        let dim = grid.dim();
         let slow = dim - 1;
         let plane = grid.stride(slow);
-        let mut touched: Vec<Option<Block>> = vec![None; dim];
+        let forced = |alpha: f64| forced_fraction(alpha, exponent);
         for component in 0..dim {
-            touched[component] = touched_block(bodies, component);
             let reaching = bodies_by_plane(bodies, component, slow, grid.padded()[slow]);
             let fill_plane = |layer: usize, total: &mut [f64], target: &mut [f64]| {
                 let first = layer * plane;
@@ -336,49 +442,6 @@ impl ImmersedBoundaries {
                     .for_each(|(layer, (total, target))| fill_plane(layer, total, target));
             }
         }
-
-        // 2. Loads, from the velocity before the forcing: the particle
-        // receives −f, the opposite of what it gives.
-        let total = &self.total_fraction;
-        let scale = -volume / stage_dt;
-        let per_body: Vec<(Vec3, Vec3)> = bodies
-            .list
-            .par_iter()
-            .map(|body| {
-                let (force, torque) = body.moments(|component, faces, row, alpha| {
-                    let (base, slope) = body.rigid_along(row, component, faces.step);
-                    let faces = row.first..row.first + row.len;
-                    let (velocity, total) = (
-                        &velocity[component][faces.clone()],
-                        &total[component][faces],
-                    );
-                    let (mut sum, mut along) = (0.0, 0.0);
-                    let faces = alpha.iter().zip(velocity.iter().zip(total));
-                    for (i, (alpha, (v, total))) in faces.enumerate() {
-                        let weight = forced(*alpha) / total.max(1.0);
-                        let q = weight * (base + i as f64 * slope - v);
-                        sum += q;
-                        along += i as f64 * q;
-                    }
-                    (sum, along)
-                });
-                (force * scale, torque * scale)
-            })
-            .collect();
-
-        // 3. The forcing, V += Σ w_p (U_p − V), and the scratch cleared.
-        for component in 0..dim {
-            if let Some(block) = touched[component] {
-                force_block(
-                    grid,
-                    &block,
-                    &mut velocity[component],
-                    &mut self.total_fraction[component],
-                    &mut self.solid_velocity[component],
-                );
-            }
-        }
-        self.gather(bodies, &per_body)
     }
 
     /// `Σ_p α_p` capped at 1 at every owned cell centre, in the order of
@@ -420,6 +483,10 @@ impl ImmersedBoundaries {
     /// Where supports overlap, each fraction is the body's share of the
     /// face (`overlaps.rs`).
     pub fn bodies(&mut self, particles: &Particles, grid: &Grid, unknowns: &[Block]) -> Bodies {
+        debug_assert!(
+            !self.forcing_sums_pending,
+            "the scratch sums hold a stage's forcing: apply it first"
+        );
         let mut bodies = self.local_bodies(particles, grid);
         bodies
             .list
@@ -488,6 +555,7 @@ impl ImmersedBoundaries {
         Bodies {
             count: particles.len(),
             list,
+            forcing_sums_made: false,
         }
     }
 

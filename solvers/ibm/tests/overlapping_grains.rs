@@ -20,41 +20,7 @@ const RADIUS: f64 = 0.5;
 /// grid volume, and `Σ_faces min(1, Σ_p α_p) dV` per component from
 /// eq. 8 on every face.
 fn shares(centres: [Vec3; 2], flow: [f64; 3]) -> (Vec<Vec3>, Vec<Vec3>, Vec3) {
-    let grid = Grid::new(Dimension::Three, [CELLS; 3], [0.0; 3], EXTENT);
-    let domain = Domain {
-        dimension: Dimension::Three,
-        lower: Vec3::zeros(),
-        upper: Vec3::from(EXTENT),
-        periodic: [true; 3],
-        gravity: Vec3::zeros(),
-    };
-    let law = ContactLaw {
-        normal: NormalStiffness::from_restitution(0.9, 1e-2, NormalCalibration::Exact),
-        tangential_ratio: 0.2,
-        friction: 0.0,
-        rolling_friction: 0.0,
-    };
-    let mut dem = DemSystem::new(domain, law, Vec::new(), 0.05);
-    dem.ghost_reach = ghost_reach(&grid, RADIUS);
-    let grains: Vec<NewParticle> = centres
-        .iter()
-        .map(|&position| NewParticle {
-            position,
-            velocity: Vec3::zeros(),
-            angular_velocity: Vec3::zeros(),
-            radius: RADIUS,
-            density: 2.0,
-            fixed: false,
-        })
-        .collect();
-    dem.add_particles(&grains);
-    let mut fluid = FlowSolver::new(
-        grid.clone(),
-        Boundaries::periodic(),
-        0.01,
-        Communicator::serial(),
-    )
-    .unwrap();
+    let (grid, dem, mut fluid) = two_grains(centres, [Vec3::zeros(); 2]);
     fluid.set_velocity(|component, _| flow[component]);
     let mut immersed = ImmersedBoundaries::new(&grid);
     let unknowns: Vec<_> = (0..3).map(|c| *fluid.velocity_unknowns(c)).collect();
@@ -84,6 +50,48 @@ fn shares(centres: [Vec3; 2], flow: [f64; 3]) -> (Vec<Vec3>, Vec<Vec3>, Vec3) {
     }
     let n = dem.particles.n_owned;
     (momentum.force[..n].to_vec(), volumes[..n].to_vec(), union)
+}
+
+/// Two grains of radius `RADIUS` at `centres` moving at `velocities` and
+/// spinning, in a periodic box of fluid at rest.
+fn two_grains(centres: [Vec3; 2], velocities: [Vec3; 2]) -> (Grid, DemSystem, FlowSolver) {
+    let grid = Grid::new(Dimension::Three, [CELLS; 3], [0.0; 3], EXTENT);
+    let domain = Domain {
+        dimension: Dimension::Three,
+        lower: Vec3::zeros(),
+        upper: Vec3::from(EXTENT),
+        periodic: [true; 3],
+        gravity: Vec3::zeros(),
+    };
+    let law = ContactLaw {
+        normal: NormalStiffness::from_restitution(0.9, 1e-2, NormalCalibration::Exact),
+        tangential_ratio: 0.2,
+        friction: 0.0,
+        rolling_friction: 0.0,
+    };
+    let mut dem = DemSystem::new(domain, law, Vec::new(), 0.05);
+    dem.ghost_reach = ghost_reach(&grid, RADIUS);
+    let grains: Vec<NewParticle> = centres
+        .iter()
+        .zip(velocities)
+        .map(|(&position, velocity)| NewParticle {
+            position,
+            velocity,
+            angular_velocity: velocity.cross(&Vec3::new(0.0, 0.0, 3.0)),
+            radius: RADIUS,
+            density: 2.0,
+            fixed: false,
+        })
+        .collect();
+    dem.add_particles(&grains);
+    let fluid = FlowSolver::new(
+        grid.clone(),
+        Boundaries::periodic(),
+        0.01,
+        Communicator::serial(),
+    )
+    .unwrap();
+    (grid, dem, fluid)
 }
 
 /// Two grains pressed together along x (an overlap of `overlap` times the
@@ -143,4 +151,67 @@ fn grains_pressed_together_share_the_fluid_of_their_overlapping_layers() {
         let total = volumes[0][component] + volumes[1][component];
         assert!((total - union[component]).abs() < 1e-12 * union[component]);
     }
+}
+
+/// A stage makes the forcing's sums before the shares and the shares from
+/// the same sums (`bodies_with_inner_momentum`): the inner momenta, the
+/// forcing's loads and the forced flow of pressed grains moving apart at
+/// different speeds and spins equal those of the bodies shared first and
+/// forced after (`bodies`, then `inner_momentum` and `apply`) to
+/// round-off.
+#[test]
+fn the_stages_forcing_of_pressed_grains_equals_the_shared_forcing() {
+    let middle = Vec3::new(2.0, 2.0, 2.0);
+    let half = RADIUS * 0.95 * Vec3::new(1.0, 0.5, 0.2).normalize();
+    let centres = [middle - half, middle + half];
+    let velocities = [Vec3::new(0.4, -0.1, 0.2), Vec3::new(-0.3, 0.2, 0.5)];
+    let shaped = |component: usize, x: [f64; 3]| {
+        let phase = x[(component + 1) % 3] + 2.0 * x[(component + 2) % 3];
+        0.3 * (phase * std::f64::consts::PI / 2.0).sin()
+    };
+    let run = |stage_route: bool| {
+        let (grid, dem, mut fluid) = two_grains(centres, velocities);
+        fluid.set_velocity(shaped);
+        let mut immersed = ImmersedBoundaries::new(&grid);
+        let unknowns: Vec<_> = (0..3).map(|c| *fluid.velocity_unknowns(c)).collect();
+        let (bodies, momentum) = if stage_route {
+            immersed.bodies_with_inner_momentum(&dem.particles, &grid, &unknowns, &fluid.velocity)
+        } else {
+            let bodies = immersed.bodies(&dem.particles, &grid, &unknowns);
+            let momentum = immersed.inner_momentum(&grid, &fluid.velocity, &bodies);
+            (bodies, momentum)
+        };
+        let loads = immersed.apply(&grid, &mut fluid.velocity, &bodies, 0.1, 0.1);
+        let n = dem.particles.n_owned;
+        let vectors = |loads: &grainflow_ibm::Loads| {
+            let mut all = loads.force[..n].to_vec();
+            all.extend_from_slice(&loads.torque[..n]);
+            all
+        };
+        (vectors(&momentum), vectors(&loads), fluid.velocity.clone())
+    };
+    let (momentum_stage, loads_stage, flow_stage) = run(true);
+    let (momentum_shared, loads_shared, flow_shared) = run(false);
+    let worst = |a: &[Vec3], b: &[Vec3]| {
+        let scale = a.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        a.iter()
+            .zip(b)
+            .map(|(a, b)| (a - b).norm())
+            .fold(0.0, f64::max)
+            / scale
+    };
+    let momentum = worst(&momentum_stage, &momentum_shared);
+    let loads = worst(&loads_stage, &loads_shared);
+    let mut flow: f64 = 0.0;
+    for (a, b) in flow_stage.iter().zip(&flow_shared) {
+        for (a, b) in a.iter().zip(b) {
+            flow = flow.max((a - b).abs());
+        }
+    }
+    println!(
+        "relative differences: inner momentum {momentum:.1e}, loads {loads:.1e}, flow {flow:.1e}"
+    );
+    assert!(momentum < 1e-14, "{momentum:e}");
+    assert!(loads < 1e-13, "{loads:e}");
+    assert!(flow < 1e-14, "{flow:e}");
 }
