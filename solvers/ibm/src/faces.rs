@@ -10,6 +10,12 @@
 //! offset `r` of a face from the centre as the row's first offset plus
 //! `i Δx` along x: no coordinate is recomputed and no fraction (the
 //! exponential of eq. 8, the costly part) is made twice.
+//!
+//! A row is stored in 8 bytes (its length and where it starts in the
+//! body's box of faces), a seventh of its fractions at D/Δx = 4: the
+//! passes are bound by memory traffic, and a row that also held its flat
+//! index, offset and place among the fractions (48 bytes) weighed as much
+//! as its fractions. The offsets are those of the box's lines, kept once.
 
 use std::ops::Range;
 
@@ -19,18 +25,40 @@ use grainflow_fluid::{Block, Grid, Location};
 use crate::forcing::WallLayer;
 use crate::solid_fraction::{face_fractions, support};
 
-/// A run of consecutive faces along x.
+/// A run of consecutive faces along x, as stored: its length and its first
+/// face `(i, j, k)` counted from the corner of the body's box of faces.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Row {
+struct StoredRow {
+    len: u16,
+    i: u16,
+    j: u16,
+    k: u16,
+}
+
+/// A run of consecutive faces along x, as a pass reads it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Row<'a> {
     /// Flat index of the row's first face.
     pub first: usize,
     /// Offset of the first face from the body's centre; face `i` of the
     /// row lies at `offset + i Δx x̂`.
     pub offset: Vec3,
-    /// Where the row's fractions start in [`FaceRows::alpha`].
-    start: usize,
+    /// The body's fractions on the row's faces.
+    pub alpha: &'a [f64],
+}
+
+impl Row<'_> {
     /// Faces in the row.
-    pub len: usize,
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.alpha.len()
+    }
+
+    /// The row's faces as flat indices.
+    #[inline]
+    pub fn faces(&self) -> Range<usize> {
+        self.first..self.first + self.alpha.len()
+    }
 }
 
 /// A body's faces of one component within its support, with their solid
@@ -40,12 +68,22 @@ pub(crate) struct FaceRows {
     /// The box of faces (within the component's unknowns) that holds the
     /// support.
     pub stencil: Block,
-    /// Where the rows of each plane of the stencil along the slowest axis
-    /// start in `rows`, and their end.
-    plane_rows: Vec<usize>,
-    /// The lines of the stencil along x that cross the support, the planes
-    /// of the slowest axis in order.
-    rows: Vec<Row>,
+    /// Flat index of the box's first face, and the grid's strides along y
+    /// and z.
+    origin: usize,
+    strides: [usize; 2],
+    /// The offsets from the centre of the box's lines along x, then y, then
+    /// z (one zero along an inactive z).
+    lines: Vec<f64>,
+    /// Where the lines along y and along z start in `lines`.
+    lines_y: usize,
+    lines_z: usize,
+    /// For each plane of the box along the slowest axis, and its end: the
+    /// first of its rows in `rows` and of their fractions in `alpha`.
+    plane_starts: Vec<(usize, usize)>,
+    /// The lines of the box along x that cross the support, the planes of
+    /// the slowest axis in order.
+    rows: Vec<StoredRow>,
     /// The fractions of all rows, one after the other.
     alpha: Vec<f64>,
     /// `Δx`, the distance between the faces of a row.
@@ -86,9 +124,21 @@ impl FaceRows {
             .collect();
         let extent = [0, 1, 2].map(|a| stencil.end[a] - stencil.start[a]);
         let slow = dim - 1;
+        // The offsets of the box's lines along each axis (zero along an
+        // inactive z).
+        let mut lines = Vec::with_capacity(extent.iter().sum());
+        for axis in 0..3 {
+            lines.extend(
+                (stencil.start[axis]..stencil.end[axis]).map(|i| match axis < dim {
+                    true => grid.coordinate(location, axis, i) - centre[axis],
+                    false => 0.0,
+                }),
+            );
+        }
+        let (lines_y, lines_z) = (extent[0], extent[0] + extent[1]);
         let mut rows = Vec::with_capacity(extent[1] * extent[2]);
-        let mut plane_rows = Vec::with_capacity(extent[slow] + 1);
-        plane_rows.push(0);
+        let mut plane_starts = Vec::with_capacity(extent[slow] + 1);
+        plane_starts.push((0, 0));
         // Each face's offset: x, and y² + z² and |y| + |z| of its row, for
         // the fractions made all at once below.
         let capacity = extent.iter().product();
@@ -97,72 +147,71 @@ impl FaceRows {
             Vec::with_capacity(capacity),
             Vec::with_capacity(capacity),
         );
-        // The offsets along y and z of the stencil's lines (zero along an
-        // inactive z).
-        let line_offsets = |axis: usize| -> Vec<f64> {
-            (stencil.start[axis]..stencil.end[axis])
-                .map(|i| match axis < dim {
-                    true => grid.coordinate(location, axis, i) - centre[axis],
-                    false => 0.0,
-                })
-                .collect()
-        };
-        let (across_y, across_z) = (line_offsets(1), line_offsets(2));
-        for (k, &z) in (stencil.start[2]..).zip(&across_z) {
-            for (j, &y) in (stencil.start[1]..).zip(&across_y) {
-                let mut offset = Vec3::new(0.0, y, z);
+        let short = |n: usize| u16::try_from(n).expect("a support spans fewer than 65,536 faces");
+        for k in 0..extent[2] {
+            let z = lines[lines_z + k];
+            for j in 0..extent[1] {
+                let y = lines[lines_y + j];
                 // The faces of the row within the support; beyond it the
                 // fraction is zero (eq. 8 cut at `TAIL`), so none is lost.
-                let across_squared = offset.y * offset.y + offset.z * offset.z;
+                let across_squared = y * y + z * z;
                 let faces = if across_squared > reach * reach {
                     stencil.start[0]..stencil.start[0]
                 } else {
                     let half = (reach * reach - across_squared).sqrt();
                     along_x.range(centre.x, half, stencil.start[0]..stencil.end[0])
                 };
-                if faces.is_empty() {
-                    if slow == 1 {
-                        plane_rows.push(rows.len());
-                    }
-                    continue;
+                if !faces.is_empty() {
+                    let i = faces.start - stencil.start[0];
+                    let len = faces.len();
+                    let first_x = lines[i];
+                    x.extend((0..len).map(|i| first_x + i as f64 * grid.spacing[0]));
+                    let start = across.len();
+                    across.resize(start + len, across_squared);
+                    across_l1.resize(start + len, y.abs() + z.abs());
+                    rows.push(StoredRow {
+                        len: short(len),
+                        i: short(i),
+                        j: short(j),
+                        k: short(k),
+                    });
                 }
-                offset.x = grid.coordinate(location, 0, faces.start) - centre.x;
-                let start = x.len();
-                let len = faces.len();
-                x.extend((0..len).map(|i| offset.x + i as f64 * grid.spacing[0]));
-                across.resize(start + len, across_squared);
-                across_l1.resize(start + len, offset.y.abs() + offset.z.abs());
-                rows.push(Row {
-                    first: grid.index(faces.start, j, k),
-                    offset,
-                    start,
-                    len,
-                });
                 if slow == 1 {
-                    plane_rows.push(rows.len());
+                    plane_starts.push((rows.len(), x.len()));
                 }
             }
             if slow == 2 {
-                plane_rows.push(rows.len());
+                plane_starts.push((rows.len(), x.len()));
             }
         }
         let mut alpha = vec![0.0; x.len()];
         face_fractions(&x, &across, &across_l1, radius, width, &mut alpha);
-        for layer in &layers {
-            for row in &rows {
-                let faces = &mut alpha[row.start..row.start + row.len];
-                layer.clear_row(grid, component, row.first, faces);
-            }
-        }
-        let sum = alpha.iter().sum();
-        FaceRows {
+        let mut faces = FaceRows {
+            origin: grid.index(stencil.start[0], stencil.start[1], stencil.start[2]),
+            strides: [grid.stride(1), grid.stride(2)],
             stencil,
-            plane_rows,
+            lines,
+            lines_y,
+            lines_z,
+            plane_starts,
             rows,
             alpha,
             step: grid.spacing[0],
-            sum,
+            sum: 0.0,
+        };
+        if !layers.is_empty() {
+            let mut start = 0;
+            for r in 0..faces.rows.len() {
+                let (first, len) = (faces.first(&faces.rows[r]), faces.rows[r].len as usize);
+                let alpha = &mut faces.alpha[start..start + len];
+                for layer in &layers {
+                    layer.clear_row(grid, component, first, alpha);
+                }
+                start += len;
+            }
         }
+        faces.sum = faces.alpha.iter().sum();
+        faces
     }
 
     /// Whether the body has no face of this component here.
@@ -170,20 +219,45 @@ impl FaceRows {
         (0..3).any(|a| self.stencil.end[a] <= self.stencil.start[a])
     }
 
+    /// Flat index of the first face of `row`.
+    #[inline]
+    fn first(&self, row: &StoredRow) -> usize {
+        let [along_y, along_z] = self.strides;
+        self.origin + row.i as usize + along_y * row.j as usize + along_z * row.k as usize
+    }
+
+    /// The rows `rows` of `self.rows`, whose fractions start at `start`.
+    fn rows_from(&self, rows: Range<usize>, mut start: usize) -> impl Iterator<Item = Row<'_>> {
+        self.rows[rows].iter().map(move |row| {
+            let len = row.len as usize;
+            let view = Row {
+                first: self.first(row),
+                offset: Vec3::new(
+                    self.lines[row.i as usize],
+                    self.lines[self.lines_y + row.j as usize],
+                    self.lines[self.lines_z + row.k as usize],
+                ),
+                alpha: &self.alpha[start..start + len],
+            };
+            start += len;
+            view
+        })
+    }
+
+    /// All rows.
+    pub fn rows(&self) -> impl Iterator<Item = Row<'_>> {
+        self.rows_from(0..self.rows.len(), 0)
+    }
+
     /// The rows of the planes `planes` (padded indices along the slowest
     /// active axis of a `dim`-dimensional grid).
-    pub fn rows_in(&self, dim: usize, planes: Range<usize>) -> &[Row] {
+    pub fn rows_in(&self, dim: usize, planes: Range<usize>) -> impl Iterator<Item = Row<'_>> {
         let slow = dim - 1;
         let (low, high) = (self.stencil.start[slow], self.stencil.end[slow]);
         let first = planes.start.clamp(low, high) - low;
         let last = planes.end.clamp(low, high) - low;
-        &self.rows[self.plane_rows[first]..self.plane_rows[last]]
-    }
-
-    /// The fractions of `row`.
-    #[inline]
-    pub fn alpha(&self, row: &Row) -> &[f64] {
-        &self.alpha[row.start..row.start + row.len]
+        let (rows, start) = self.plane_starts[first];
+        self.rows_from(rows..self.plane_starts[last].0, start)
     }
 
     /// Hands `visit` each row of plane `layer` (padded index along the
@@ -200,7 +274,7 @@ impl FaceRows {
     ) {
         for row in self.rows_in(dim, layer..layer + 1) {
             let at = row.first - first;
-            visit(&mut field[at..at + row.len], self.alpha(row));
+            visit(&mut field[at..at + row.len()], row.alpha);
         }
     }
 
@@ -209,15 +283,18 @@ impl FaceRows {
     /// that several supports cover.
     pub fn share(&mut self, totals: &[f64]) {
         let mut changed = false;
+        let mut start = 0;
         for row in &self.rows {
-            let faces = &totals[row.first..row.first + row.len];
-            let alpha = &mut self.alpha[row.start..row.start + row.len];
+            let (first, len) = (self.first(row), row.len as usize);
+            let faces = &totals[first..first + len];
+            let alpha = &mut self.alpha[start..start + len];
             for (alpha, &total) in alpha.iter_mut().zip(faces) {
                 if total > 1.0 {
                     *alpha /= total;
                     changed = true;
                 }
             }
+            start += len;
         }
         if changed {
             self.sum = self.alpha.iter().sum();
@@ -225,13 +302,13 @@ impl FaceRows {
     }
 
     /// `(Σ q, Σ q r)` over the faces, `q` a scalar on each face given row
-    /// by row: `row_sums(row, α)` returns `(Σ_i q_i, Σ_i i q_i)` over the
+    /// by row: `row_sums(row)` returns `(Σ_i q_i, Σ_i i q_i)` over the
     /// row's faces `i`, whose offsets are `row.offset + i Δx x̂`.
-    pub fn moments(&self, mut row_sums: impl FnMut(&Row, &[f64]) -> (f64, f64)) -> (f64, Vec3) {
+    pub fn moments(&self, mut row_sums: impl FnMut(&Row) -> (f64, f64)) -> (f64, Vec3) {
         let mut sum = 0.0;
         let mut moment = Vec3::zeros();
-        for row in &self.rows {
-            let (plain, along) = row_sums(row, self.alpha(row));
+        for row in self.rows() {
+            let (plain, along) = row_sums(&row);
             sum += plain;
             moment += row.offset * plain;
             moment.x += self.step * along;

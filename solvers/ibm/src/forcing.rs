@@ -101,10 +101,10 @@ impl Body {
     /// `∫ α u dV` and `∫ r × α u dV` over the body's faces of the face
     /// field `velocity`, cells of volume `volume`.
     fn inner_momentum(&self, velocity: &[Vec<f64>], volume: f64) -> (Vec3, Vec3) {
-        let (momentum, angular) = self.moments(|component, _, row, alpha| {
-            let velocity = &velocity[component][row.first..row.first + row.len];
+        let (momentum, angular) = self.moments(|component, _, row| {
+            let velocity = &velocity[component][row.faces()];
             let (mut sum, mut along) = (0.0, 0.0);
-            for (i, (alpha, v)) in alpha.iter().zip(velocity).enumerate() {
+            for (i, (alpha, v)) in row.alpha.iter().zip(velocity).enumerate() {
                 let q = alpha * v;
                 sum += q;
                 along += i as f64 * q;
@@ -116,16 +116,16 @@ impl Body {
 
     /// `(Σ q, Σ r × q)` over the body's faces of every component, `q` the
     /// vector along the component whose row sums `(Σ_i q_i, Σ_i i q_i)`
-    /// are `row_sums(component, faces, row, α)`: the force and torque of a
+    /// are `row_sums(component, faces, row)`: the force and torque of a
     /// face field on the body.
     fn moments(
         &self,
-        mut row_sums: impl FnMut(usize, &FaceRows, &Row, &[f64]) -> (f64, f64),
+        mut row_sums: impl FnMut(usize, &FaceRows, &Row) -> (f64, f64),
     ) -> (Vec3, Vec3) {
         let mut force = Vec3::zeros();
         let mut torque = Vec3::zeros();
         for (component, faces) in self.faces.iter().enumerate() {
-            let (sum, moment) = faces.moments(|row, alpha| row_sums(component, faces, row, alpha));
+            let (sum, moment) = faces.moments(|row| row_sums(component, faces, row));
             force[component] += sum;
             // Σ r × (q e_c) = (Σ q r) × e_c.
             let mut axis = Vec3::zeros();
@@ -346,9 +346,9 @@ impl ImmersedBoundaries {
             .list
             .par_iter()
             .map(|body| {
-                let (force, torque) = body.moments(|component, faces, row, alpha| {
+                let (force, torque) = body.moments(|component, faces, row| {
                     let (base, slope) = body.rigid_along(row, component, faces.step);
-                    let faces = row.first..row.first + row.len;
+                    let (alpha, faces) = (row.alpha, row.faces());
                     let velocity = &velocity[component][faces.clone()];
                     let load = |i: usize, weight: f64, v: f64| -> (f64, f64) {
                         let q = weight * (base + i as f64 * slope - v);
@@ -410,13 +410,10 @@ impl ImmersedBoundaries {
                     let body = &bodies.list[body];
                     let faces = &body.faces[component];
                     for row in faces.rows_in(dim, layer..layer + 1) {
-                        let (base, slope) = body.rigid_along(row, component, faces.step);
-                        let at = row.first - first;
-                        let sums = total[at..at + row.len]
-                            .iter_mut()
-                            .zip(&mut target[at..at + row.len]);
-                        for (i, (alpha, (total, target))) in
-                            faces.alpha(row).iter().zip(sums).enumerate()
+                        let (base, slope) = body.rigid_along(&row, component, faces.step);
+                        let at = row.first - first..row.first - first + row.len();
+                        let sums = total[at.clone()].iter_mut().zip(&mut target[at]);
+                        for (i, (alpha, (total, target))) in row.alpha.iter().zip(sums).enumerate()
                         {
                             let beta = forced(*alpha);
                             *total += beta;
