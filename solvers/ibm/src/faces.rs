@@ -226,17 +226,23 @@ impl FaceRows {
         self.origin + row.i as usize + along_y * row.j as usize + along_z * row.k as usize
     }
 
+    /// Offset of the first face of `row` from the body's centre.
+    #[inline]
+    fn offset(&self, row: &StoredRow) -> Vec3 {
+        Vec3::new(
+            self.lines[row.i as usize],
+            self.lines[self.lines_y + row.j as usize],
+            self.lines[self.lines_z + row.k as usize],
+        )
+    }
+
     /// The rows `rows` of `self.rows`, whose fractions start at `start`.
     fn rows_from(&self, rows: Range<usize>, mut start: usize) -> impl Iterator<Item = Row<'_>> {
         self.rows[rows].iter().map(move |row| {
             let len = row.len as usize;
             let view = Row {
                 first: self.first(row),
-                offset: Vec3::new(
-                    self.lines[row.i as usize],
-                    self.lines[self.lines_y + row.j as usize],
-                    self.lines[self.lines_z + row.k as usize],
-                ),
+                offset: self.offset(row),
                 alpha: &self.alpha[start..start + len],
             };
             start += len;
@@ -299,6 +305,42 @@ impl FaceRows {
         if changed {
             self.sum = self.alpha.iter().sum();
         }
+    }
+
+    /// [`FaceRows::share`] and [`FaceRows::moments`] of `q = α v` in one
+    /// pass over the rows, `v` the face field `field`: each fraction
+    /// becomes its share and is read at once for the fluid's momentum in
+    /// the body (the same sums, in the same order, as the two passes).
+    pub fn share_and_weigh(&mut self, totals: &[f64], field: &[f64]) -> (f64, Vec3) {
+        let mut changed = false;
+        let (mut sum, mut moment) = (0.0, Vec3::zeros());
+        let mut start = 0;
+        for r in 0..self.rows.len() {
+            let stored = self.rows[r];
+            let (first, len) = (self.first(&stored), stored.len as usize);
+            let faces = first..first + len;
+            let (totals, values) = (&totals[faces.clone()], &field[faces]);
+            let alpha = &mut self.alpha[start..start + len];
+            let (mut plain, mut along) = (0.0, 0.0);
+            let rows = alpha.iter_mut().zip(totals.iter().zip(values));
+            for (i, (alpha, (&total, &value))) in rows.enumerate() {
+                if total > 1.0 {
+                    *alpha /= total;
+                    changed = true;
+                }
+                let q = *alpha * value;
+                plain += q;
+                along += i as f64 * q;
+            }
+            sum += plain;
+            moment += self.offset(&stored) * plain;
+            moment.x += self.step * along;
+            start += len;
+        }
+        if changed {
+            self.sum = self.alpha.iter().sum();
+        }
+        (sum, moment)
     }
 
     /// `(Σ q, Σ q r)` over the faces, `q` a scalar on each face given row

@@ -114,6 +114,27 @@ impl Body {
         (momentum * volume, angular * volume)
     }
 
+    /// Replaces the body's fractions by its shares of the faces whose
+    /// totals of all bodies' fractions, `totals`, exceed one, and returns
+    /// its [`Body::inner_momentum`] in `velocity` with them, in one pass.
+    fn share_and_weigh(
+        &mut self,
+        totals: &[Vec<f64>],
+        velocity: &[Vec<f64>],
+        volume: f64,
+    ) -> (Vec3, Vec3) {
+        let mut momentum = Vec3::zeros();
+        let mut angular = Vec3::zeros();
+        for (component, faces) in self.faces.iter_mut().enumerate() {
+            let (sum, moment) = faces.share_and_weigh(&totals[component], &velocity[component]);
+            momentum[component] += sum;
+            let mut axis = Vec3::zeros();
+            axis[component] = 1.0;
+            angular += moment.cross(&axis);
+        }
+        (momentum * volume, angular * volume)
+    }
+
     /// `(Σ q, Σ r × q)` over the body's faces of every component, `q` the
     /// vector along the component whose row sums `(Σ_i q_i, Σ_i i q_i)`
     /// are `row_sums(component, faces, row)`: the force and torque of a
@@ -268,12 +289,7 @@ impl ImmersedBoundaries {
                 .par_iter_mut()
                 .zip(per_body)
                 .map(|(body, measured)| {
-                    measured.unwrap_or_else(|| {
-                        for (component, faces) in body.faces.iter_mut().enumerate() {
-                            faces.share(&totals[component]);
-                        }
-                        body.inner_momentum(velocity, volume)
-                    })
+                    measured.unwrap_or_else(|| body.share_and_weigh(totals, velocity, volume))
                 })
                 .collect()
         } else {
