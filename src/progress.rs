@@ -4,6 +4,13 @@
 //! time or every minute, whichever comes first. Both give the step, the
 //! simulated time, the rate and an ETA from the recent rate. Only the root
 //! rank shows anything.
+//!
+//! A job stopped and resumed (Ctrl-Z and `fg`, a scheduler's suspend) has
+//! wall time pass while the process does nothing: the rate and the ETA
+//! leave that time out. Between two reads of the clock, the process's CPU
+//! time grows by at least the wall time while one thread runs; wall time
+//! beyond the CPU time's growth, when over a second, is counted as a pause.
+//! A slow step, even of minutes, keeps its time: its thread runs.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::collections::VecDeque;
@@ -22,6 +29,9 @@ const LINE_FRACTION: f64 = 0.05;
 const RATE_WINDOW: f64 = 30.0;
 /// The clock is read about this often (s); between reads, steps are counted.
 const CLOCK_EVERY: f64 = 0.01;
+/// Wall time without CPU time shorter than this (s) is not a pause (a
+/// write to disk, the system's scheduling).
+const SHORTEST_PAUSE: f64 = 1.0;
 
 enum Display {
     Bar(ProgressBar),
@@ -34,8 +44,13 @@ pub struct Progress {
     display: Display,
     end: f64,
     started: Instant,
-    /// (elapsed s, simulated time, step) at recent clock reads, oldest first.
+    /// (active s, simulated time, step) at recent clock reads, oldest
+    /// first; active time is the elapsed time less the pauses.
     recent: VecDeque<(f64, f64, u64)>,
+    /// The last clock read: (elapsed s, the process's CPU s if known).
+    last_read: (f64, Option<f64>),
+    /// Wall seconds the process stood stopped so far.
+    paused: f64,
     last_text: f64,
     last_line: f64,
     /// The next line is due at this many [`LINE_FRACTION`]s of the run.
@@ -86,6 +101,8 @@ impl Progress {
             end,
             started: Instant::now(),
             recent: VecDeque::from([(0.0, 0.0, 0)]),
+            last_read: (0.0, process_cpu_seconds()),
+            paused: 0.0,
             last_text: 0.0,
             last_line: 0.0,
             next_line: 1,
@@ -111,17 +128,33 @@ impl Progress {
             return None;
         }
         let elapsed = self.started.elapsed().as_secs_f64();
-        self.update_at(elapsed, time, step)
+        self.update_at(elapsed, process_cpu_seconds(), time, step)
     }
 
-    /// [`Progress::update`] at `elapsed` seconds since the start.
-    pub fn update_at(&mut self, elapsed: f64, time: f64, step: u64) -> Option<String> {
-        let &(first_elapsed, _, first_step) = self.recent.front().expect("a sample");
-        let step_seconds = (elapsed - first_elapsed) / (step - first_step).max(1) as f64;
+    /// [`Progress::update`] at `elapsed` seconds since the start, the
+    /// process having used `cpu` seconds of CPU time (if known).
+    pub fn update_at(
+        &mut self,
+        elapsed: f64,
+        cpu: Option<f64>,
+        time: f64,
+        step: u64,
+    ) -> Option<String> {
+        let (last_elapsed, last_cpu) = self.last_read;
+        if let (Some(cpu), Some(last_cpu)) = (cpu, last_cpu) {
+            let idle = (elapsed - last_elapsed) - (cpu - last_cpu);
+            if idle > SHORTEST_PAUSE {
+                self.paused += idle;
+            }
+        }
+        self.last_read = (elapsed, cpu);
+        let active = elapsed - self.paused;
+        let &(first_active, _, first_step) = self.recent.front().expect("a sample");
+        let step_seconds = (active - first_active) / (step - first_step).max(1) as f64;
         self.stride = ((CLOCK_EVERY / step_seconds.max(1e-9)) as u64).clamp(1, 10_000);
         self.countdown = self.stride;
-        self.recent.push_back((elapsed, time, step));
-        while self.recent.len() > 2 && elapsed - self.recent[1].0 > RATE_WINDOW {
+        self.recent.push_back((active, time, step));
+        while self.recent.len() > 2 && active - self.recent[1].0 > RATE_WINDOW {
             self.recent.pop_front();
         }
         let fraction = (time / self.end).clamp(0.0, 1.0);
@@ -188,6 +221,25 @@ impl Progress {
         if let Display::Bar(bar) = &self.display {
             bar.finish_and_clear();
         }
+    }
+}
+
+/// The CPU time the process has used so far, all its threads together
+/// (none where the system does not say).
+fn process_cpu_seconds() -> Option<f64> {
+    #[cfg(unix)]
+    {
+        let mut now = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `now` is a valid timespec for the call to fill.
+        let status = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut now) };
+        (status == 0).then(|| now.tv_sec as f64 + 1e-9 * now.tv_nsec as f64)
+    }
+    #[cfg(not(unix))]
+    {
+        None
     }
 }
 
@@ -267,7 +319,7 @@ mod tests {
         let mut lines = Vec::new();
         for step in 1..=10u64 {
             let elapsed = step as f64;
-            lines.extend(progress.update_at(elapsed, 2.0 * elapsed, step));
+            lines.extend(progress.update_at(elapsed, Some(elapsed), 2.0 * elapsed, step));
         }
         assert_eq!(lines.len(), 4, "{lines:?}");
         assert!(lines[0].starts_with("  6 % after 0:00:03"), "{}", lines[0]);
@@ -275,9 +327,42 @@ mod tests {
         // Then a step of five minutes that moves 1 %: a line at once, the
         // minute having passed, with the rate of the last 30 s.
         let line = progress
-            .update_at(310.0, 21.0, 11)
+            .update_at(310.0, Some(310.0), 21.0, 11)
             .expect("a line after a minute");
         assert!(line.contains("step 11, t = 2.1000e1"), "{line}");
+        assert!(line.contains("300.00 s/step"), "{line}");
+    }
+
+    /// A job stopped for an hour and resumed: its CPU time stood still, so
+    /// the hour is left out of the rate and the ETA, which stay those of
+    /// the steps around it (0.1 s a step, 1 simulated s per 10 s).
+    #[test]
+    fn a_pause_is_left_out_of_the_rate_and_the_eta() {
+        let mut progress = Progress::lines(1000.0);
+        let mut clock = |progress: &mut Progress, wall: f64, cpu: f64, step: u64| {
+            progress.update_at(wall, Some(cpu), 0.01 * step as f64, step)
+        };
+        for step in 1..=600u64 {
+            let t = 0.1 * step as f64;
+            clock(&mut progress, t, 2.0 * t, step);
+        }
+        // Stopped for an hour after step 600, then one more step: the
+        // minute since the last line has passed, so a line comes.
+        let line = clock(&mut progress, 3660.1, 120.2, 601).expect("a line after the pause");
+        assert!(line.contains("after 1:01:00"), "{line}");
+        assert!(line.contains("0.10 s/step"), "{line}");
+        // 993.99 simulated s to go at 0.1 per wall s: 9,940 s (the step
+        // after the pause adds its 0.1 s of CPU time to the window's).
+        let eta = line.split("ETA ").nth(1).expect("an ETA");
+        let parts: Vec<f64> = eta.split(':').map(|p| p.parse().unwrap()).collect();
+        let seconds = 3600.0 * parts[0] + 60.0 * parts[1] + parts[2];
+        assert!((seconds / 9940.0 - 1.0).abs() < 0.01, "{line}");
+        // Without the CPU time the hour counts.
+        let mut blind = Progress::lines(1000.0);
+        for step in 1..=600u64 {
+            blind.update_at(0.1 * step as f64, None, 0.01 * step as f64, step);
+        }
+        let line = blind.update_at(3660.1, None, 6.01, 601).expect("a line");
         assert!(line.contains("s/step"), "{line}");
     }
 }
