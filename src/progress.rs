@@ -235,7 +235,7 @@ fn process_cpu_seconds() -> Option<f64> {
         };
         // SAFETY: `now` is a valid timespec for the call to fill.
         let status = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut now) };
-        (status == 0).then(|| now.tv_sec as f64 + 1e-9 * now.tv_nsec as f64)
+        (status == 0).then_some(now.tv_sec as f64 + 1e-9 * now.tv_nsec as f64)
     }
     #[cfg(not(unix))]
     {
@@ -339,7 +339,7 @@ mod tests {
     #[test]
     fn a_pause_is_left_out_of_the_rate_and_the_eta() {
         let mut progress = Progress::lines(1000.0);
-        let mut clock = |progress: &mut Progress, wall: f64, cpu: f64, step: u64| {
+        let clock = |progress: &mut Progress, wall: f64, cpu: f64, step: u64| {
             progress.update_at(wall, Some(cpu), 0.01 * step as f64, step)
         };
         for step in 1..=600u64 {
