@@ -50,6 +50,7 @@ use grainflow_dem::Particles;
 use grainflow_fluid::{Block, Grid, Location};
 use rayon::prelude::*;
 
+use crate::face_sums::{force_block, touched_block};
 use crate::faces::{FaceRows, Row};
 pub use crate::loads::{vectors_on_owners, Loads};
 use crate::overlaps::pressed_bodies;
@@ -92,7 +93,7 @@ impl Body {
     /// The `component` of the rigid velocity along `row` of faces `step`
     /// apart: `base + i slope` at its face `i` (`ω × x̂ = (0, ω_z, −ω_y)`).
     #[inline]
-    fn rigid_along(&self, row: &Row, component: usize, step: f64) -> (f64, f64) {
+    pub(crate) fn rigid_along(&self, row: &Row, component: usize, step: f64) -> (f64, f64) {
         let w = self.angular_velocity;
         let slope = [0.0, w.z, -w.y][component] * step;
         (self.velocity_at(&row.offset)[component], slope)
@@ -188,7 +189,7 @@ pub struct ImmersedBoundaries {
     /// between stages).
     pub(crate) total_fraction: Vec<Vec<f64>>,
     /// `Σ_p α_p U_p` on the faces of each component.
-    solid_velocity: Vec<Vec<f64>>,
+    pub(crate) solid_velocity: Vec<Vec<f64>>,
     /// Whether the two sums above hold a stage's forcing until `apply`.
     forcing_sums_pending: bool,
 }
@@ -408,69 +409,6 @@ impl ImmersedBoundaries {
         self.gather(bodies, &per_body)
     }
 
-    /// Adds `Σ_p β_p` and `Σ_p β_p U_p` of `bodies`, `β = 1 − (1 − α)^exponent`
-    /// of each body's fraction on the face, into the scratch sums the
-    /// forcing reads (`total_fraction`, `solid_velocity`).
-    ///
-    /// The planes of the slowest axis are cut into slabs shared among
-    /// threads (one slab on one thread); within a slab the bodies that
-    /// reach it add their rows one body after the other, in list order, so
-    /// each face sums its bodies in list order whatever the number of
-    /// threads, and a body's rows are read where they lie, one after the
-    /// other (plane by plane, a body's rows of each plane were fetched
-    /// apart, which took twice as long).
-    fn add_forcing_sums(&mut self, grid: &Grid, bodies: &Bodies, exponent: f64) {
-        let dim = grid.dim();
-        let slow = dim - 1;
-        let plane = grid.stride(slow);
-        let planes = grid.padded()[slow];
-        let threads = rayon::current_num_threads();
-        // Four slabs a thread even out the bodies per slab.
-        let thickness = match threads {
-            1 => planes,
-            _ => planes.div_ceil(4 * threads).max(1),
-        };
-        let forced = |alpha: f64| forced_fraction(alpha, exponent);
-        for component in 0..dim {
-            let fill_slab = |slab: usize, total: &mut [f64], target: &mut [f64]| {
-                let layers = slab * thickness..((slab + 1) * thickness).min(planes);
-                let first = layers.start * plane;
-                for body in &bodies.list {
-                    let faces = &body.faces[component];
-                    let reach = faces.stencil.start[slow]..faces.stencil.end[slow];
-                    if faces.is_empty() || reach.end <= layers.start || reach.start >= layers.end {
-                        continue;
-                    }
-                    for row in faces.rows_in(dim, layers.clone()) {
-                        let (base, slope) = body.rigid_along(&row, component, faces.step);
-                        let at = row.first - first..row.first - first + row.len();
-                        let sums = total[at.clone()].iter_mut().zip(&mut target[at]);
-                        for (i, (alpha, (total, target))) in row.alpha.iter().zip(sums).enumerate()
-                        {
-                            let beta = forced(*alpha);
-                            *total += beta;
-                            *target += beta * (base + i as f64 * slope);
-                        }
-                    }
-                }
-            };
-            let (total, target) = (
-                &mut self.total_fraction[component],
-                &mut self.solid_velocity[component],
-            );
-            let slab = thickness * plane;
-            if threads == 1 {
-                fill_slab(0, total, target);
-            } else {
-                total
-                    .par_chunks_mut(slab)
-                    .zip(target.par_chunks_mut(slab))
-                    .enumerate()
-                    .for_each(|(index, (total, target))| fill_slab(index, total, target));
-            }
-        }
-    }
-
     /// `Σ_p α_p` capped at 1 at every owned cell centre, in the order of
     /// [`Grid::for_each`] over the cell block: the solid fraction field for
     /// output.
@@ -613,101 +551,5 @@ pub(crate) fn forced_fraction(alpha: f64, exponent: f64) -> f64 {
         alpha.min(1.0)
     } else {
         -(exponent * (-alpha).ln_1p()).exp_m1()
-    }
-}
-
-/// The smallest block that holds the faces of `component` of every body.
-fn touched_block(bodies: &Bodies, component: usize) -> Option<Block> {
-    let mut touched: Option<Block> = None;
-    for body in &bodies.list {
-        let faces = &body.faces[component];
-        if faces.is_empty() {
-            continue;
-        }
-        let stencil = faces.stencil;
-        touched = Some(match touched {
-            None => stencil,
-            Some(union) => Block {
-                start: [0, 1, 2].map(|a| union.start[a].min(stencil.start[a])),
-                end: [0, 1, 2].map(|a| union.end[a].max(stencil.end[a])),
-            },
-        });
-    }
-    touched
-}
-
-/// For each plane of the slowest axis (`planes` of them), the bodies
-/// whose faces of `component` reach it, in list order: a plane's sums
-/// visit only those.
-pub(crate) fn bodies_by_plane(
-    bodies: &Bodies,
-    component: usize,
-    slow: usize,
-    planes: usize,
-) -> Vec<Vec<usize>> {
-    let mut reaching = vec![Vec::new(); planes];
-    for (index, body) in bodies.list.iter().enumerate() {
-        let faces = &body.faces[component];
-        if !faces.is_empty() {
-            for plane in faces.stencil.start[slow]..faces.stencil.end[slow] {
-                reaching[plane].push(index);
-            }
-        }
-    }
-    reaching
-}
-
-/// `V += (Σ β_p U_p − Σ β_p V) / max(1, Σ β_p)` (eq. 7 with the weights
-/// of overlapping bodies) on the faces of `block`, and the two sums set
-/// back to zero there: one pass over the three fields, the planes of the
-/// slowest axis shared among threads (each face computed alone).
-fn force_block(
-    grid: &Grid,
-    block: &Block,
-    velocity: &mut [f64],
-    total: &mut [f64],
-    target: &mut [f64],
-) {
-    let slow = grid.dim() - 1;
-    let plane = grid.stride(slow);
-    let mut inner = *block;
-    inner.start[slow] = 0;
-    inner.end[slow] = 1;
-    let rows = |velocity: &mut [f64], total: &mut [f64], target: &mut [f64]| {
-        for k in inner.start[2]..inner.end[2] {
-            for j in inner.start[1]..inner.end[1] {
-                let faces = grid.index(inner.start[0], j, k)..grid.index(inner.end[0], j, k);
-                let rows = velocity[faces.clone()]
-                    .iter_mut()
-                    .zip(&mut total[faces.clone()])
-                    .zip(&mut target[faces]);
-                for ((v, total), target) in rows {
-                    *v += (*target - *total * *v) / total.max(1.0);
-                    *total = 0.0;
-                    *target = 0.0;
-                }
-            }
-        }
-    };
-    let planes = block.start[slow] * plane..block.end[slow] * plane;
-    let (velocity, total, target) = (
-        &mut velocity[planes.clone()],
-        &mut total[planes.clone()],
-        &mut target[planes],
-    );
-    if rayon::current_num_threads() == 1 {
-        let planes = velocity
-            .chunks_mut(plane)
-            .zip(total.chunks_mut(plane))
-            .zip(target.chunks_mut(plane));
-        for ((velocity, total), target) in planes {
-            rows(velocity, total, target);
-        }
-    } else {
-        velocity
-            .par_chunks_mut(plane)
-            .zip(total.par_chunks_mut(plane))
-            .zip(target.par_chunks_mut(plane))
-            .for_each(|((velocity, total), target)| rows(velocity, total, target));
     }
 }

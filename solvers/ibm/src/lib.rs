@@ -18,6 +18,7 @@
 
 pub mod axisymmetric;
 pub mod coupled;
+mod face_sums;
 mod faces;
 pub mod forcing;
 mod loads;

@@ -22,7 +22,8 @@
 use grainflow_fluid::Grid;
 use rayon::prelude::*;
 
-use crate::forcing::{bodies_by_plane, Bodies, ImmersedBoundaries};
+use crate::face_sums::bodies_by_plane;
+use crate::forcing::{Bodies, ImmersedBoundaries};
 use crate::solid_fraction::support;
 
 impl ImmersedBoundaries {
