@@ -10,7 +10,10 @@
 //! leave that time out. Between two reads of the clock, the process's CPU
 //! time grows by at least the wall time while one thread runs; wall time
 //! beyond the CPU time's growth, when over a second, is counted as a pause.
-//! A slow step, even of minutes, keeps its time: its thread runs.
+//! A slow step, even of minutes, keeps its time: its thread runs. A wait
+//! that uses no CPU (a long write to a slow disk, another rank's work that
+//! an MPI library waits for without polling) counts as a pause too, and
+//! makes the ETA that much short.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::collections::VecDeque;
