@@ -133,6 +133,13 @@ fn particles_by_block(
         mean: p.radius,
         spread: p.radius_spread,
     };
+    // A generator block's grains: the particles' density, its own
+    // `fixed` and initial velocity.
+    let material = |fixed: bool, velocity: &[f64]| Material {
+        density: p.density,
+        fixed,
+        velocity: vector(velocity),
+    };
     let mut all: Vec<NewParticle> = Vec::new();
     let mut blocks = Vec::with_capacity(p.block.len());
     let mut groups = Vec::new();
@@ -148,11 +155,7 @@ fn particles_by_block(
                 fixed,
                 velocity,
             } => {
-                let material = Material {
-                    density: p.density,
-                    fixed: *fixed,
-                    velocity: vector(velocity),
-                };
+                let material = material(*fixed, velocity);
                 let last = dimension.count() - 1;
                 let mut step = Vec3::repeat(*spacing);
                 step[last] = layer_spacing.unwrap_or(*spacing);
@@ -174,11 +177,7 @@ fn particles_by_block(
                 fixed,
                 velocity,
             } => {
-                let material = Material {
-                    density: p.density,
-                    fixed: *fixed,
-                    velocity: vector(velocity),
-                };
+                let material = material(*fixed, velocity);
                 generate::random(
                     dimension,
                     vector(lower),

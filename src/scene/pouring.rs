@@ -39,14 +39,8 @@ struct Pour {
     interval: f64,
     gap: f64,
     settled_speed: Option<f64>,
-    /// Grains released so far, and in how many batches.
-    poured: usize,
-    /// Ids of the grains of the last batch.
-    last_batch: std::ops::Range<u64>,
-    batches: usize,
-    next_release: f64,
-    /// The pour's own stream, the same on every rank.
-    rng: Pcg64,
+    /// How far it has gone (what a checkpoint keeps).
+    progress: PourProgress,
 }
 
 impl Pouring {
@@ -70,24 +64,28 @@ impl Pouring {
 
     /// Whether every pour has released all its grains.
     pub fn is_done(&self) -> bool {
-        self.pours.iter().all(|p| p.poured == p.count)
+        self.pours.iter().all(|p| p.progress.poured == p.count)
     }
 
     /// Grains still to be released.
     pub fn remaining(&self) -> usize {
-        self.pours.iter().map(|p| p.count - p.poured).sum()
+        self.pours.iter().map(|p| p.count - p.progress.poured).sum()
     }
 
     /// Batches released so far, over all pours.
     pub fn batches_released(&self) -> usize {
-        self.pours.iter().map(|p| p.batches).sum()
+        self.pours.iter().map(|p| p.progress.batches).sum()
     }
 
     /// The pours still going on: grains per batch (the mean), their
     /// shortest interval (s), and whether any waits for the previous batch
     /// to land. None once every pour is done.
     pub fn pace(&self, dimension: Dimension) -> Option<(usize, f64, bool)> {
-        let going: Vec<&Pour> = self.pours.iter().filter(|p| p.poured < p.count).collect();
+        let going: Vec<&Pour> = self
+            .pours
+            .iter()
+            .filter(|p| p.progress.poured < p.count)
+            .collect();
         if going.is_empty() {
             return None;
         }
@@ -128,7 +126,9 @@ impl Pouring {
     pub fn release_due(&mut self, system: &mut DemSystem) -> Result<Vec<String>, String> {
         let mut lines = Vec::new();
         for pour in &mut self.pours {
-            if pour.poured == pour.count || system.time < pour.next_release - 1e-9 * pour.interval {
+            if pour.progress.poured == pour.count
+                || system.time < pour.progress.next_release - 1e-9 * pour.interval
+            {
                 continue;
             }
             if let Some(speed) = pour.settled_speed {
@@ -168,13 +168,15 @@ impl Pour {
             interval: section.interval,
             gap: section.gap,
             settled_speed: section.settled_speed,
-            poured: 0,
-            last_batch: 0..0,
-            batches: 0,
-            next_release: 0.0,
-            // A stream of its own: the blocks' grains and radii do not
-            // change when a pour is added.
-            rng: Pcg64::new(u128::from(seed), 1 + index as u128),
+            progress: PourProgress {
+                poured: 0,
+                last_batch: 0..0,
+                batches: 0,
+                next_release: 0.0,
+                // A stream of its own: the blocks' grains and radii do not
+                // change when a pour is added.
+                rng: Pcg64::new(u128::from(seed), 1 + index as u128),
+            },
         }
     }
 
@@ -189,7 +191,7 @@ impl Pour {
     fn last_batch_speed(&self, system: &DemSystem) -> f64 {
         let p = &system.particles;
         let (mut sum, mut count) = (0.0, 0usize);
-        for k in (0..p.n_owned).filter(|&k| self.last_batch.contains(&p.id[k])) {
+        for k in (0..p.n_owned).filter(|&k| self.progress.last_batch.contains(&p.id[k])) {
             sum += p.velocity[k].norm_squared();
             count += 1;
         }
@@ -209,11 +211,11 @@ impl Pour {
             self.radii,
             self.jitter,
             &self.material,
-            &mut self.rng,
+            &mut self.progress.rng,
         );
         // The last batch keeps its lowest sites.
         batch.sort_by(|a, b| a.position.dot(&up).total_cmp(&b.position.dot(&up)));
-        batch.truncate(self.count - self.poured);
+        batch.truncate(self.count - self.progress.poured);
 
         let p = &system.particles;
         let highest = (0..p.n_owned)
@@ -243,31 +245,31 @@ impl Pour {
                     system.time,
                     self.index,
                     grain.position.as_slice(),
-                    self.poured,
+                    self.progress.poured,
                     self.count
                 ));
             }
         }
         let first_id = system.next_id();
         system.add_particles_in_groups(&batch, &vec![self.group; batch.len()]);
-        self.last_batch = first_id..system.next_id();
-        self.poured += batch.len();
-        self.batches += 1;
+        self.progress.last_batch = first_id..system.next_id();
+        self.progress.poured += batch.len();
+        self.progress.batches += 1;
         // A pour that waits for the deposit to settle counts its interval
         // from the actual release.
-        self.next_release = match self.settled_speed {
+        self.progress.next_release = match self.settled_speed {
             Some(_) => system.time + self.interval,
-            None => self.next_release + self.interval,
+            None => self.progress.next_release + self.interval,
         };
         Ok(format!(
             "t = {:.6e} s: particles.pour[{}] batch {}: {} grains, lowest surface at {:.4} m \
              along −g; {} of {} poured",
             system.time,
             self.index,
-            self.batches,
+            self.progress.batches,
             batch.len(),
             bottom + lift,
-            self.poured,
+            self.progress.poured,
             self.count
         ))
     }
@@ -276,27 +278,20 @@ impl Pour {
 /// How far one pour has gone: what a checkpoint keeps of it.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct PourProgress {
+    /// Grains released so far, and in how many batches.
     poured: usize,
+    /// Ids of the grains of the last batch.
     last_batch: std::ops::Range<u64>,
     batches: usize,
     next_release: f64,
+    /// The pour's own stream, the same on every rank.
     rng: Pcg64,
 }
 
 impl Pouring {
     /// Saves how far each pour has gone, its random stream included.
     pub fn save_state(&self, state: &mut grainflow_core::State) {
-        let progress: Vec<PourProgress> = self
-            .pours
-            .iter()
-            .map(|p| PourProgress {
-                poured: p.poured,
-                last_batch: p.last_batch.clone(),
-                batches: p.batches,
-                next_release: p.next_release,
-                rng: p.rng.clone(),
-            })
-            .collect();
+        let progress: Vec<&PourProgress> = self.pours.iter().map(|p| &p.progress).collect();
         state.put_value("pouring", &progress);
     }
 
@@ -313,11 +308,7 @@ impl Pouring {
             )));
         }
         for (pour, p) in self.pours.iter_mut().zip(progress) {
-            pour.poured = p.poured;
-            pour.last_batch = p.last_batch;
-            pour.batches = p.batches;
-            pour.next_release = p.next_release;
-            pour.rng = p.rng;
+            pour.progress = p;
         }
         Ok(())
     }
