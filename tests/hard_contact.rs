@@ -157,3 +157,60 @@ fn collapsing_column_keeps_its_certificates_with_both_schemes() {
         assert!(front > 0.2 + 0.008, "{model}: front {front}");
     }
 }
+
+/// Where COCD cannot start: a sphere sitting in the hole of a square bed of
+/// four glued spheres (spacing 8.8 mm, d = 8 mm: contact normals 51° from
+/// the vertical) and overlapping them by 1 µm. COCD's convexified cone asks
+/// it to leave each at the overlap's rate plus μ |v_t|; rising, it slides
+/// along each normal at tan 51° = 1.24 times its separation, so for
+/// μ > 1/1.24 = 0.81 no motion does (the program is infeasible at any step
+/// and tolerance). At μ = 0.9 the run stops at its first step naming the
+/// overlap and what to do; at μ = 0.5 it starts, and with no overlap at
+/// μ = 0.9 too.
+#[test]
+fn cocd_refuses_a_grain_wedged_with_overlaps_and_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = |friction: f64, overlap: f64| {
+        let (radius, spacing) = (4.0e-3, 8.8e-3);
+        let across = (0.5_f64).sqrt() * spacing;
+        let height = ((2.0 * radius - overlap).powi(2) - across * across).sqrt();
+        let h = 0.5 * spacing;
+        let text = format!(
+            "[domain]\ndimension = 3\nlower = [-0.02, -0.02, -0.01]\nupper = [0.02, 0.02, 0.03]\n\
+             gravity = [0.0, 0.0, -9.81]\n\n[particles]\ndensity = 2500.0\nradius = {radius}\n\n\
+             [[particles.block]]\nkind = \"explicit\"\nfixed = true\n\
+             positions = [[{h}, {h}, 0.0], [-{h}, {h}, 0.0], [{h}, -{h}, 0.0], [-{h}, -{h}, 0.0]]\n\n\
+             [[particles.block]]\nkind = \"explicit\"\npositions = [[0.0, 0.0, {height}]]\n\n\
+             [contact]\nmodel = \"cocd\"\nfriction = {friction}\n\n\
+             [time]\nend = 0.005\ndt = 1.0e-3\n\n[output]\ninterval = 0.005\n"
+        );
+        let path = dir.path().join(format!("wedged_{friction}_{overlap}.toml"));
+        std::fs::write(&path, text).unwrap();
+        let out = dir.path().join(format!("out_{friction}_{overlap}"));
+        let result = std::process::Command::new(env!("CARGO_BIN_EXE_grainflow"))
+            .args([
+                "run",
+                path.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        (
+            result.status.success(),
+            String::from_utf8_lossy(&result.stderr).into_owned(),
+        )
+    };
+    let (ok, stderr) = case(0.9, 1e-6);
+    assert!(!ok, "the wedged grain ran");
+    assert!(
+        stderr.contains("step 1)")
+            && stderr.contains("overlapping by up to 1.000e-6 m")
+            && stderr.contains("start from a deposit without overlaps"),
+        "{stderr}"
+    );
+    let (ok, stderr) = case(0.5, 1e-6);
+    assert!(ok, "{stderr}");
+    let (ok, stderr) = case(0.9, 0.0);
+    assert!(ok, "{stderr}");
+}

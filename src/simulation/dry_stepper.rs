@@ -168,10 +168,10 @@ impl DryStepper {
             }
             DryStepper::Hard { contact, record } => match contact.step(system, dt) {
                 Err(why) => Some(format!(
-                    "hard-contact step failed at t = {:.6e} s (step {}): {why}; try a smaller \
-                     time.dt or a looser contact.tolerance",
+                    "hard-contact step failed at t = {:.6e} s (step {}): {why}; {}",
                     system.time,
-                    system.steps + 1
+                    system.steps + 1,
+                    failed_step_advice(contact.method, system)
                 )),
                 Ok(report) => {
                     record.add(&report);
@@ -247,5 +247,30 @@ impl DryStepper {
             DryStepper::Soft { .. } => Map::new(),
             DryStepper::Hard { record, .. } => record.metrics(),
         }
+    }
+}
+
+/// What to try after a hard-contact step failed on `system` (left at the
+/// start of the step). COCD's convexified cone asks an overlapping pair to
+/// separate at the overlap's rate plus μ |v_t| (Martin et al. 2022, eq. 9);
+/// a grain wedged with overlaps into a pocket steeper than atan(1/μ), such
+/// as the hole of a square bed of glued grains at μ = 0.9, cannot, and the
+/// program has no solution at any step or tolerance.
+fn failed_step_advice(method: Method, system: &DemSystem) -> String {
+    let overlap = grainflow_contact::certificate::largest_overlap(system, 1.0);
+    let p = &system.particles;
+    let mean_radius = p.radius[..p.n_owned].iter().sum::<f64>() / p.n_owned.max(1) as f64;
+    let frictional = system.law.friction > 0.0 || system.walls.iter().any(|w| w.friction > 0.0);
+    if method == Method::Cocd && overlap > 0.0 && frictional {
+        format!(
+            "the step started with grains overlapping by up to {overlap:.3e} m ({:.2e} of the mean \
+             radius): COCD's convexified cone asks overlapping grains to part at their overlap's \
+             rate plus μ |v_t|, which a grain wedged into a pocket of its neighbours cannot do; \
+             start from a deposit without overlaps (made with hard contact, or with the radii \
+             shrunk by the overlap)",
+            overlap / mean_radius
+        )
+    } else {
+        "try a smaller time.dt or a looser contact.tolerance".into()
     }
 }

@@ -96,7 +96,8 @@ pub fn contact_law_residual(
 }
 
 /// Largest overlap of the current configuration, grain–grain or
-/// grain–wall, divided by `length` (0 when nothing overlaps).
+/// grain–wall, between grains of which one at least moves, divided by
+/// `length` (0 when nothing overlaps).
 pub fn largest_overlap(system: &DemSystem, length: f64) -> f64 {
     let p = &system.particles;
     let list = &system.neighbours;
@@ -106,6 +107,9 @@ pub fn largest_overlap(system: &DemSystem, length: f64) -> f64 {
             let j = list.partner[e] as usize;
             if j < i {
                 continue; // the pair was measured from j's side
+            }
+            if p.is_fixed(i) && p.is_fixed(j) {
+                continue; // glued grains never meet in a program
             }
             let gap = (p.position[i] - p.position[j]).norm() - p.radius[i] - p.radius[j];
             largest = largest.max(-gap);
