@@ -311,7 +311,10 @@ fn check_runs_a_pour_through_its_first_batches_and_sums_the_rest() {
             .unwrap_or_else(|| panic!("{line}"))
     };
     let (probed, summed) = (count_after("the first "), count_after("then "));
-    assert!((2..=4).contains(&probed) && probed + summed == 147, "{line}");
+    assert!(
+        (2..=4).contains(&probed) && probed + summed == 147,
+        "{line}"
+    );
     assert!(
         line.contains(&format!("measured on the first {probed} batches"))
             && line.contains("per grain in motion"),

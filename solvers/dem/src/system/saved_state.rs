@@ -10,7 +10,8 @@
 //! instead (the pair list is rebuilt, so the sums of the next steps may
 //! differ at round-off).
 
-use super::{DemSystem, PackedGrain, PackedGrains};
+use super::rebuild::{PackedGrain, PackedGrains};
+use super::DemSystem;
 use crate::neighbours::PreviousList;
 use crate::particles::Particles;
 use crate::system::StepDiagnostics;
