@@ -111,6 +111,23 @@ fn run(contact: &mut HardContact, system: &mut DemSystem, steps: usize, dt: f64)
     separation
 }
 
+/// Asserts that the grain of `system` moves at `velocity` and spins at
+/// `spin` to [`CLOSED_FORM`], printing the errors.
+fn holds_motion(contact: &HardContact, system: &DemSystem, velocity: Vec3, spin: Vec3, gap: f64) {
+    let p = &system.particles;
+    let v = relative(p.velocity[0], velocity);
+    let w = relative(p.angular_velocity[0], spin);
+    println!(
+        "{}: velocity {v:.1e}, spin {w:.1e}, gap {gap:.1e} m",
+        name(contact)
+    );
+    assert!(
+        v < CLOSED_FORM && w < CLOSED_FORM,
+        "{}: {v} {w}",
+        name(contact)
+    );
+}
+
 fn relative(value: Vec3, expected: Vec3) -> f64 {
     (value - expected).norm() / expected.norm()
 }
@@ -140,20 +157,7 @@ fn a_sphere_rolls_down_an_oblique_incline_at_five_sevenths_of_g_sin_theta() {
         let start = grain(RADIUS * normal, Vec3::zeros(), Vec3::zeros(), false);
         let mut system = on_plane(normal, 0.5, &[start]);
         let separation = run(&mut contact, &mut system, steps, dt);
-        let p = &system.particles;
-        let (v, w) = (
-            relative(p.velocity[0], velocity),
-            relative(p.angular_velocity[0], spin),
-        );
-        println!(
-            "{}: velocity {v:.1e}, spin {w:.1e}, gap {separation:.1e} m",
-            name(&contact)
-        );
-        assert!(
-            v < CLOSED_FORM && w < CLOSED_FORM,
-            "{}: {v} {w}",
-            name(&contact)
-        );
+        holds_motion(&contact, &system, velocity, spin, separation);
         // An interior point ends a step with gaps of the order of ε
         // diameters: the sphere may leave at ε d/Δt.
         assert!(
@@ -223,20 +227,7 @@ fn a_sphere_thrown_along_a_floor_rolls_on_at_five_sevenths_of_its_speed() {
         let start = grain(RADIUS * Vec3::z(), thrown, Vec3::zeros(), false);
         let mut system = on_plane(Vec3::z(), 0.2, &[start]);
         let separation = run(&mut contact, &mut system, 60, 1e-3);
-        let p = &system.particles;
-        let (v, w) = (
-            relative(p.velocity[0], rolling),
-            relative(p.angular_velocity[0], spin),
-        );
-        println!(
-            "{}: velocity {v:.1e}, spin {w:.1e}, gap {separation:.1e} m",
-            name(&contact)
-        );
-        assert!(
-            v < CLOSED_FORM && w < CLOSED_FORM,
-            "{}: {v} {w}",
-            name(&contact)
-        );
+        holds_motion(&contact, &system, rolling, spin, separation);
     }
 }
 
