@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Hard against soft contact on the 2D column collapse, from
+"""Hard against soft contact on a column collapse (2D or 3D), from
 scripts/cocd_collapse_runs.py (Martin et al. 2022, Fig. 2 and 4):
 
 (a) COCD mass profiles h(x) at three times for several time steps;

@@ -35,6 +35,16 @@ use rayon::prelude::*;
 
 use crate::transform::{Direction, TransformKind};
 
+/// How FFTW chooses its algorithms: by estimate. FFTW_MEASURE times the
+/// candidates on the machine and keeps the fastest, so on a loaded node
+/// two runs of a case (or a run and its restart) could take different
+/// algorithms with different rounding: two runs of the immersed avalanche
+/// on 2 ranks differed from the third row of their series, and a resumed
+/// run from the one that never stopped. FFTW_ESTIMATE picks by a model of
+/// the machine, the same plans every time, so runs and restarts agree bit
+/// for bit.
+const PLANNING: u32 = ffi::FFTW_ESTIMATE;
+
 /// Serialises FFTW's planner (plan creation and destruction).
 static PLANNER: Mutex<()> = Mutex::new(());
 
@@ -77,8 +87,8 @@ pub struct BatchTransform {
 impl BatchTransform {
     /// Plans the transforms of `kind` along `axis` of `data`, whose shape
     /// is `shape`, in `parts` parts along the outermost dimension (at most
-    /// one per outer index). Planning measures (FFTW_MEASURE) and
-    /// overwrites `data`.
+    /// one per outer index). Plans are chosen by FFTW's estimate, not by
+    /// timing (see [`PLANNING`]); `data` is left as it is.
     pub fn new(
         kind: TransformKind,
         data: &mut [f64],
@@ -219,7 +229,7 @@ fn plan_lines(
             part.as_mut_ptr(),
             part.as_mut_ptr(),
             &kind,
-            ffi::FFTW_MEASURE,
+            PLANNING,
         )
     };
     assert!(
