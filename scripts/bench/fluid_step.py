@@ -5,7 +5,7 @@ memory per cell, for a triply periodic vortex at 64^3 and 128^3 and a
 channel (periodic x and y, no-slip walls in z, pressure-driven) at
 128 x 64 x 64, on 1 and 2 threads. Each run starts from the case's flow,
 takes `--steps` steps, and reads the wall time of the steps from
-series.csv (the set-up, FFTW's planning included, is left out). Prints the
+timing.csv (the set-up, FFTW's planning included, is left out). Prints the
 medians over `--repeats` runs and writes them as JSON.
 
 Variants are compared in the same command, their runs interleaved so that
@@ -47,7 +47,10 @@ def one_run(binary, root, case, cells, dt, steps, threads, extra):
         for s in sets:
             command += ["--set", s]
         _, memory = peak_rss_of(command, cwd=out)
-        lines = open(os.path.join(out, "series.csv")).read().split()
+        # The wall clock of each output row (timing.csv; series.csv before
+        # the timing was written apart).
+        timing = os.path.join(out, "timing.csv")
+        lines = open(timing if os.path.exists(timing) else os.path.join(out, "series.csv")).read().split()
         header = lines[0].split(",")
         rows = [dict(zip(header, map(float, l.split(",")))) for l in lines[1:]]
         seconds = rows[-1]["wall_seconds"] - rows[0]["wall_seconds"]
