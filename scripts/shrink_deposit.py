@@ -9,12 +9,11 @@ import csv
 import sys
 
 
-def main():
-    if len(sys.argv) != 3:
-        sys.exit(__doc__)
-    path, factor = sys.argv[1], float(sys.argv[2])
+def shrunk(path, factor):
+    """The rows of the deposit at `path` (header first), radii times
+    `factor` in (0, 1], velocities zero."""
     if not 0.0 < factor <= 1.0:
-        sys.exit(f"the factor must lie in (0, 1], not {factor}")
+        raise ValueError(f"the factor must lie in (0, 1], not {factor}")
     with open(path) as f:
         rows = list(csv.reader(f))
     header = rows[0]
@@ -24,6 +23,16 @@ def main():
         row[radius] = repr(float(row[radius]) * factor)
         for k in velocities:
             row[k] = "0.0"
+    return rows
+
+
+def main():
+    if len(sys.argv) != 3:
+        sys.exit(__doc__)
+    try:
+        rows = shrunk(sys.argv[1], float(sys.argv[2]))
+    except ValueError as e:
+        sys.exit(str(e))
     csv.writer(sys.stdout, lineterminator="\n").writerows(rows)
 
 

@@ -16,7 +16,10 @@ configurations. Prints the table and writes it as JSON.
 usage: scripts/bench/cocd_step_3d.py [--spheres 10000] [--tolerances 1e-8,1e-5]
          [--threads 1,2] [--repeats 2] [--clarabel] [--work DIR] [--json FILE]
 """
-import argparse, json, math, os, subprocess, sys
+import argparse, csv, json, math, os, subprocess, sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from shrink_deposit import shrunk  # noqa: E402
 
 BOX = """[domain]
 dimension = 3
@@ -95,16 +98,9 @@ def packing(binary, work, spheres):
                            time="end = 2.0\ndt_over_contact_time = 0.1\nrest_speed = 1.0e-3\nrest_after = 0.4"))
     run(binary, fill, os.path.join(work, "fill"), threads=2)
     # Shrink the radii by 1.5 %, at rest.
-    shrunk = os.path.join(work, "shrunk.csv")
-    with open(os.path.join(work, "fill", "final_particles.csv")) as f:
-        lines = f.read().splitlines()
-    rows = [lines[0]]
-    for line in lines[1:]:
-        x = line.split(",")
-        x[3] = repr(float(x[3]) * 0.985)
-        x[4] = x[5] = x[6] = "0.0"
-        rows.append(",".join(x))
-    write(shrunk, "\n".join(rows) + "\n")
+    rows = shrunk(os.path.join(work, "fill", "final_particles.csv"), 0.985)
+    with open(os.path.join(work, "shrunk.csv"), "w", newline="") as f:
+        csv.writer(f, lineterminator="\n").writerows(rows)
     settle = os.path.join(work, "settle.toml")
     write(settle, step_case(side, 2 * top + 0.01, "shrunk.csv", "end = 1.0e-2\ndt = 1.0e-3"))
     run(binary, settle, os.path.join(work, "settle"))
