@@ -389,7 +389,7 @@ fn resting_stacks_carry_the_weights_statics_gives() {
         }
         assert_eq!(contacts.len(), if label == "column" { 4 } else { 3 });
         for mut contact in schemes() {
-            let mut system = on_plane(Vec3::z(), 0.0, &stack_of(&system));
+            let mut system = on_plane(Vec3::z(), 0.0, &stack);
             run(&mut contact, &mut system, 50, dt);
             for k in 0..n {
                 let now = system.index_of(k as u64).unwrap();
@@ -403,12 +403,4 @@ fn resting_stacks_carry_the_weights_statics_gives() {
             }
         }
     }
-}
-
-/// The grains of `system` at rest where they stand.
-fn stack_of(system: &DemSystem) -> Vec<NewParticle> {
-    let p = &system.particles;
-    (0..p.n_owned)
-        .map(|k| grain(p.position[k], Vec3::zeros(), Vec3::zeros(), p.is_fixed(k)))
-        .collect()
 }
