@@ -205,7 +205,8 @@ fn check_warns_between_the_accuracy_and_the_stability_limit() {
 /// `check --ranks N` shows, before a cluster job, how a scene would be
 /// shared: the process grid, each rank's load (the 2,700 grains of the 3D
 /// column, the 32³ cells of the Beltrami flow), the warning when ranks hold
-/// too little, and the refusal of what does not run on several ranks.
+/// too little, and the refusal of what does not run on several ranks (for
+/// hard contact, with the separator its program would have).
 #[test]
 fn check_shows_how_a_scene_is_shared_among_ranks() {
     let text = |args: &[&str]| {
@@ -247,7 +248,15 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
         .output()
         .unwrap();
     assert_eq!(refused.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&refused.stderr).contains("hard contact"));
+    let refusal = String::from_utf8_lossy(&refused.stderr);
+    assert!(refusal.contains("hard contact"), "{refusal}");
+    // With the separator its program would have there: 400 discs, three
+    // unknowns each, split across x.
+    assert!(
+        refusal.contains("on 2 ranks (process grid 2 x 1 x 1) the contact program's separator: ")
+            && refusal.contains(" of 1200 unknowns"),
+        "{refusal}"
+    );
 }
 
 /// With `time.cfl`, `check` counts the steps at the speeds the scene is

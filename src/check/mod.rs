@@ -27,7 +27,9 @@ use std::fmt::Write;
 /// [`report`], and with `ranks` above one how the scene would be shared
 /// among that many MPI ranks ([`sharing::report`]).
 pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
-    crate::simulation::check_ranks(case, ranks)?;
+    if let Err(refusal) = crate::simulation::check_ranks(case, ranks) {
+        return Err(with_separator(case, ranks, refusal));
+    }
     // Before anything is built: a scene too large for the machine is
     // refused by its keys, not by a failed allocation.
     Footprint::of(case).check_fits(ranks, machine_memory())?;
@@ -48,6 +50,36 @@ pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
         text += &sharing.map_err(RunError::Case)?;
     }
     Ok(text)
+}
+
+/// A hard-contact scene refused on several ranks: the refusal, with the
+/// size of the separator its program would have on them
+/// ([`sharing::Separator`]).
+fn with_separator(case: &Case, ranks: usize, refusal: RunError) -> RunError {
+    let Some(hard) = case
+        .has_grains()
+        .then(|| scene::hard_contact(case))
+        .flatten()
+    else {
+        return refusal;
+    };
+    let separator = scene::build(case).and_then(|mut system| {
+        hard.prepare(&mut system);
+        let centres = &system.particles.position[..system.particles.n_owned];
+        let range = system.range_for(system.particles.max_radius());
+        let grid = scene::process_grid_of(case, &system.domain, ranks, range, centres)?;
+        Ok((grid, sharing::Separator::of(&system, hard.threshold, grid)))
+    });
+    match separator {
+        Ok((grid, separator)) => RunError::Case(format!(
+            "{refusal}\n  on {ranks} ranks (process grid {} x {} x {}) {}",
+            grid[0],
+            grid[1],
+            grid[2],
+            separator.describe()
+        )),
+        Err(_) => refusal,
+    }
 }
 
 /// The report of `check` on one rank.

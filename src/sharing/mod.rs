@@ -5,6 +5,10 @@
 //! below about 10,000 grains or 100,000 cells per rank the messages, not
 //! the work, set the pace).
 
+mod separator;
+
+pub use separator::Separator;
+
 use crate::case::Case;
 use crate::{scene, scene::fluid as fluid_scene};
 use grainflow_core::{fits, grains_per_box, Vec3};

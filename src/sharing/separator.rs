@@ -1,0 +1,196 @@
+//! The separator a hard-contact program would have on several ranks.
+//!
+//! COCD's interior point factorises the normal matrix K = M̃ + AᵀΘA at every
+//! iteration (Martin et al. 2022, eq. 7–9; `grainflow_contact::normal_factor`).
+//! Shared among ranks by the grains' subdomains, K splits into one block per
+//! rank and the unknowns of grains in contact across a rank boundary. Those
+//! form a vertex separator S: taking, for every pair of grains of two
+//! ranks, the grain of the higher rank cuts every coupling between the
+//! ranks' interiors. Each rank then factorises its interior and the ranks
+//! assemble together the Schur complement
+//!
+//!   Σ = K_SS − Σ_r K_Sr K_rr⁻¹ K_rS,
+//!
+//! dense and of the separator's size: ns² numbers to hold and ns³/3
+//! multiply–adds to factorise, at every interior-point iteration. That
+//! size, not the ranks' interiors, sets what several ranks can gain.
+
+use grainflow_contact::{contacts, Partner};
+use grainflow_core::Subdomain;
+use grainflow_dem::DemSystem;
+
+/// The program's unknowns as shared among ranks.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Separator {
+    /// Unknowns of the whole program: the free grains' velocities and spins.
+    pub unknowns: usize,
+    /// Unknowns of the separator S.
+    pub separator: usize,
+    /// Unknowns of each rank's interior.
+    pub interiors: Vec<usize>,
+    /// Candidate pairs of two free grains, and those across ranks.
+    pub pairs: usize,
+    pub crossing_pairs: usize,
+}
+
+impl Separator {
+    /// The separator of the program over the candidate pairs of `system`
+    /// (one rank, every grain owned) within the gap `threshold`, its grains
+    /// shared by a process grid of `ranks` as a run shares them.
+    pub fn of(system: &DemSystem, threshold: f64, ranks: [usize; 3]) -> Self {
+        let p = &system.particles;
+        let n = p.n_owned;
+        let per_grain = match system.dimension().count() {
+            2 => 3,
+            _ => 6,
+        };
+        let grid = Subdomain::of_rank(&system.domain, ranks, 0);
+        let owner: Vec<usize> = (0..n)
+            .map(|k| {
+                let mut x = p.position[k];
+                system.domain.wrap(&mut x);
+                grid.owner(&system.domain, &x)
+            })
+            .collect();
+        let mut in_separator = vec![false; n];
+        let (mut pairs, mut crossing_pairs) = (0, 0);
+        let listed = contacts::listed(system, threshold);
+        for (a, partner) in listed.partner.iter().enumerate() {
+            let Partner::Grain(j) = *partner else {
+                continue;
+            };
+            let (i, j) = (listed.grain[a] as usize, j as usize);
+            // A fixed grain has no unknowns: its pairs couple nothing.
+            if p.is_fixed(i) || p.is_fixed(j) {
+                continue;
+            }
+            pairs += 1;
+            if owner[i] != owner[j] {
+                crossing_pairs += 1;
+                let higher = if owner[i] > owner[j] { i } else { j };
+                in_separator[higher] = true;
+            }
+        }
+        let mut interiors = vec![0; grid.rank_count()];
+        let (mut unknowns, mut separator) = (0, 0);
+        for k in (0..n).filter(|&k| !p.is_fixed(k)) {
+            unknowns += per_grain;
+            if in_separator[k] {
+                separator += per_grain;
+            } else {
+                interiors[owner[k]] += per_grain;
+            }
+        }
+        Separator {
+            unknowns,
+            separator,
+            interiors,
+            pairs,
+            crossing_pairs,
+        }
+    }
+
+    /// Bytes of the dense Schur complement (held whole on a rank).
+    pub fn schur_bytes(&self) -> f64 {
+        8.0 * (self.separator as f64).powi(2)
+    }
+
+    /// Multiply–adds of one dense Cholesky factorisation of Σ.
+    pub fn schur_flops(&self) -> f64 {
+        (self.separator as f64).powi(3) / 3.0
+    }
+
+    /// The lines `check --ranks N` prints.
+    pub fn describe(&self) -> String {
+        let share = 100.0 * self.separator as f64 / self.unknowns.max(1) as f64;
+        format!(
+            "the contact program's separator: {} of {} unknowns ({share:.1} %), the grains of \
+             {} of {} candidate pairs that cross a rank boundary; its dense Schur complement \
+             {} and {:.1e} multiply-adds per interior-point iteration; ranks' interiors {} to \
+             {} unknowns",
+            self.separator,
+            self.unknowns,
+            self.crossing_pairs,
+            self.pairs,
+            crate::footprint::human_bytes(self.schur_bytes()),
+            self.schur_flops(),
+            self.interiors.iter().min().copied().unwrap_or(0),
+            self.interiors.iter().max().copied().unwrap_or(0),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use grainflow_core::{Dimension, Domain, Vec3};
+    use grainflow_dem::particles::NewParticle;
+    use grainflow_dem::{ContactLaw, NormalCalibration, NormalStiffness};
+
+    /// A layer of 4 × 4 touching spheres of 1 mm (the fixed ones at `fixed`)
+    /// in a box 4 mm square, on one rank.
+    fn layer(fixed: &[(usize, usize)]) -> DemSystem {
+        let d = 1e-3;
+        let domain = Domain {
+            dimension: Dimension::Three,
+            lower: Vec3::zeros(),
+            upper: Vec3::new(4.0 * d, 4.0 * d, d),
+            periodic: [false; 3],
+            gravity: Vec3::zeros(),
+        };
+        let law = ContactLaw {
+            normal: NormalStiffness::from_restitution(0.5, 1e-4, NormalCalibration::Exact),
+            tangential_ratio: 0.2,
+            friction: 0.3,
+            rolling_friction: 0.0,
+        };
+        let mut system = DemSystem::new(domain, law, Vec::new(), 0.1 * d);
+        let grains: Vec<NewParticle> = (0..16)
+            .map(|k| {
+                let (ix, iy) = (k % 4, k / 4);
+                NewParticle {
+                    position: Vec3::new((ix as f64 + 0.5) * d, (iy as f64 + 0.5) * d, 0.5 * d),
+                    velocity: Vec3::zeros(),
+                    angular_velocity: Vec3::zeros(),
+                    radius: 0.5 * d,
+                    density: 2500.0,
+                    fixed: fixed.contains(&(ix, iy)),
+                }
+            })
+            .collect();
+        system.add_particles(&grains);
+        system
+    }
+
+    /// Split across x, the 24 pairs of touching neighbours cross the
+    /// boundary in the 4 rows: the separator is the column of the upper
+    /// rank's side, 4 spheres of 6 unknowns.
+    #[test]
+    fn the_separator_of_a_layer_split_in_two_is_the_column_on_the_upper_side() {
+        let separator = Separator::of(&layer(&[]), 1e-4, [2, 1, 1]);
+        assert_eq!(
+            separator,
+            Separator {
+                unknowns: 96,
+                separator: 24,
+                interiors: vec![48, 24],
+                pairs: 24,
+                crossing_pairs: 4,
+            }
+        );
+        // Unsplit, nothing crosses.
+        let whole = Separator::of(&layer(&[]), 1e-4, [1, 1, 1]);
+        assert_eq!((whole.separator, whole.interiors), (0, vec![96]));
+    }
+
+    /// A fixed grain has no unknowns, and its pairs couple nothing.
+    #[test]
+    fn a_fixed_grain_on_the_boundary_leaves_the_separator() {
+        let separator = Separator::of(&layer(&[(2, 0)]), 1e-4, [2, 1, 1]);
+        assert_eq!(separator.unknowns, 90);
+        assert_eq!(separator.separator, 18);
+        assert_eq!(separator.crossing_pairs, 3);
+        assert_eq!(separator.pairs, 21);
+        assert_eq!(separator.schur_bytes(), 8.0 * 18.0 * 18.0);
+    }
+}
