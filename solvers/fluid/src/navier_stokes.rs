@@ -36,14 +36,19 @@
 use grainflow_core::Communicator;
 
 use crate::boundary::{
-    fill_ghosts_on, fill_ghosts_together, homogeneous, local_ends, unknowns, Boundaries, EndKind,
-    FieldEnds, GhostedField, HaloExchange,
+    fill_ghosts_on, fill_ghosts_together, homogeneous, local_ends, unknowns, Boundaries, FieldEnds,
+    GhostedField, HaloExchange,
 };
 use crate::error::FluidError;
 use crate::grid::{Block, Grid, Location};
 use crate::operators::{add_laplacian, convective_tendency, divergence, subtract_gradient};
 use crate::partition::Partition;
 use crate::poisson::{DirectSolver, TransformBackend};
+
+mod measures;
+mod step_limits;
+
+pub use step_limits::time_step_for_cfl_rates;
 
 /// Stages of a step.
 pub const STAGES: usize = 3;
@@ -380,92 +385,6 @@ impl FlowSolver {
         }
     }
 
-    /// `ν Δt Σ_a 4/h_a²`: the viscous number an explicit step must keep
-    /// below [`EXPLICIT_VISCOUS_LIMIT`]. Along a stretched axis `4/h²` is
-    /// replaced by the Gershgorin bound of its Laplacian,
-    /// [`Grid::laplacian_bound`].
-    pub fn viscous_number(&self, dt: f64) -> f64 {
-        let grid = &self.grid;
-        self.viscosity
-            * dt
-            * (0..grid.dim())
-                .map(|axis| grid.laplacian_bound(axis))
-                .sum::<f64>()
-    }
-
-    /// The largest step whose CFL number stays at most `cfl` for every
-    /// velocity that can enter it ([`FlowSolver::cfl_bound`]); infinite only
-    /// for a fluid at rest between walls at rest with no unbalanced force.
-    pub fn time_step_for_cfl(&self, cfl: f64) -> f64 {
-        let (speed_rate, acceleration_rate) = self.cfl_rates();
-        time_step_for_cfl_rates(cfl, speed_rate, acceleration_rate)
-    }
-
-    /// An upper bound of the CFL number a step of `dt` reaches from the
-    /// current state: `Σ_a (U_a + A_a Δt) Δt / h_a`, where `U_a` is the
-    /// largest of the current `|u_a|` and of the speeds the boundaries
-    /// impose ([`FlowSolver::boundary_speeds`]), and `A_a` the acceleration
-    /// no pressure can balance ([`FlowSolver::unbalanced_acceleration`]).
-    /// From rest, the current velocity alone would say zero: a lid or an
-    /// inflow sets the fluid moving within the first stage.
-    pub fn cfl_bound(&self, dt: f64) -> f64 {
-        let (speed_rate, acceleration_rate) = self.cfl_rates();
-        (speed_rate + acceleration_rate * dt) * dt
-    }
-
-    /// `(Σ_a U_a / h_a, Σ_a A_a / h_a)` of [`FlowSolver::cfl_bound`], with
-    /// `h_a` the smallest control length along `a` where it is stretched.
-    pub fn cfl_rates(&self) -> (f64, f64) {
-        let grid = &self.grid;
-        let flow = self.axis_cfl(1.0);
-        let (speeds, accelerations) = (self.boundary_speeds(), self.unbalanced_acceleration());
-        let (mut speed_rate, mut acceleration_rate) = (0.0, 0.0);
-        for axis in 0..grid.dim() {
-            let block = &self.velocity_unknowns[axis];
-            let h = (block.start[axis]..block.end[axis])
-                .map(|plane| grid.gap(axis, plane))
-                .fold(f64::INFINITY, f64::min);
-            speed_rate += flow[axis].max(speeds[axis] / h);
-            acceleration_rate += accelerations[axis] / h;
-        }
-        (speed_rate, acceleration_rate)
-    }
-
-    /// The largest speed along each axis that the boundaries impose on the
-    /// fluid: sliding walls, flow through porous walls, and a bulk velocity
-    /// held along a periodic axis (m/s).
-    pub fn boundary_speeds(&self) -> [f64; 3] {
-        let mut speeds = self.bulk_velocity.map(|bulk| bulk.map_or(0.0, f64::abs));
-        for face in self.boundaries.faces.iter().flatten() {
-            if let crate::boundary::BoundaryCondition::MovingWall(velocity) = face {
-                for (speed, v) in speeds.iter_mut().zip(velocity) {
-                    *speed = speed.max(v.abs());
-                }
-            }
-        }
-        speeds
-    }
-
-    /// The body force and mean pressure gradient along the axes where no
-    /// pressure field can balance them (m/s²): the periodic axes and the
-    /// one with an outflow. Along an axis closed by walls a uniform force is
-    /// the gradient of a pressure and moves nothing; a held bulk velocity
-    /// cancels the mean of the force along its axis.
-    pub fn unbalanced_acceleration(&self) -> [f64; 3] {
-        let outflow_axis = self
-            .boundaries
-            .has_outflow(&self.grid)
-            .then(|| self.grid.line_axis());
-        [0, 1, 2].map(|axis| {
-            let open = self.ranks.periodic[axis] || outflow_axis == Some(axis);
-            if open && self.bulk_velocity[axis].is_none() {
-                (self.body_force[axis] - self.mean_pressure_gradient[axis]).abs()
-            } else {
-                0.0
-            }
-        })
-    }
-
     /// Stage `stage` prediction `u*`: explicit convection (RK3), body force
     /// and mean pressure gradient, pressure of the previous stage, and
     /// viscous term, Crank–Nicolson through one Helmholtz solve per
@@ -639,84 +558,6 @@ impl FlowSolver {
         fill_ghosts_together(&self.grid, &mut fields, Some(&self.ranks));
     }
 
-    /// Largest `|D u|` over the cells of every rank (1/s).
-    pub fn max_divergence(&mut self) -> f64 {
-        divergence(&self.grid, &self.velocity, &mut self.divergence);
-        let divergence = &self.divergence;
-        let largest = self
-            .grid
-            .par_max(&self.grid.cell_block(), |index, _| divergence[index].abs());
-        self.ranks.communicator.max(largest)
-    }
-
-    /// `½ ∫ |u|² dV` over the domain, each component integrated on its own
-    /// faces (trapezoidal weights ½ on wall faces; along a stretched axis
-    /// each value weighted by its cell width or face control length).
-    pub fn kinetic_energy(&self) -> f64 {
-        let grid = &self.grid;
-        let line = grid.line_axis();
-        let uniform = grid.is_uniform(line);
-        let mut sum = 0.0;
-        for (component, field) in self.velocity.iter().enumerate() {
-            // Wall faces of this rank (prescribed, not unknowns) join the
-            // sum with weight ½.
-            let mut block = self.velocity_unknowns[component];
-            let ends = &self.velocity_ends[component][component];
-            let walls = ends.map(|end| end.kind == EndKind::DirichletFace);
-            if walls[0] {
-                block.start[component] -= 1;
-            }
-            if walls[1] {
-                block.end[component] += 1;
-            }
-            let (first, last) = (block.start[component], block.end[component] - 1);
-            let on_face = component == line;
-            sum += grid.par_sum(&block, |index, point| {
-                let on_wall = (walls[0] && point[component] == first)
-                    || (walls[1] && point[component] == last);
-                let weight = if on_wall { 0.5 } else { 1.0 };
-                let length = match (uniform, on_face) {
-                    (true, _) => 1.0,
-                    (false, true) => grid.gap(line, point[line]),
-                    (false, false) => grid.width(line, point[line]),
-                };
-                weight * length * field[index] * field[index]
-            });
-        }
-        let volume = if uniform {
-            grid.cell_volume()
-        } else {
-            grid.section_area()
-        };
-        self.ranks.communicator.sum(0.5 * sum * volume)
-    }
-
-    /// `Δt Σ_a max|u_a| / h_a` over every rank; along a stretched axis the
-    /// largest `|u_a| / g` over its faces.
-    pub fn max_cfl(&self, dt: f64) -> f64 {
-        self.axis_cfl(dt).iter().fold(0.0, |sum, cfl| sum + cfl)
-    }
-
-    /// `Δt max|u_a| / h_a` of each velocity component `a` over every rank
-    /// (zero beyond the active axes).
-    fn axis_cfl(&self, dt: f64) -> [f64; 3] {
-        let grid = &self.grid;
-        let mut cfl = [0.0; 3];
-        for (component, field) in self.velocity.iter().enumerate() {
-            let block = &self.velocity_unknowns[component];
-            cfl[component] = if grid.is_uniform(component) {
-                let largest = grid.par_max(block, |index, _| field[index].abs());
-                self.ranks.communicator.max(largest) * dt / grid.spacing[component]
-            } else {
-                let largest = grid.par_max(block, |index, plane| {
-                    field[index].abs() / grid.gap(component, plane)
-                });
-                self.ranks.communicator.max(largest) * dt
-            };
-        }
-        cfl
-    }
-
     /// This rank's share of the cells.
     pub fn partition(&self) -> &Partition {
         &self.ranks.partition
@@ -731,14 +572,6 @@ impl FlowSolver {
     pub fn velocity_unknowns(&self, component: usize) -> &Block {
         &self.velocity_unknowns[component]
     }
-}
-
-/// The largest `Δt` with `a Δt² + b Δt ≤ cfl` for the rates
-/// `b = speed_rate` (1/s) and `a = acceleration_rate` (1/s²) of
-/// [`FlowSolver::cfl_rates`]: the positive root, written so that `a = 0`
-/// gives `cfl / b` exactly; infinite when both rates vanish.
-pub fn time_step_for_cfl_rates(cfl: f64, speed_rate: f64, acceleration_rate: f64) -> f64 {
-    2.0 * cfl / (speed_rate + (speed_rate * speed_rate + 4.0 * acceleration_rate * cfl).sqrt())
 }
 
 /// The velocity components with their locations and end conditions, for
