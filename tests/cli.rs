@@ -206,7 +206,7 @@ fn check_warns_between_the_accuracy_and_the_stability_limit() {
 /// shared: the process grid, each rank's load (the 2,700 grains of the 3D
 /// column, the 32³ cells of the Beltrami flow), the warning when ranks hold
 /// too little, and the refusal of what does not run on several ranks (for
-/// hard contact, with the separator its program would have).
+/// COCD, with the separator its program would have).
 #[test]
 fn check_shows_how_a_scene_is_shared_among_ranks() {
     let text = |args: &[&str]| {
@@ -249,7 +249,7 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
         .unwrap();
     assert_eq!(refused.status.code(), Some(2));
     let refusal = String::from_utf8_lossy(&refused.stderr);
-    assert!(refusal.contains("hard contact"), "{refusal}");
+    assert!(refusal.contains("COCD"), "{refusal}");
     // With the separator its program would have there: 400 discs, three
     // unknowns each, split across x.
     assert!(

@@ -13,6 +13,12 @@
 //! The unknowns are the moving grains that have at least one candidate
 //! ("bodies", one column each); glued grains and walls have infinite mass
 //! and do not move. A periodic image stands for its source grain.
+//!
+//! On several ranks a rank lists the pairs of its own grains, and a pair
+//! with a copy (ghost) of another rank's grain is held by the rank of the
+//! lower id: every pair is in exactly one rank's set. The copies a rank's
+//! pairs touch are bodies there too ([`Bodies::owned`] counts the columns
+//! of its own grains, which come first).
 
 use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::DemSystem;
@@ -23,7 +29,8 @@ pub const STATIC: u32 = u32::MAX;
 /// What grain i of a contact touches.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Partner {
-    /// Owned grain (the source, for a periodic image).
+    /// Local grain: owned (the source, for a periodic image of an owned
+    /// grain), or the ghost copy of another rank's grain.
     Grain(u32),
     Wall(u32),
 }
@@ -170,10 +177,13 @@ impl ContactSet {
 /// The moving grains with candidate contacts, one column each.
 #[derive(Clone, Debug, Default)]
 pub struct Bodies {
-    /// Column of each owned grain (`STATIC` if glued or without candidate).
+    /// Column of each local grain, owned then ghosts (`STATIC` if glued or
+    /// without candidate).
     pub column: Vec<u32>,
-    /// Owned grain of each column.
+    /// Local grain of each column: the owned ones first.
     pub grain: Vec<u32>,
+    /// Columns of owned grains (the rest are copies of other ranks').
+    pub owned: usize,
     /// Centre at the start of the step (the factor's ordering cuts the
     /// packing by planes).
     pub position: Vec<Vec3>,
@@ -213,6 +223,46 @@ pub struct Scales {
 }
 
 impl Scales {
+    /// This rank's share of the scales: the sums of the diameters and the
+    /// masses of its own bodies, their count and the largest free speed.
+    pub fn partial(bodies: &Bodies) -> [f64; 4] {
+        let own = 0..bodies.owned;
+        let fastest = own
+            .clone()
+            .map(|b| {
+                bodies.free_velocity[b]
+                    .norm()
+                    .max(bodies.free_spin[b].norm() * bodies.radius[b])
+            })
+            .fold(0.0, f64::max);
+        [
+            own.clone().map(|b| 2.0 * bodies.radius[b]).sum(),
+            own.clone().map(|b| bodies.mass[b]).sum(),
+            own.len() as f64,
+            fastest,
+        ]
+    }
+
+    /// The scales of the bodies of every rank from the sums of their
+    /// [`Scales::partial`] (the largest speed: their largest).
+    pub fn of_sums(
+        [diameters, masses, count, fastest]: [f64; 4],
+        dt: f64,
+        gravity: &Vec3,
+    ) -> Scales {
+        let n = count.max(1.0);
+        let length = diameters / n;
+        let length = if length > 0.0 { length } else { 1.0 };
+        let mass = masses / n;
+        let fastest = fastest.max(gravity.norm() * dt);
+        Scales {
+            length,
+            mass: if mass > 0.0 { mass } else { 1.0 },
+            time: dt,
+            velocity: if fastest > 0.0 { fastest } else { length / dt },
+        }
+    }
+
     pub fn of(bodies: &Bodies, dt: f64, gravity: &Vec3) -> Scales {
         let n = bodies.len().max(1) as f64;
         let length = 2.0 * bodies.radius.iter().sum::<f64>() / n;
@@ -274,12 +324,21 @@ pub fn listed(system: &DemSystem, threshold: f64) -> ContactSet {
                 j
             } else {
                 let source = system.ghost_source(j);
-                // The pair across the periodic edge is listed from both
-                // grains; the lower one holds it.
-                if source <= i {
-                    continue;
+                if source == usize::MAX {
+                    // A copy of another rank's grain: the rank of the lower
+                    // id holds the pair.
+                    if p.id[j] < p.id[i] {
+                        continue;
+                    }
+                    j
+                } else {
+                    // The pair across the periodic edge is listed from both
+                    // grains; the lower one holds it.
+                    if source <= i {
+                        continue;
+                    }
+                    source
                 }
-                source
             };
             if p.is_fixed(i) && p.is_fixed(source) {
                 continue;
@@ -326,16 +385,29 @@ pub fn listed(system: &DemSystem, threshold: f64) -> ContactSet {
 
 /// The bodies `contacts` move (the moving grains with at least one of
 /// them, one column each, in grain order), with the contacts' columns set.
+/// `free_velocity`, `free_spin`: U of every local grain the contacts touch.
 pub fn with_bodies(
+    system: &DemSystem,
+    contacts: ContactSet,
+    free_velocity: &[Vec3],
+    free_spin: &[Vec3],
+) -> (ContactSet, Bodies) {
+    with_bodies_marked(system, contacts, free_velocity, free_spin, &[])
+}
+
+/// [`with_bodies`], with also a body for each owned grain `marked` (on
+/// several ranks: the grains whose copies other ranks' contacts touch).
+pub fn with_bodies_marked(
     system: &DemSystem,
     mut contacts: ContactSet,
     free_velocity: &[Vec3],
     free_spin: &[Vec3],
+    marked: &[bool],
 ) -> (ContactSet, Bodies) {
     let p = &system.particles;
     let n_owned = p.n_owned;
     let mut bodies = Bodies {
-        column: vec![STATIC; n_owned],
+        column: vec![STATIC; p.len()],
         ..Bodies::default()
     };
     let mark = |k: usize, bodies: &mut Bodies| {
@@ -349,9 +421,15 @@ pub fn with_bodies(
             mark(j as usize, &mut bodies);
         }
     }
-    for k in 0..n_owned {
+    for (k, _) in marked.iter().enumerate().filter(|(_, &m)| m) {
+        mark(k, &mut bodies);
+    }
+    for k in 0..p.len() {
         if bodies.column[k] == STATIC {
             continue;
+        }
+        if k < n_owned {
+            bodies.owned += 1;
         }
         bodies.column[k] = bodies.grain.len() as u32;
         bodies.grain.push(k as u32);

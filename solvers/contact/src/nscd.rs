@@ -16,11 +16,14 @@
 //! problem is solved exactly: P_n = max(0, (b − v_n^free)/w_n), then the
 //! sticking P_t = −v_t^free/w_t projected onto the disc |P_t| ≤ μ P_n. Sweeps
 //! repeat until the complementarity residual of the contact law
-//! ([`crate::certificate`]) is below the tolerance over √2.
+//! ([`crate::certificate`]) is below the tolerance over √2. On several
+//! ranks each sweeps its own pairs and the copies of the grains are brought
+//! in step after each sweep ([`crate::sharing`]).
 
 use crate::certificate;
 use crate::cocd::Solution;
 use crate::contacts::{Bodies, ContactSet, Scales};
+use crate::sharing::Sharing;
 use grainflow_core::Vec3;
 
 /// The normal bound b_α of each contact (see the module documentation).
@@ -56,7 +59,8 @@ pub fn normal_bound(gap: f64, approach: f64, dt: f64, restitution: f64) -> f64 {
 
 /// Solves the step by Gauss–Seidel from the impulses `initial` (a warm
 /// start; zeros for none). Returns the solution and whether the residual
-/// went below `tolerance` within `max_sweeps`.
+/// went below `tolerance` within `max_sweeps` (on every rank of
+/// `sharing`).
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
     contacts: &ContactSet,
@@ -66,9 +70,22 @@ pub fn solve(
     initial: &[(f64, Vec3)],
     tolerance: f64,
     max_sweeps: u32,
+    sharing: Option<&Sharing>,
 ) -> (Solution, bool) {
     let mut velocity = bodies.free_velocity.clone();
     let mut spin = bodies.free_spin.clone();
+    // On several ranks each set of pairs sweeps its share of a grain's mass
+    // where several sets act on it ([`crate::sharing`]).
+    let multiplicity = sharing.map(|sharing| sharing.multiplicity(contacts, bodies));
+    let split;
+    let bodies = match &multiplicity {
+        Some(n) => {
+            split = Sharing::split_masses(bodies, n);
+            &split
+        }
+        None => bodies,
+    };
+    let mut before = sharing.map(|_| Sharing::motion_before(&velocity, &spin));
     let mut normal_impulse = vec![0.0; contacts.len()];
     let mut tangential_impulse = vec![Vec3::zeros(); contacts.len()];
     for (a, &(p_n, p_t)) in initial.iter().enumerate() {
@@ -82,13 +99,22 @@ pub fn solve(
             &mut spin,
         );
     }
+    if let (Some(sharing), Some(before), Some(n)) = (sharing, &before, &multiplicity) {
+        sharing.settle_copies(bodies, &mut velocity, &mut spin, before, n);
+    }
     let effective: Vec<(f64, f64)> = (0..contacts.len())
         .map(|a| contacts.inverse_effective_masses(a, bodies))
         .collect();
 
     let mut sweeps = 0;
-    let mut converged = contacts.is_empty();
+    let mut converged = match sharing {
+        Some(sharing) => !sharing.any(!contacts.is_empty()),
+        None => contacts.is_empty(),
+    };
     while !converged && sweeps < max_sweeps {
+        if let Some(before) = before.as_mut() {
+            *before = Sharing::motion_before(&velocity, &spin);
+        }
         for a in 0..contacts.len() {
             let n = contacts.normal[a];
             let (w_n, w_t) = effective[a];
@@ -112,6 +138,9 @@ pub fn solve(
             contacts.apply_impulse(a, change, bodies, &mut velocity, &mut spin);
         }
         sweeps += 1;
+        if let (Some(sharing), Some(before), Some(n)) = (sharing, &before, &multiplicity) {
+            sharing.settle_copies(bodies, &mut velocity, &mut spin, before, n);
+        }
         let residual = certificate::contact_law_residual(
             contacts,
             scales,
@@ -125,7 +154,10 @@ pub fn solve(
         // A residual r bounds a contact's overlap after the move by √2 r
         // (at a slowly sliding contact the cone projection absorbs part of
         // it): stopping at ε/√2 keeps the overlap below ε mean diameters.
-        converged = residual.complementarity <= tolerance * std::f64::consts::FRAC_1_SQRT_2;
+        let largest = sharing.map_or(residual.complementarity, |sharing| {
+            sharing.max(residual.complementarity)
+        });
+        converged = largest <= tolerance * std::f64::consts::FRAC_1_SQRT_2;
     }
     (
         Solution {

@@ -7,12 +7,17 @@
 //! 3. u^{k+1} and the impulses: COCD or NSCD;
 //! 4. the contact law's residual at the solution;
 //! 5. c^{k+1} = c^k + Δt v^{k+1}; the largest overlap after the move.
+//!
+//! On several ranks (NSCD) each rank solves its own pairs, the copies of
+//! its grains kept in step ([`crate::sharing`]), and every test and
+//! figure of the step is taken over all ranks.
 
 use crate::candidates::{self, LeftOutLaw};
 use crate::certificate;
 use crate::cocd::{self, ConicSolver, Solution};
 use crate::contacts::{self, Bodies, ContactSet, Partner, Scales};
 use crate::nscd;
+use crate::sharing::Sharing;
 use grainflow_core::Vec3;
 use grainflow_dem::{DemSystem, StepDiagnostics};
 use std::collections::HashMap;
@@ -146,13 +151,15 @@ impl HardContact {
     /// step could not be solved (the grains are left at the start of the
     /// step).
     pub fn step(&mut self, system: &mut DemSystem, dt: f64) -> Result<StepReport, String> {
-        // 1. Free velocities.
+        // 1. Free velocities, of every local grain (a copy: its grain's).
         let n = system.particles.n_owned;
+        let local = system.particles.len();
+        let shared = system.communicator.size() > 1;
         let gravity = system.domain.gravity;
         let (free_velocity, free_spin) = {
             let p = &system.particles;
-            let mut velocity = Vec::with_capacity(n);
-            let mut spin = Vec::with_capacity(n);
+            let mut velocity = Vec::with_capacity(local);
+            let mut spin = Vec::with_capacity(local);
             for k in 0..n {
                 velocity.push(if p.is_fixed(k) {
                     Vec3::zeros()
@@ -161,6 +168,11 @@ impl HardContact {
                 });
                 spin.push(p.angular_velocity[k] + dt * p.inverse_inertia[k] * p.external_torque[k]);
             }
+            velocity.resize(local, Vec3::zeros());
+            spin.resize(local, Vec3::zeros());
+            if let Some(sharing) = Sharing::of(system) {
+                sharing.motion_onto_ghosts(&mut velocity, &mut spin);
+            }
             (velocity, spin)
         };
 
@@ -168,7 +180,15 @@ impl HardContact {
         // step; 1.5 for the speed the contacts themselves may add. The list
         // reaches that far; the program starts from the pairs their own
         // motion can close and takes in the others that would overlap.
-        let fastest = free_velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let fastest = free_velocity[..n]
+            .iter()
+            .map(|v| v.norm())
+            .fold(0.0, f64::max);
+        let fastest = if shared {
+            system.communicator.max(fastest)
+        } else {
+            fastest
+        };
         let threshold = self.threshold.max(3.0 * fastest * dt);
         if threshold > system.neighbours.gap {
             system.listing_gap = 2.0 * threshold;
@@ -191,26 +211,53 @@ impl HardContact {
         let mut programs = 0;
         let (contacts, scales, solution, bounds, unconverged, end_motion) = loop {
             programs += 1;
-            let (contacts, bodies) = contacts::with_bodies(
-                system,
-                listed.subset(&in_program),
-                &free_velocity,
-                &free_spin,
-            );
-            let scales = Scales::of(&bodies, dt, &gravity);
+            let program = listed.subset(&in_program);
+            let (contacts, bodies, scales) = match Sharing::of(system) {
+                Some(sharing) => {
+                    let elsewhere = sharing.touched_elsewhere(&program);
+                    let (contacts, bodies) = contacts::with_bodies_marked(
+                        system,
+                        program,
+                        &free_velocity,
+                        &free_spin,
+                        &elsewhere,
+                    );
+                    let mut sums = Scales::partial(&bodies);
+                    let fastest = sharing.max(sums[3]);
+                    sums[3] = 0.0;
+                    sharing.sum_each(&mut sums);
+                    sums[3] = fastest;
+                    (contacts, bodies, Scales::of_sums(sums, dt, &gravity))
+                }
+                None => {
+                    let (contacts, bodies) =
+                        contacts::with_bodies(system, program, &free_velocity, &free_spin);
+                    let scales = Scales::of(&bodies, dt, &gravity);
+                    (contacts, bodies, scales)
+                }
+            };
             let (solution, bounds, unconverged) =
                 self.solve(system, &contacts, &bodies, &scales, dt)?;
-            let end_motion =
+            let mut end_motion =
                 candidates::end_motion(system, &bodies, &solution, &free_velocity, &free_spin);
+            end_motion.0.resize(local, Vec3::zeros());
+            end_motion.1.resize(local, Vec3::zeros());
+            if let Some(sharing) = Sharing::of(system) {
+                sharing.motion_onto_ghosts(&mut end_motion.0, &mut end_motion.1);
+            }
             let p = &system.particles;
             let broken = candidates::broken(
                 &listed,
                 &in_program,
                 left_out_law,
                 (&end_motion.0, &end_motion.1),
-                (&p.velocity[..n], &p.angular_velocity[..n]),
+                (&p.velocity, &p.angular_velocity),
             );
-            if broken.is_empty() {
+            let any_broken = match Sharing::of(system) {
+                Some(sharing) => sharing.any(!broken.is_empty()),
+                None => !broken.is_empty(),
+            };
+            if !any_broken {
                 break (contacts, scales, solution, bounds, unconverged, end_motion);
             }
             if programs == candidates::ROUNDS {
@@ -236,7 +283,7 @@ impl HardContact {
         }
 
         // 4. The contact law at the solution.
-        let residual = certificate::contact_law_residual(
+        let mut residual = certificate::contact_law_residual(
             &contacts,
             &scales,
             &bounds,
@@ -246,6 +293,10 @@ impl HardContact {
             &solution.tangential_impulse,
             matches!(self.method, Method::Nscd { .. }),
         );
+        if shared {
+            residual.complementarity = system.communicator.max(residual.complementarity);
+            residual.coulomb = system.communicator.max(residual.coulomb);
+        }
 
         // End-of-step velocities; the force and torque written out are the
         // step's mean ones, m (u^{k+1} − u^k)/Δt (contacts and gravity).
@@ -264,8 +315,13 @@ impl HardContact {
 
         // Contacts that carry a force (for coordination and rest tests).
         let largest_impulse = solution.normal_impulse.iter().cloned().fold(0.0, f64::max);
+        let largest_impulse = if shared {
+            system.communicator.max(largest_impulse)
+        } else {
+            largest_impulse
+        };
         let carries = |a: usize| solution.normal_impulse[a] > 1e-9 * largest_impulse;
-        let mut particle_contacts = vec![0u32; n];
+        let mut particle_contacts = vec![0.0; local];
         let mut walls_touched = vec![0u64; n];
         let (mut closed, mut wall_contacts) = (0, 0);
         for a in (0..contacts.len()).filter(|&a| carries(a)) {
@@ -273,8 +329,8 @@ impl HardContact {
             let i = contacts.grain[a] as usize;
             match contacts.partner[a] {
                 Partner::Grain(j) => {
-                    particle_contacts[i] += 1;
-                    particle_contacts[j as usize] += 1;
+                    particle_contacts[i] += 1.0;
+                    particle_contacts[j as usize] += 1.0;
                 }
                 Partner::Wall(w) => {
                     walls_touched[i] |= 1u64 << w.min(63);
@@ -282,6 +338,12 @@ impl HardContact {
                 }
             }
         }
+        if shared {
+            system.sum_onto_owners(&mut particle_contacts, 1);
+            closed = system.communicator.sum_count(closed);
+            wall_contacts = system.communicator.sum_count(wall_contacts);
+        }
+        let particle_contacts = particle_contacts[..n].iter().map(|&c| c as u32).collect();
         system.record_contacts(particle_contacts, walls_touched);
 
         // 5. Move.
@@ -289,7 +351,12 @@ impl HardContact {
         let penetration = if non_finite {
             f64::NAN
         } else {
-            certificate::largest_overlap(system, scales.length)
+            let largest = certificate::largest_overlap(system, scales.length);
+            if shared {
+                system.communicator.max(largest)
+            } else {
+                largest
+            }
         };
         system.last = StepDiagnostics {
             max_overlap_ratio: 2.0 * penetration,
@@ -297,8 +364,13 @@ impl HardContact {
             wall_contacts,
             non_finite,
         };
+        let candidates = if shared {
+            system.communicator.sum_count(contacts.len())
+        } else {
+            contacts.len()
+        };
         Ok(StepReport {
-            candidates: contacts.len(),
+            candidates,
             programs,
             closed,
             iterations: solution.iterations,
@@ -325,6 +397,13 @@ impl HardContact {
     ) -> Result<(Solution, Vec<f64>, bool), String> {
         match self.method {
             Method::Cocd => {
+                if system.communicator.size() > 1 {
+                    return Err(
+                        "COCD runs on one rank in this version (its program is factorised \
+                                whole); NSCD runs on several"
+                            .into(),
+                    );
+                }
                 let bounds: Vec<f64> = contacts.gap.iter().map(|d| -d / dt).collect();
                 let solution = if contacts.is_empty() {
                     Solution {
@@ -366,6 +445,7 @@ impl HardContact {
                     &initial,
                     self.tolerance,
                     self.max_iterations,
+                    Sharing::of(system).as_ref(),
                 );
                 self.previous_impulses = (0..contacts.len())
                     .filter(|&a| solution.normal_impulse[a] > 0.0)

@@ -241,7 +241,7 @@ fn grain_on_two_glued_grains_is_held_by_the_statics_forces() {
     let bounds: Vec<f64> = contacts.gap.iter().map(|d| -d / dt).collect();
     let zeros = vec![(0.0, Vec3::zeros()); 2];
     let (gauss_seidel, converged) = nscd::solve(
-        &contacts, &bodies, &scales, &bounds, &zeros, TOLERANCE, 10_000,
+        &contacts, &bodies, &scales, &bounds, &zeros, TOLERANCE, 10_000, None,
     );
     assert!(converged);
     for solution in [&conic, &gauss_seidel] {

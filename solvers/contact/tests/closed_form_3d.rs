@@ -374,6 +374,7 @@ fn resting_stacks_carry_the_weights_statics_gives() {
             &zeros,
             GAUSS_SEIDEL_STATICS,
             100_000,
+            None,
         );
         assert!(converged);
         for (what, solution) in solutions

@@ -366,7 +366,17 @@ impl DemSystem {
         self.ghosts.reverse_sum(values, width, &self.communicator);
     }
 
-    /// The owned particle a ghost (index ≥ n_owned) copies.
+    /// Copies the `width` numbers of each owned particle onto its ghosts
+    /// (`values` holds `width` numbers per local particle, owned then
+    /// ghosts; collective): [`Ghosts::copy_to_ghosts`].
+    pub fn copy_onto_ghosts(&self, values: &mut [f64], width: usize) {
+        assert_eq!(values.len(), self.particles.len() * width);
+        self.ghosts
+            .copy_to_ghosts(values, width, &self.communicator);
+    }
+
+    /// The owned particle a ghost (index ≥ n_owned) copies, or `usize::MAX`
+    /// for a copy of another rank's particle.
     pub fn ghost_source(&self, ghost: usize) -> usize {
         self.ghosts.source[ghost - self.particles.n_owned]
     }
