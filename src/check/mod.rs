@@ -52,14 +52,14 @@ pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
     Ok(text)
 }
 
-/// A hard-contact scene refused on several ranks: the refusal, with the
-/// size of the separator its program would have on them
-/// ([`sharing::Separator`]).
+/// A COCD scene refused on several ranks: the refusal, with the size of
+/// the separator its program would have on them ([`sharing::Separator`]).
 fn with_separator(case: &Case, ranks: usize, refusal: RunError) -> RunError {
     let Some(hard) = case
         .has_grains()
         .then(|| scene::hard_contact(case))
         .flatten()
+        .filter(|hard| hard.method == grainflow_contact::Method::Cocd)
     else {
         return refusal;
     };
