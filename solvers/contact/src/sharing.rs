@@ -48,14 +48,12 @@ impl<'a> Sharing<'a> {
     /// grain, owned then ghosts) onto the ghosts' entries.
     pub fn motion_onto_ghosts(&self, velocity: &mut [Vec3], spin: &mut [Vec3]) {
         let mut values = vec![0.0; 6 * velocity.len()];
-        for (k, (v, w)) in velocity.iter().zip(spin.iter()).enumerate() {
-            values[6 * k..6 * k + 3].copy_from_slice(v.as_slice());
-            values[6 * k + 3..6 * k + 6].copy_from_slice(w.as_slice());
+        for (k, (&v, &w)) in velocity.iter().zip(spin.iter()).enumerate() {
+            put_motion(&mut values, k, v, w);
         }
         self.system.copy_onto_ghosts(&mut values, 6);
         for (k, (v, w)) in velocity.iter_mut().zip(spin.iter_mut()).enumerate() {
-            *v = Vec3::from_column_slice(&values[6 * k..6 * k + 3]);
-            *w = Vec3::from_column_slice(&values[6 * k + 3..6 * k + 6]);
+            (*v, *w) = motion_at(&values, k);
         }
     }
 
@@ -121,14 +119,11 @@ impl<'a> Sharing<'a> {
         for c in bodies.owned..bodies.len() {
             let k = bodies.grain[c] as usize;
             let (v, w) = before[c];
-            values[6 * k..6 * k + 3].copy_from_slice((velocity[c] - v).as_slice());
-            values[6 * k + 3..6 * k + 6].copy_from_slice((spin[c] - w).as_slice());
+            put_motion(&mut values, k, velocity[c] - v, spin[c] - w);
         }
         self.system.sum_onto_owners(&mut values, 6);
         for c in 0..bodies.owned {
-            let k = bodies.grain[c] as usize;
-            let elsewhere = Vec3::from_column_slice(&values[6 * k..6 * k + 3]);
-            let elsewhere_spin = Vec3::from_column_slice(&values[6 * k + 3..6 * k + 6]);
+            let (elsewhere, elsewhere_spin) = motion_at(&values, bodies.grain[c] as usize);
             let n = multiplicity[c];
             if n == 1.0 {
                 // One set of pairs acts on it, here or on another rank.
@@ -142,15 +137,11 @@ impl<'a> Sharing<'a> {
         }
         values.fill(0.0);
         for c in 0..bodies.owned {
-            let k = bodies.grain[c] as usize;
-            values[6 * k..6 * k + 3].copy_from_slice(velocity[c].as_slice());
-            values[6 * k + 3..6 * k + 6].copy_from_slice(spin[c].as_slice());
+            put_motion(&mut values, bodies.grain[c] as usize, velocity[c], spin[c]);
         }
         self.system.copy_onto_ghosts(&mut values, 6);
         for c in bodies.owned..bodies.len() {
-            let k = bodies.grain[c] as usize;
-            velocity[c] = Vec3::from_column_slice(&values[6 * k..6 * k + 3]);
-            spin[c] = Vec3::from_column_slice(&values[6 * k + 3..6 * k + 6]);
+            (velocity[c], spin[c]) = motion_at(&values, bodies.grain[c] as usize);
         }
     }
 
@@ -158,4 +149,19 @@ impl<'a> Sharing<'a> {
     pub fn motion_before(velocity: &[Vec3], spin: &[Vec3]) -> Vec<(Vec3, Vec3)> {
         velocity.iter().zip(spin).map(|(&v, &w)| (v, w)).collect()
     }
+}
+
+/// Writes the velocity and spin of local grain `k` into its six numbers of
+/// `values` (the layout the ghost exchanges carry).
+fn put_motion(values: &mut [f64], k: usize, velocity: Vec3, spin: Vec3) {
+    values[6 * k..6 * k + 3].copy_from_slice(velocity.as_slice());
+    values[6 * k + 3..6 * k + 6].copy_from_slice(spin.as_slice());
+}
+
+/// The velocity and spin of local grain `k` in `values`.
+fn motion_at(values: &[f64], k: usize) -> (Vec3, Vec3) {
+    (
+        Vec3::from_column_slice(&values[6 * k..6 * k + 3]),
+        Vec3::from_column_slice(&values[6 * k + 3..6 * k + 6]),
+    )
 }
