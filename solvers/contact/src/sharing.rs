@@ -60,35 +60,29 @@ impl<'a> Sharing<'a> {
     /// Owned grains whose copies the pairs of another rank touch (each
     /// must be a body here, to take what those pairs do to it).
     pub fn touched_elsewhere(&self, contacts: &ContactSet) -> Vec<bool> {
-        let p = &self.system.particles;
-        let mut touched = vec![0.0; p.len()];
-        for a in 0..contacts.len() {
-            if let Partner::Grain(j) = contacts.partner[a] {
-                if j as usize >= p.n_owned {
-                    touched[j as usize] = 1.0;
-                }
-            }
-        }
-        self.system.sum_onto_owners(&mut touched, 1);
-        touched[..p.n_owned].iter().map(|&t| t > 0.0).collect()
+        let here = touched_here(contacts, self.system.particles.len());
+        let acting = self.acting_sets(contacts);
+        (0..self.system.particles.n_owned)
+            .map(|k| acting[k] > here[k])
+            .collect()
     }
 
     /// The number of local sets of pairs (this rank's, other ranks', one
     /// per copy) that act on each body, n ≥ 1 (collective).
     pub fn multiplicity(&self, contacts: &ContactSet, bodies: &Bodies) -> Vec<f64> {
-        let p = &self.system.particles;
-        let mut acting = vec![0.0; p.len()];
-        for a in 0..contacts.len() {
-            acting[contacts.grain[a] as usize] = 1.0;
-            if let Partner::Grain(j) = contacts.partner[a] {
-                acting[j as usize] = 1.0;
-            }
-        }
-        self.system.sum_onto_owners(&mut acting, 1);
-        self.system.copy_onto_ghosts(&mut acting, 1);
+        let acting = self.acting_sets(contacts);
         (0..bodies.len())
             .map(|c| acting[bodies.grain[c] as usize].max(1.0))
             .collect()
+    }
+
+    /// For each local grain, how many local sets of pairs touch it, over
+    /// every rank, its copies included (collective).
+    fn acting_sets(&self, contacts: &ContactSet) -> Vec<f64> {
+        let mut acting = touched_here(contacts, self.system.particles.len());
+        self.system.sum_onto_owners(&mut acting, 1);
+        self.system.copy_onto_ghosts(&mut acting, 1);
+        acting
     }
 
     /// The bodies as a rank sweeps them: each a copy of mass m/n
@@ -164,4 +158,16 @@ fn motion_at(values: &[f64], k: usize) -> (Vec3, Vec3) {
         Vec3::from_column_slice(&values[6 * k..6 * k + 3]),
         Vec3::from_column_slice(&values[6 * k + 3..6 * k + 6]),
     )
+}
+
+/// 1 for each of `local` grains a pair of `contacts` touches, else 0.
+fn touched_here(contacts: &ContactSet, local: usize) -> Vec<f64> {
+    let mut touched = vec![0.0; local];
+    for a in 0..contacts.len() {
+        touched[contacts.grain[a] as usize] = 1.0;
+        if let Partner::Grain(j) = contacts.partner[a] {
+            touched[j as usize] = 1.0;
+        }
+    }
+    touched
 }

@@ -184,11 +184,8 @@ impl HardContact {
             .iter()
             .map(|v| v.norm())
             .fold(0.0, f64::max);
-        let fastest = if shared {
-            system.communicator.max(fastest)
-        } else {
-            fastest
-        };
+        // Reductions over the ranks return the rank's own value on one.
+        let fastest = system.communicator.max(fastest);
         let threshold = self.threshold.max(3.0 * fastest * dt);
         if threshold > system.neighbours.gap {
             system.listing_gap = 2.0 * threshold;
@@ -293,10 +290,8 @@ impl HardContact {
             &solution.tangential_impulse,
             matches!(self.method, Method::Nscd { .. }),
         );
-        if shared {
-            residual.complementarity = system.communicator.max(residual.complementarity);
-            residual.coulomb = system.communicator.max(residual.coulomb);
-        }
+        residual.complementarity = system.communicator.max(residual.complementarity);
+        residual.coulomb = system.communicator.max(residual.coulomb);
 
         // End-of-step velocities; the force and torque written out are the
         // step's mean ones, m (u^{k+1} − u^k)/Δt (contacts and gravity).
@@ -315,11 +310,7 @@ impl HardContact {
 
         // Contacts that carry a force (for coordination and rest tests).
         let largest_impulse = solution.normal_impulse.iter().cloned().fold(0.0, f64::max);
-        let largest_impulse = if shared {
-            system.communicator.max(largest_impulse)
-        } else {
-            largest_impulse
-        };
+        let largest_impulse = system.communicator.max(largest_impulse);
         let carries = |a: usize| solution.normal_impulse[a] > 1e-9 * largest_impulse;
         let mut particle_contacts = vec![0.0; local];
         let mut walls_touched = vec![0u64; n];
@@ -340,9 +331,9 @@ impl HardContact {
         }
         if shared {
             system.sum_onto_owners(&mut particle_contacts, 1);
-            closed = system.communicator.sum_count(closed);
-            wall_contacts = system.communicator.sum_count(wall_contacts);
         }
+        let closed = system.communicator.sum_count(closed);
+        let wall_contacts = system.communicator.sum_count(wall_contacts);
         let particle_contacts = particle_contacts[..n].iter().map(|&c| c as u32).collect();
         system.record_contacts(particle_contacts, walls_touched);
 
@@ -351,12 +342,9 @@ impl HardContact {
         let penetration = if non_finite {
             f64::NAN
         } else {
-            let largest = certificate::largest_overlap(system, scales.length);
-            if shared {
-                system.communicator.max(largest)
-            } else {
-                largest
-            }
+            system
+                .communicator
+                .max(certificate::largest_overlap(system, scales.length))
         };
         system.last = StepDiagnostics {
             max_overlap_ratio: 2.0 * penetration,
@@ -364,13 +352,8 @@ impl HardContact {
             wall_contacts,
             non_finite,
         };
-        let candidates = if shared {
-            system.communicator.sum_count(contacts.len())
-        } else {
-            contacts.len()
-        };
         Ok(StepReport {
-            candidates,
+            candidates: system.communicator.sum_count(contacts.len()),
             programs,
             closed,
             iterations: solution.iterations,
