@@ -57,8 +57,8 @@ def main():
     args = parser.parse_args()
     binary = os.path.abspath(args.binary)
     os.makedirs(args.work, exist_ok=True)
-    # 1. The soft fill (the bench's packing, which also writes fill/).
-    cocd_step_3d.packing(binary, args.work, 2000)
+    # 1. The soft fill (the bench's).
+    cocd_step_3d.fill(binary, args.work, 2000)
     fill_case = open(os.path.join(args.work, "fill.toml")).read()
     # 2. Stiffer contacts, to rest.
     write_rows(os.path.join(args.work, "fill_at_rest.csv"),

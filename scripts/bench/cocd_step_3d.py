@@ -79,11 +79,9 @@ def run(binary, case, out, *sets, threads=2):
         return json.load(f)
 
 
-def packing(binary, work, spheres):
-    """The packing at rest after the hard settling: a CSV of the spheres."""
-    rest = os.path.join(work, "rest.csv")
-    if os.path.exists(rest):
-        return rest
+def fill(binary, work, spheres):
+    """The soft DEM's packing of the lattice (WORK/fill/final_particles.csv,
+    its grains slower than 1 mm/s): the box's side and the lattice's top."""
     # Lattice sites: a square base of k x k, layers to reach the count.
     per_side = max(4, round((spheres / 1.5) ** (1 / 3)))
     layers = math.ceil(spheres / per_side**2)
@@ -92,11 +90,20 @@ def packing(binary, work, spheres):
     lattice = (f'[[particles.block]]\nkind = "lattice"\nlower = [0.0006, 0.0006, 0.0006]\n'
                f'upper = [{side - 0.0006 + 1e-6}, {side - 0.0006 + 1e-6}, {top}]\n'
                f'spacing = {SPACING}\njitter = 0.3')
-    fill = os.path.join(work, "fill.toml")
-    write(fill, BOX.format(side=side, height=2 * top + 0.01, block=lattice,
+    case = os.path.join(work, "fill.toml")
+    write(case, BOX.format(side=side, height=2 * top + 0.01, block=lattice,
                            contact='model = "soft"\nrestitution = 0.2\ncontact_time = 2.0e-4\nfriction = 0.3',
                            time="end = 2.0\ndt_over_contact_time = 0.1\nrest_speed = 1.0e-3\nrest_after = 0.4"))
-    run(binary, fill, os.path.join(work, "fill"), threads=2)
+    run(binary, case, os.path.join(work, "fill"), threads=2)
+    return side, top
+
+
+def packing(binary, work, spheres):
+    """The packing at rest after the hard settling: a CSV of the spheres."""
+    rest = os.path.join(work, "rest.csv")
+    if os.path.exists(rest):
+        return rest
+    side, top = fill(binary, work, spheres)
     # Shrink the radii by 1.5 %, at rest.
     rows = shrunk(os.path.join(work, "fill", "final_particles.csv"), 0.985)
     with open(os.path.join(work, "shrunk.csv"), "w", newline="") as f:
