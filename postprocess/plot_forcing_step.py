@@ -2,8 +2,10 @@
 """The direct forcing's step dependence in (r, z) (the paper's falling
 sphere, scripts/falling_sphere_axisymmetric_sweep.py): terminal Reynolds
 number against the grain's CFL number at its terminal velocity, under eq. 7
-at every stage and with the forcing step held at nu dt_f / dx^2 = 0.8, at
-D/dx = 10 and 20, beside Schiller-Naumann and Clift-Grace-Weber.
+at every stage, with the forcing step held at nu dt_f / dx^2 = 0.8 and with
+the layer relaxed at the flow's renewal rate (coupling.layer_forcing =
+"renewal"), at D/dx = 10 and 20, beside Schiller-Naumann and
+Clift-Grace-Weber.
 
 usage: postprocess/plot_forcing_step.py [CSV] [PNG]
 """
@@ -27,7 +29,8 @@ SCHILLER_NAUMANN, CLIFT_GRACE_WEBER = 20.318, 19.744
 fig, ax = plt.subplots(figsize=(7, 4.5))
 for per, colour in (("10", "tab:blue"), ("20", "tab:red")):
     for held, style, label in (("", "o--", "eq. 7 at every stage"),
-                               ("0.8", "s-", "forcing step held, ν Δt_f/Δx² = 0.8")):
+                               ("0.8", "s-", "forcing step held, ν Δt_f/Δx² = 0.8"),
+                               ("renewal", "^-", "renewal rate (layer_forcing)")):
         points = sorted((float(r["grain_cfl"]), float(r["terminal_reynolds"]))
                         for r in rows
                         if r["cells_per_diameter"] == per and r["forcing_number"] == held)

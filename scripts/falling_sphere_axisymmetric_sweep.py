@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """The paper's falling sphere in (r, z) (cases/falling_sphere_axisymmetric.toml)
-over resolutions: each --run is D/dx : dt (g/D)^1/2 [: forcing number], on
+over resolutions: each --run is D/dx : dt (g/D)^1/2 [: forcing], on
 the paper's domain (20 D x 40 D, uniform cells to r = 1.5 D, 98 x (D/dx)/20
 growing cells beyond). The forcing number nu dt_f / dx^2, where given, holds
 the transition layer's relaxation at the forcing step dt_f
-(coupling.forcing_step) whatever the step; without it, eq. 7 at every
-stage. Writes one CSV row per run with the acceptance figures (initial
+(coupling.forcing_step) whatever the step; "renewal" relaxes it at the rate
+the flow renews it (coupling.layer_forcing = "renewal"); without either,
+eq. 7 at every stage. Writes one CSV row per run with the acceptance figures (initial
 acceleration against eq. 20, terminal Reynolds number against
 Schiller-Naumann, with no wall correction), the grain's CFL number at its
 terminal velocity, and the cost (wall seconds).
@@ -42,7 +43,9 @@ def run(binary, per, dt_scaled, forcing_number, workdir, threads):
         f"output.tracked_interval={dt_scaled * UNIT}",
     ]
     cell = D / per
-    if forcing_number:
+    if forcing_number == "renewal":
+        sets.append('coupling.layer_forcing="renewal"')
+    elif forcing_number:
         sets.append(f"coupling.forcing_step={forcing_number * cell * cell / NU}")
     command = [binary, "run", "cases/falling_sphere_axisymmetric.toml", "--out", out,
                "--threads", str(threads)]
@@ -72,7 +75,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", required=True)
     ap.add_argument("--run", action="append", required=True,
-                    help="D/dx:dt (g/D)^1/2[:forcing number nu dt_f/dx^2]")
+                    help="D/dx:dt (g/D)^1/2[:forcing number nu dt_f/dx^2 or renewal]")
     ap.add_argument("--binary", default="target/release/grainflow")
     ap.add_argument("--workdir", default="out/falling_sphere_axisymmetric")
     ap.add_argument("--threads", type=int, default=2)
@@ -80,7 +83,9 @@ def main():
     rows = []
     for spec in args.run:
         fields = spec.split(":")
-        forcing = float(fields[2]) if len(fields) > 2 else None
+        forcing = None
+        if len(fields) > 2:
+            forcing = fields[2] if fields[2] == "renewal" else float(fields[2])
         row = run(args.binary, int(fields[0]), float(fields[1]), forcing, args.workdir,
                   args.threads)
         print(row, flush=True)

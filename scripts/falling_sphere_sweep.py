@@ -12,8 +12,9 @@ Each --run is D/dx : box width / D : box height / D : dt factor, where the
 dt factor multiplies the paper's dt (g/D)^1/2 = 0.04 scaled to D/dx = 20,
 so that the CFL number stays the same across resolutions. An optional fifth
 field sets coupling.forcing_step to that factor times the same scaled step
-(the forcing relaxes the transition layer as at that step, whatever dt);
-a sixth, time.cfl.
+(the forcing relaxes the transition layer as at that step, whatever dt),
+or "renewal" sets coupling.layer_forcing = "renewal" (the layer relaxed at
+the rate the flow renews it); a sixth, time.cfl.
 """
 import argparse
 import csv
@@ -44,7 +45,10 @@ def run(binary, cells_per_d, width, height, dt_factor, end, workdir, forcing_fac
         f"output.tracked_interval={dt}",
     ]
     forcing_step = None
-    if forcing_factor is not None:
+    if forcing_factor == "renewal":
+        forcing_step = "renewal"
+        sets.append('coupling.layer_forcing="renewal"')
+    elif forcing_factor is not None:
         forcing_step = PAPER_DT * 20.0 / cells_per_d * forcing_factor
         sets.append(f"coupling.forcing_step={forcing_step}")
     if cfl is not None:
@@ -115,7 +119,9 @@ def label(cells_per_d, width, dt_factor, forcing_factor, cfl):
     name = f"D/dx={cells_per_d} box={width} {step}"
     if cfl is not None:
         name += f" cfl={cfl:g}"
-    if forcing_factor is not None:
+    if forcing_factor == "renewal":
+        name += " renewal"
+    elif forcing_factor is not None:
         name += f" forcing={forcing_factor * scale:.4g}"
     return name
 
@@ -147,7 +153,9 @@ def main():
         for spec in args.run:
             fields = spec.split(":")
             cells, width, height, factor = fields[:4]
-            forcing = float(fields[4]) if len(fields) > 4 and fields[4] else None
+            forcing = None
+            if len(fields) > 4 and fields[4]:
+                forcing = fields[4] if fields[4] == "renewal" else float(fields[4])
             cfl = float(fields[5]) if len(fields) > 5 and fields[5] else None
             row = run(args.binary, int(cells), float(width), float(height), float(factor),
                       args.end, args.workdir, forcing, cfl)

@@ -344,7 +344,9 @@ fn check_runs_a_pour_through_its_first_batches_and_sums_the_rest() {
 /// the grains look larger under the forcing of eq. 7: `check` warns, and
 /// names `coupling.forcing_step`, which, set to the calibration step,
 /// removes the cause and the warning (the falling sphere at D/Δx = 4:
-/// CFL 0.08 at its settling speed, against 1.00 at the forcing step).
+/// CFL 0.08 at its settling speed, against 1.00 at the forcing step), as
+/// does `coupling.layer_forcing = "renewal"`, which refuses a held step
+/// beside it.
 #[test]
 fn check_warns_of_a_short_forcing_step_unless_it_is_held() {
     let check = |extra: &[&str]| {
@@ -376,6 +378,28 @@ fn check_warns_of_a_short_forcing_step_unless_it_is_held() {
         held.contains("relaxed as eq. 7 does at a step of 6.4000e-3 s"),
         "{held}"
     );
+    // Relaxed at the flow's renewal rate, the grain does not depend on the
+    // step: no warning.
+    let renewal = check(&["coupling.layer_forcing=\"renewal\""]);
+    assert!(!renewal.contains("warning: the grains' CFL"), "{renewal}");
+    assert!(
+        renewal.contains("relaxed at the rate the flow renews it"),
+        "{renewal}"
+    );
+    // A held step and the renewal rate are two answers to one question.
+    let both = grainflow()
+        .args(["check", &case("falling_sphere.toml"), "--set"])
+        .args([
+            "coupling.layer_forcing=\"renewal\"",
+            "--set",
+            "coupling.forcing_step=6.4e-3",
+        ])
+        .output()
+        .unwrap();
+    assert!(!both.status.success());
+    let error = String::from_utf8_lossy(&both.stderr);
+    assert!(error.contains("coupling.forcing_step"), "{error}");
+    assert!(error.contains("renewal"), "{error}");
 }
 
 /// `check` and `run` of `case` with `overrides`: (exit code, stderr) of

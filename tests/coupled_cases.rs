@@ -20,6 +20,11 @@ fn bad_coupled_tables_are_refused_with_the_key_and_nothing_is_written() {
             "coupling.forcing_step",
         ),
         (
+            "falling_sphere.toml",
+            "coupling.layer_forcing=\"slow\"",
+            "layer_forcing",
+        ),
+        (
             "bouncing_sphere.toml",
             "coupling.wall_layer=\"open\"",
             "coupling.wall_layer",

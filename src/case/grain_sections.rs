@@ -1,6 +1,7 @@
 //! The tables of a case that describe the grains, their contacts, the
 //! walls and the coupling with a fluid.
 
+use grainflow_ibm::LayerForcing;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -248,6 +249,13 @@ pub struct CouplingSection {
     /// step does. Unset: eq. 7 at every step.
     #[serde(default)]
     pub forcing_step: Option<f64>,
+    /// How fast the direct forcing relaxes each grain's transition layer:
+    /// "every_stage" (default: eq. 7 at every stage, calibrated near a
+    /// grain CFL number of 1) or "renewal" (at the rate the flow renews the
+    /// layer, advection across a cell and diffusion across it: the grain
+    /// the same at any step; `grainflow_ibm::layer_forcing`).
+    #[serde(default)]
+    pub layer_forcing: LayerForcingName,
     /// The first layer of fluid cells along the domain's walls: "free"
     /// (default: the moving grains do not force it; it holds the film of
     /// eq. 19, which the flow does not resolve; glued grains still do) or
@@ -257,12 +265,35 @@ pub struct CouplingSection {
     pub wall_layer: String,
 }
 
+/// `coupling.layer_forcing` as the case names it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LayerForcingName {
+    #[default]
+    EveryStage,
+    Renewal,
+}
+
+impl CouplingSection {
+    /// The layer's forcing the section asks for: held at
+    /// `coupling.forcing_step` where set (the case refuses it beside
+    /// "renewal").
+    pub fn layer_forcing(&self) -> LayerForcing {
+        match (self.forcing_step, self.layer_forcing) {
+            (Some(step), _) => LayerForcing::Held { step },
+            (None, LayerForcingName::EveryStage) => LayerForcing::EveryStage,
+            (None, LayerForcingName::Renewal) => LayerForcing::Renewal,
+        }
+    }
+}
+
 impl Default for CouplingSection {
     fn default() -> Self {
         CouplingSection {
             formulation: default_formulation(),
             contact_gap: default_contact_gap(),
             forcing_step: None,
+            layer_forcing: LayerForcingName::EveryStage,
             wall_layer: default_wall_layer(),
         }
     }

@@ -392,6 +392,14 @@ impl Case {
             }
             if let Some(step) = c.forcing_step {
                 positive("coupling.forcing_step", step)?;
+                if c.layer_forcing == LayerForcingName::Renewal {
+                    return Err(invalid(
+                        "coupling.forcing_step",
+                        step,
+                        "not with coupling.layer_forcing = \"renewal\", which takes each \
+                         grain's own rate: set one of the two",
+                    ));
+                }
             }
             if !matches!(c.wall_layer.as_str(), "free" | "forced") {
                 return Err(invalid(

@@ -4,6 +4,7 @@ use super::cost_estimate::{self, Evolution};
 use super::{cfl_steps, coupled_simulation, memory_line, scales_line, Settling};
 use crate::case::Case;
 use crate::{scene, RunError};
+use grainflow_ibm::LayerForcing;
 use std::fmt::Write;
 
 /// `check` of grains in a fluid: the models, the dimensionless numbers of
@@ -55,16 +56,23 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
             let _ = writeln!(out, "  no lubrication ([lubrication] absent)");
         }
     }
-    match system.immersed.forcing_step {
-        Some(step) => {
+    match system.immersed.layer {
+        LayerForcing::Held { step } => {
             let _ = writeln!(
                 out,
                 "  direct forcing: the transition layer relaxed as eq. 7 does at a step of \
                  {step:.4e} s, whatever the fluid step (coupling.forcing_step)"
             );
         }
-        None => {
+        LayerForcing::EveryStage => {
             let _ = writeln!(out, "  direct forcing: eq. 7 at every stage");
+        }
+        LayerForcing::Renewal => {
+            let _ = writeln!(
+                out,
+                "  direct forcing: the transition layer relaxed at the rate the flow renews it \
+                 (coupling.layer_forcing = \"renewal\"): the grain the same at any step"
+            );
         }
     }
     let h = grid.spacing[..dim]
@@ -106,9 +114,11 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
                 g,
             };
             let velocity = settling.write(&mut out, dt, h);
-            let layer_step = system.immersed.forcing_step.unwrap_or(dt);
-            if let Some(w) = coupled_simulation::forcing_step_warning(velocity * layer_step / h) {
-                let _ = writeln!(out, "{w}");
+            if let Some(layer_step) = system.immersed.layer.layer_step(dt) {
+                let cfl = velocity * layer_step / h;
+                if let Some(w) = coupled_simulation::forcing_step_warning(cfl) {
+                    let _ = writeln!(out, "{w}");
+                }
             }
         }
     }

@@ -119,7 +119,7 @@ pub fn build(
     let mut system =
         AxisymmetricCoupledSystem::new(flow, dem, density, coupling, ratio * contact_time)
             .map_err(|e| e.to_string())?;
-    system.immersed.forcing_step = section.forcing_step;
+    system.immersed.layer = section.layer_forcing();
     if section.wall_layer != "free" {
         system.immersed.free_end_layers = EndLayers { ends: [false; 2] };
     }

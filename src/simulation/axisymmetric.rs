@@ -199,7 +199,7 @@ impl AxisymmetricModel {
             dem_substeps: self.dem_substeps,
             dem_dt: self.system.dem_dt,
             contact_time: self.contact_time,
-            forcing_step: self.system.immersed.forcing_step,
+            layer: self.system.immersed.layer,
             timings: &self.system.timings,
         };
         coupled_summary(scene, case, &counts, wall_seconds)

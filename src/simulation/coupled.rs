@@ -12,6 +12,7 @@ use crate::{scene, scene::fluid as fluid_scene, sharing, stability, RunError};
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_fluid::time_step_for_cfl_rates;
 use grainflow_ibm::forcing::WallLayer;
+use grainflow_ibm::LayerForcing;
 use grainflow_ibm::{
     CoupledReport, CoupledSystem, Coupling, Timings, RIGID_INNER_FLUID_FAILS_BELOW,
     RIGID_INNER_FLUID_WARNS_BELOW,
@@ -55,7 +56,7 @@ pub fn build_on(case: &Case, communicator: Communicator) -> Result<(CoupledSyste
     let density = case.fluid_section().density;
     let mut system = CoupledSystem::new(flow, dem, density, coupling, ratio * contact_time);
     let coupling_section = case.coupling.clone().unwrap_or_default();
-    system.immersed.forcing_step = coupling_section.forcing_step;
+    system.immersed.layer = coupling_section.layer_forcing();
     if coupling_section.wall_layer == "free" {
         system.immersed.free_wall_layers = WallLayer::along_walls(
             &system.flow.grid,
@@ -216,13 +217,30 @@ pub fn done_line(steps: u64, dem_substeps: usize, wall_seconds: f64, t: &Timings
     )
 }
 
+/// The case's name of a layer forcing, for `summary.json`.
+fn layer_forcing_name(layer: &LayerForcing) -> &'static str {
+    match layer {
+        LayerForcing::EveryStage => "every_stage",
+        LayerForcing::Held { .. } => "held",
+        LayerForcing::Renewal => "renewal",
+    }
+}
+
+/// The step the layer is held at, if it is.
+fn held_step(layer: &LayerForcing) -> Option<f64> {
+    match *layer {
+        LayerForcing::Held { step } => Some(step),
+        _ => None,
+    }
+}
+
 /// What every coupled run reports of its sub-steps and its time.
 pub struct CoupledCounts<'a> {
     pub steps: u64,
     pub dem_substeps: usize,
     pub dem_dt: f64,
     pub contact_time: f64,
-    pub forcing_step: Option<f64>,
+    pub layer: LayerForcing,
     pub timings: &'a Timings,
 }
 
@@ -241,7 +259,8 @@ pub fn coupled_summary<'a>(
         ("dem_substeps", json!(c.dem_substeps)),
         ("dt", json!(case.time.dt)),
         ("cfl", json!(case.time.cfl)),
-        ("forcing_step", json!(c.forcing_step)),
+        ("layer_forcing", json!(layer_forcing_name(&c.layer))),
+        ("forcing_step", json!(held_step(&c.layer))),
         ("dem_dt", json!(c.dem_dt)),
         ("contact_time", json!(c.contact_time)),
         (
@@ -424,8 +443,10 @@ impl CoupledModel {
                 .iter()
                 .copied()
                 .fold(f64::INFINITY, f64::min);
-            let layer_step = self.system.immersed.forcing_step.unwrap_or(step_dt);
-            self.grain_cfl_sum += speed * step_dt * (speed * layer_step / h);
+            // Read at the step the layer is relaxed at (the step itself
+            // under renewal, where it does not matter).
+            let layer_step = self.system.immersed.layer.layer_step(step_dt);
+            self.grain_cfl_sum += speed * step_dt * (speed * layer_step.unwrap_or(step_dt) / h);
             self.distance += speed * step_dt;
         }
         let (time, dem) = (self.system.flow.time, &self.system.dem);
@@ -461,7 +482,8 @@ impl CoupledModel {
     /// The warning for a forcing step short against the grains' crossing
     /// time, at the end of a run in which grains moved.
     pub fn closing_warning(&self) -> Option<String> {
-        (self.distance > 0.0)
+        let layer_held = self.system.immersed.layer != LayerForcing::Renewal;
+        (layer_held && self.distance > 0.0)
             .then(|| forcing_step_warning(self.grain_cfl()))
             .flatten()
     }
@@ -485,7 +507,7 @@ impl CoupledModel {
             dem_substeps: self.dem_substeps,
             dem_dt: self.system.dem_dt,
             contact_time: self.contact_time,
-            forcing_step: self.system.immersed.forcing_step,
+            layer: self.system.immersed.layer,
             timings: &self.system.timings,
         };
         coupled_summary(scene, case, &counts, wall_seconds)

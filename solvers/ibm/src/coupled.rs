@@ -61,7 +61,8 @@ use grainflow_fluid::{stage_fraction, Block, FlowSolver, FluidError, StepReport,
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use crate::forcing::{vectors_on_owners, ImmersedBoundaries, Loads};
+use crate::forcing::{vectors_on_owners, Bodies, ImmersedBoundaries, Loads};
+use crate::layer_forcing::{renewal_exponent, slip_from_sums, LayerForcing, SLIP_SUMS};
 
 /// Density ratio `ρ_p/ρ` below which the rigid-inner-fluid load (eq. 5–6)
 /// blows up: in translation within a few time units at 1.6 and below, at
@@ -211,12 +212,14 @@ impl CoupledSystem {
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);
+            let renewal = self.renewal_exponents(&bodies, dt);
             let forcing = self.immersed.apply(
                 &self.flow.grid,
                 &mut self.flow.velocity,
                 &bodies,
                 stage_dt,
                 dt,
+                renewal.as_deref(),
             );
             let forcing = forcing.summed_on_owners(&self.dem);
             let clock = self.lap(clock, Part::Forcing);
@@ -263,6 +266,26 @@ impl CoupledSystem {
             dem: dem_report,
             dem_substeps: substeps,
         })
+    }
+
+    /// Each local particle's exponent `r Δt` under
+    /// [`LayerForcing::Renewal`], from its layer's slip in the predicted
+    /// flow summed over the ranks and copied onto its ghosts, so that every
+    /// copy of a grain forces with one rate; `None` under the other
+    /// forcings. Collective.
+    fn renewal_exponents(&self, bodies: &Bodies, dt: f64) -> Option<Vec<f64>> {
+        if self.immersed.layer != LayerForcing::Renewal {
+            return None;
+        }
+        let mut sums = self.immersed.layer_slips(&self.flow.velocity, bodies);
+        self.dem.sum_onto_owners(&mut sums, SLIP_SUMS);
+        self.dem.copy_onto_ghosts(&mut sums, SLIP_SUMS);
+        let spacing = self.immersed.width / std::f64::consts::SQRT_2;
+        let exponents = sums
+            .chunks_exact(SLIP_SUMS)
+            .map(|own| renewal_exponent(slip_from_sums(own), self.flow.viscosity, spacing, dt))
+            .collect();
+        Some(exponents)
     }
 
     /// Adds the time since `clock` to `part`; returns the time now.

@@ -8,7 +8,7 @@
 use grainflow_fluid::{Block, Grid};
 use rayon::prelude::*;
 
-use crate::forcing::{forced_fraction, Bodies, ImmersedBoundaries};
+use crate::forcing::{forced_fraction, Bodies, Exponents, ImmersedBoundaries};
 
 impl ImmersedBoundaries {
     /// Adds `Σ_p β_p` and `Σ_p β_p U_p` of `bodies`, `β = 1 − (1 − α)^exponent`
@@ -22,7 +22,7 @@ impl ImmersedBoundaries {
     /// threads, and a body's rows are read where they lie, one after the
     /// other (plane by plane, a body's rows of each plane were fetched
     /// apart, which took twice as long).
-    pub(crate) fn add_forcing_sums(&mut self, grid: &Grid, bodies: &Bodies, exponent: f64) {
+    pub(crate) fn add_forcing_sums(&mut self, grid: &Grid, bodies: &Bodies, exponents: Exponents) {
         let dim = grid.dim();
         let slow = dim - 1;
         let plane = grid.stride(slow);
@@ -33,7 +33,6 @@ impl ImmersedBoundaries {
             1 => planes,
             _ => planes.div_ceil(4 * threads).max(1),
         };
-        let forced = |alpha: f64| forced_fraction(alpha, exponent);
         for component in 0..dim {
             let fill_slab = |slab: usize, total: &mut [f64], target: &mut [f64]| {
                 let layers = slab * thickness..((slab + 1) * thickness).min(planes);
@@ -44,13 +43,14 @@ impl ImmersedBoundaries {
                     if faces.is_empty() || reach.end <= layers.start || reach.start >= layers.end {
                         continue;
                     }
+                    let exponent = exponents.of(body.particle);
                     for row in faces.rows_in(dim, layers.clone()) {
                         let (base, slope) = body.rigid_along(&row, component, faces.step);
                         let at = row.first - first..row.first - first + row.len();
                         let sums = total[at.clone()].iter_mut().zip(&mut target[at]);
                         for (i, (alpha, (total, target))) in row.alpha.iter().zip(sums).enumerate()
                         {
-                            let beta = forced(*alpha);
+                            let beta = forced_fraction(*alpha, exponent);
                             *total += beta;
                             *target += beta * (base + i as f64 * slope);
                         }

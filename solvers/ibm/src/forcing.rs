@@ -52,6 +52,7 @@ use rayon::prelude::*;
 
 use crate::face_sums::{force_block, touched_block};
 use crate::faces::{FaceRows, Row};
+use crate::layer_forcing::{slip_weight, LayerForcing, SLIP_SUMS};
 pub use crate::loads::{vectors_on_owners, Loads};
 use crate::overlaps::pressed_bodies;
 use crate::solid_fraction::{solid_fraction, support, transition_width};
@@ -71,7 +72,7 @@ pub fn ghost_reach(grid: &Grid, max_radius: f64) -> f64 {
 #[derive(Clone, Debug)]
 pub(crate) struct Body {
     /// Local index of the particle.
-    particle: usize,
+    pub(crate) particle: usize,
     pub(crate) centre: Vec3,
     velocity: Vec3,
     angular_velocity: Vec3,
@@ -113,6 +114,26 @@ impl Body {
             (sum, along)
         });
         (momentum * volume, angular * volume)
+    }
+
+    /// The sums of the layer's slip `Σ w (V − U)_c²` and `Σ w` on the
+    /// faces of each component `c` in the face field `velocity`, `w` the
+    /// face's [`slip_weight`] ([`crate::layer_forcing`]).
+    fn layer_slip(&self, velocity: &[Vec<f64>]) -> [f64; SLIP_SUMS] {
+        let mut sums = [0.0; SLIP_SUMS];
+        for (component, faces) in self.faces.iter().enumerate() {
+            for row in faces.rows() {
+                let (base, slope) = self.rigid_along(&row, component, faces.step);
+                let velocity = &velocity[component][row.faces()];
+                for (i, (alpha, v)) in row.alpha.iter().zip(velocity).enumerate() {
+                    let weight = slip_weight(*alpha);
+                    let slip = v - (base + i as f64 * slope);
+                    sums[component] += weight * slip * slip;
+                    sums[3 + component] += weight;
+                }
+            }
+        }
+        sums
     }
 
     /// Replaces the body's fractions by its shares of the faces whose
@@ -176,10 +197,9 @@ pub struct Bodies {
 pub struct ImmersedBoundaries {
     /// `Δ` of eq. 8.
     pub width: f64,
-    /// The step `Δt_f` at which the forcing relaxes the transition layer
-    /// as eq. 7 does; `None`: at every step (the paper's forcing). See
-    /// [`ImmersedBoundaries::apply`].
-    pub forcing_step: Option<f64>,
+    /// How fast the forcing relaxes the transition layer
+    /// ([`crate::layer_forcing`]); eq. 7 at every stage unless set.
+    pub layer: LayerForcing,
     /// The layers of cells along the walls that the moving grains leave to
     /// the fluid ([`WallLayer::along_walls`]); empty, the paper's forcing, which
     /// reaches the walls.
@@ -207,7 +227,7 @@ impl ImmersedBoundaries {
         );
         ImmersedBoundaries {
             width: transition_width(&grid.spacing[..dim]),
-            forcing_step: None,
+            layer: LayerForcing::EveryStage,
             free_wall_layers: Vec::new(),
             dimension: grid.dimension,
             total_fraction: (0..dim).map(|_| grid.zeros()).collect(),
@@ -280,8 +300,8 @@ impl ImmersedBoundaries {
                 (!pressed).then(|| body.inner_momentum(velocity, volume))
             })
             .collect();
-        let per_body: Vec<(Vec3, Vec3)> = if self.forcing_step.is_none() {
-            self.add_forcing_sums(grid, &bodies, 1.0);
+        let per_body: Vec<(Vec3, Vec3)> = if self.layer == LayerForcing::EveryStage {
+            self.add_forcing_sums(grid, &bodies, Exponents::Uniform(1.0));
             bodies.forcing_sums_made = true;
             self.forcing_sums_pending = true;
             let totals = &self.total_fraction;
@@ -308,26 +328,37 @@ impl ImmersedBoundaries {
         (bodies, momentum)
     }
 
+    /// The sums of each local particle's layer slip in the predicted
+    /// `velocity` on this rank's faces ([`SLIP_SUMS`] numbers per local
+    /// particle, owned then ghosts; zero for those without faces here):
+    /// what [`LayerForcing::Renewal`] reads its rates from, once summed
+    /// over the ranks.
+    pub fn layer_slips(&self, velocity: &[Vec<f64>], bodies: &Bodies) -> Vec<f64> {
+        let per_body: Vec<[f64; SLIP_SUMS]> = bodies
+            .list
+            .par_iter()
+            .map(|body| body.layer_slip(velocity))
+            .collect();
+        let mut sums = vec![0.0; SLIP_SUMS * bodies.count];
+        for (body, own) in bodies.list.iter().zip(&per_body) {
+            let at = SLIP_SUMS * body.particle;
+            for (sum, value) in sums[at..at + SLIP_SUMS].iter_mut().zip(own) {
+                *sum += value;
+            }
+        }
+        sums
+    }
+
     /// Applies the direct forcing of a stage of length `stage_dt` of a step
     /// `step_dt` to the predicted velocity and returns the loads on each
     /// local particle from this rank's faces, per unit fluid density
     /// (eq. 5–7 without the density factors).
     ///
-    /// Eq. 7 moves a face of solid fraction `α` the fraction `α` of the
-    /// way to the rigid velocity at every stage: over a time `t` the
-    /// transition layer is relaxed by `(1 − α)^{3 t/Δt}`, faster the shorter
-    /// the step, and the grain looks larger. With a forcing step `Δt_f`
-    /// each stage uses instead
-    ///
-    /// ```text
-    /// β = 1 − (1 − α)^{Δt/Δt_f}
-    /// ```
-    ///
-    /// which is eq. 7 at `Δt = Δt_f` and relaxes the layer at the rate
-    /// `−3 ln(1 − α)/Δt_f` whatever the step; the flow's own renewal of
-    /// the layer (advection, diffusion) is also proportional to the step,
-    /// so the grain's apparent size no longer depends on it. Where `α = 1`
-    /// `β = 1`: the inside of the grain moves rigidly at every stage.
+    /// Each stage moves a face of solid fraction `α` by `β = 1 − (1 −
+    /// α)^e` of the way to the rigid velocity, `e` the grain's exponent
+    /// ([`crate::layer_forcing`]): 1 for eq. 7, `Δt/Δt_f` with the layer
+    /// held at `Δt_f`, and with [`LayerForcing::Renewal`] each local
+    /// particle's own from `renewal_exponents` (one per local particle).
     pub fn apply(
         &mut self,
         grid: &Grid,
@@ -335,18 +366,20 @@ impl ImmersedBoundaries {
         bodies: &Bodies,
         stage_dt: f64,
         step_dt: f64,
+        renewal_exponents: Option<&[f64]>,
     ) -> Loads {
         let dim = grid.dim();
         let volume = grid.cell_volume();
-        let exponent = self
-            .forcing_step
-            .map_or(1.0, |reference| step_dt / reference);
-        let forced = |alpha: f64| forced_fraction(alpha, exponent);
+        let exponents = match (self.layer.uniform_exponent(step_dt), renewal_exponents) {
+            (Some(exponent), _) => Exponents::Uniform(exponent),
+            (None, Some(each)) => Exponents::PerParticle(each),
+            (None, None) => panic!("the layer's renewal needs each grain's exponent"),
+        };
 
         // 1. Σ β_p and Σ β_p U_p on the faces, unless the bodies were
         // made with them (eq. 7: β = α, summed before the shares).
         if !bodies.forcing_sums_made {
-            self.add_forcing_sums(grid, bodies, exponent);
+            self.add_forcing_sums(grid, bodies, exponents);
         }
         let touched: Vec<Option<Block>> = (0..dim)
             .map(|component| touched_block(bodies, component))
@@ -363,6 +396,7 @@ impl ImmersedBoundaries {
             .list
             .par_iter()
             .map(|body| {
+                let exponent = exponents.of(body.particle);
                 let (force, torque) = body.moments(|component, faces, row| {
                     let (base, slope) = body.rigid_along(row, component, faces.step);
                     let (alpha, faces) = (row.alpha, row.faces());
@@ -382,7 +416,8 @@ impl ImmersedBoundaries {
                         let total = &total[component][faces];
                         let faces = alpha.iter().zip(velocity.iter().zip(total));
                         for (i, (alpha, (v, total))) in faces.enumerate() {
-                            let (q, moment) = load(i, forced(*alpha) / total.max(1.0), *v);
+                            let weight = forced_fraction(*alpha, exponent) / total.max(1.0);
+                            let (q, moment) = load(i, weight, *v);
                             sum += q;
                             along += moment;
                         }
@@ -540,6 +575,26 @@ impl ImmersedBoundaries {
             }
         }
         loads
+    }
+}
+
+/// The exponent `e` of each grain's forcing `1 − (1 − α)^e` in a stage.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Exponents<'a> {
+    /// The same for every grain.
+    Uniform(f64),
+    /// One per local particle.
+    PerParticle(&'a [f64]),
+}
+
+impl Exponents<'_> {
+    /// The exponent of local particle `particle`.
+    #[inline]
+    pub(crate) fn of(&self, particle: usize) -> f64 {
+        match *self {
+            Exponents::Uniform(exponent) => exponent,
+            Exponents::PerParticle(each) => each[particle],
+        }
     }
 }
 

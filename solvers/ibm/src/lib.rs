@@ -5,6 +5,8 @@
 //! - [`solid_fraction`]: the smooth solid volume fraction `α` of eq. 8–10;
 //! - [`forcing`]: the direct forcing `f = α (U − V)/Δt` of eq. 7 on the
 //!   staggered faces and the loads it gives the particles (eq. 5–6);
+//! - [`layer_forcing`]: how fast the forcing relaxes a grain's transition
+//!   layer (eq. 7 at every stage, or at the flow's own renewal rate);
 //! - [`coupled`]: the coupled step — forcing at every Runge–Kutta stage,
 //!   the DEM sub-cycled within each stage with the hydrodynamic loads held
 //!   fixed, contacts and lubrication from the DEM;
@@ -21,6 +23,7 @@ pub mod coupled;
 mod face_sums;
 mod faces;
 pub mod forcing;
+pub mod layer_forcing;
 mod loads;
 mod overlaps;
 pub mod settling;
@@ -32,3 +35,4 @@ pub use coupled::{
     RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
 };
 pub use forcing::{Bodies, ImmersedBoundaries, Loads};
+pub use layer_forcing::LayerForcing;

@@ -7,7 +7,7 @@ use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid};
 use grainflow_ibm::settling::early_acceleration;
-use grainflow_ibm::{CoupledSystem, Coupling};
+use grainflow_ibm::{CoupledSystem, Coupling, LayerForcing};
 
 /// A sphere of diameter 1 and density `density_ratio` (fluid density 1,
 /// g = 1 downwards) at rest 2.5 D below the top of a free-slip box, the
@@ -109,7 +109,8 @@ fn initial_acceleration_matches_added_mass_and_depends_on_the_step() {
             800.0,
             Coupling::InnerFluidMomentum,
         );
-        system.immersed.forcing_step = forcing_step;
+        system.immersed.layer =
+            forcing_step.map_or(LayerForcing::EveryStage, |step| LayerForcing::Held { step });
         let mut samples = Vec::new();
         for _ in 0..(0.2 / dt).round() as usize {
             system.step(dt).unwrap();

@@ -181,7 +181,7 @@ fn the_stages_forcing_of_pressed_grains_equals_the_shared_forcing() {
             let momentum = immersed.inner_momentum(&grid, &fluid.velocity, &bodies);
             (bodies, momentum)
         };
-        let loads = immersed.apply(&grid, &mut fluid.velocity, &bodies, 0.1, 0.1);
+        let loads = immersed.apply(&grid, &mut fluid.velocity, &bodies, 0.1, 0.1, None);
         let n = dem.particles.n_owned;
         let vectors = |loads: &grainflow_ibm::Loads| {
             let mut all = loads.force[..n].to_vec();

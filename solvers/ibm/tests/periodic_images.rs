@@ -71,7 +71,7 @@ fn a_sphere_across_periodic_edges_acts_like_one_inside() {
         dem.sum_onto_owners(&mut volume, 1);
         let volume = volume[0];
         let loads = immersed
-            .apply(&grid, &mut flow.velocity, &bodies, 0.1, 0.1)
+            .apply(&grid, &mut flow.velocity, &bodies, 0.1, 0.1, None)
             .summed_on_owners(&dem);
         let (force, torque) = (loads.force[0], loads.torque[0]);
         let momentum: Vec<f64> = (0..3)

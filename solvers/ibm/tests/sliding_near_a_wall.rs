@@ -43,7 +43,7 @@ use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::{stage_fraction, Boundaries, BoundaryCondition, FlowSolver, Grid};
 use grainflow_ibm::forcing::WallLayer;
-use grainflow_ibm::{CoupledSystem, Coupling};
+use grainflow_ibm::{CoupledSystem, Coupling, LayerForcing};
 
 const DIAMETER: f64 = 0.01;
 const RADIUS: f64 = 0.5 * DIAMETER;
@@ -148,7 +148,9 @@ fn system(setup: Setup) -> CoupledSystem {
     dem.add_particles(&grains);
     let mut system =
         CoupledSystem::new(flow, dem, FLUID_DENSITY, Coupling::InnerFluidMomentum, 1.0);
-    system.immersed.forcing_step = Some(FORCING_NUMBER * h * h / KINEMATIC_VISCOSITY);
+    system.immersed.layer = LayerForcing::Held {
+        step: FORCING_NUMBER * h * h / KINEMATIC_VISCOSITY,
+    };
     if setup.free {
         system.immersed.free_wall_layers =
             WallLayer::along_walls(&system.flow.grid, &system.flow.boundaries, [0.0; 3], extent);

@@ -93,7 +93,7 @@ fn forced_once_at(at: Vec3, fixed: bool, free: bool) -> (Vec3, Vec<Vec<f64>>) {
     let unknowns: Vec<_> = (0..3).map(|c| *flow.velocity_unknowns(c)).collect();
     let bodies = immersed.bodies(&dem.particles, &grid, &unknowns);
     let volumes = immersed.grid_volumes(&grid, &bodies)[0];
-    immersed.apply(&grid, &mut flow.velocity, &bodies, 0.1, 0.1);
+    immersed.apply(&grid, &mut flow.velocity, &bodies, 0.1, 0.1, None);
     (volumes, flow.velocity)
 }
 

@@ -7,7 +7,7 @@
 //! f = Σ_p w_p (U_p − V) / h,      w_p = β_p / max(1, Σ_q β_q),
 //! ```
 //!
-//! `β = 1 − (1 − α)^{Δt/Δt_f}` (`α` itself without a forcing step), with
+//! `β = 1 − (1 − α)^e` (`α` itself under eq. 7; [`crate::layer_forcing`]), with
 //! the rigid velocity `U_p = (0, w_p)` of a grain that moves along the
 //! axis without spinning (a spin about the axis would be swirl). The
 //! grain receives `F_p = −Σ_faces w_p (U_p − V) dV / h` along z, `dV` the
@@ -18,17 +18,20 @@ use grainflow_core::Vec3;
 use grainflow_dem::Particles;
 use grainflow_fluid::axisymmetric::{AxisymmetricFlow, RzGrid};
 
-use super::bodies::{ring_width, AxialBodies, EndLayers};
+use super::bodies::{ring_width, AxialBodies, AxialBody, EndLayers};
 use crate::forcing::{forced_fraction, Loads};
+use crate::layer_forcing::{
+    renewal_exponent, slip_from_sums, slip_weight, LayerForcing, SLIP_SUMS,
+};
 use crate::solid_fraction::solid_fraction;
 
 /// The grains' action on an (r, z) flow.
 pub struct AxisymmetricImmersed {
     /// `Δ` of eq. 8.
     pub width: f64,
-    /// The step `Δt_f` at which the forcing relaxes the transition layer
-    /// as eq. 7 does; `None`: at every step (the paper's forcing).
-    pub forcing_step: Option<f64>,
+    /// How fast the forcing relaxes the transition layer; eq. 7 at every
+    /// stage unless set.
+    pub layer: LayerForcing,
     /// The layers along the wall ends that moving grains leave to the
     /// fluid; none: the paper's forcing, which reaches the walls.
     pub free_end_layers: EndLayers,
@@ -45,7 +48,7 @@ impl AxisymmetricImmersed {
         let zeros = || [grid.zeros(), grid.zeros()];
         AxisymmetricImmersed {
             width: ring_width(grid),
-            forcing_step: None,
+            layer: LayerForcing::EveryStage,
             free_end_layers,
             total: zeros(),
             target: zeros(),
@@ -104,11 +107,18 @@ impl AxisymmetricImmersed {
         stage_dt: f64,
         step_dt: f64,
     ) -> Loads {
-        let exponent = self
-            .forcing_step
-            .map_or(1.0, |reference| step_dt / reference);
+        let exponents: Vec<f64> = bodies
+            .list
+            .iter()
+            .map(|body| {
+                self.layer.uniform_exponent(step_dt).unwrap_or_else(|| {
+                    let slip = slip_from_sums(&layer_slip(flow, body));
+                    renewal_exponent(slip, flow.viscosity, flow.grid.dz, step_dt)
+                })
+            })
+            .collect();
         // 1. Σ β_p and Σ β_p U_p on the faces, in list order.
-        for body in &bodies.list {
+        for (body, &exponent) in bodies.list.iter().zip(&exponents) {
             for c in 0..2 {
                 let rigid = if c == 0 { 0.0 } else { body.velocity };
                 let faces = &body.faces[c];
@@ -122,7 +132,7 @@ impl AxisymmetricImmersed {
         // 2. The loads, from the velocity before the forcing.
         let mut loads = Loads::zeros(bodies.count);
         let scale = -1.0 / stage_dt;
-        for body in &bodies.list {
+        for (body, &exponent) in bodies.list.iter().zip(&exponents) {
             let faces = &body.faces[1];
             let total = &self.total[1];
             let force: f64 = (0..faces.index.len())
@@ -174,4 +184,26 @@ impl AxisymmetricImmersed {
         field.iter_mut().for_each(|alpha| *alpha = alpha.min(1.0));
         field
     }
+}
+
+/// The sums of the layer's slip of `body` in the predicted velocity of
+/// `flow` ([`crate::layer_forcing`]): the faces weighted by their ring
+/// volumes too, `u_r` against no radial motion, `u_z` against the grain's.
+fn layer_slip(flow: &AxisymmetricFlow, body: &AxialBody) -> [f64; SLIP_SUMS] {
+    let mut sums = [0.0; SLIP_SUMS];
+    for (c, component) in [0, 2].into_iter().enumerate() {
+        let (velocity, rigid) = if c == 0 {
+            (&flow.radial, 0.0)
+        } else {
+            (&flow.axial, body.velocity)
+        };
+        let faces = &body.faces[c];
+        for f in 0..faces.index.len() {
+            let weight = slip_weight(faces.alpha[f]) * faces.volume[f];
+            let slip = velocity[faces.index[f]] - rigid;
+            sums[component] += weight * slip * slip;
+            sums[3 + component] += weight;
+        }
+    }
+    sums
 }
