@@ -1,7 +1,7 @@
 //! The tables of a case that describe the grains, their contacts, the
 //! walls and the coupling with a fluid.
 
-use grainflow_ibm::LayerForcing;
+use grainflow_ibm::{Coupling, LayerForcing};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -236,8 +236,8 @@ pub struct CouplingSection {
     /// "inner_fluid_momentum" (default: the rate of change of the fluid
     /// momentum inside each grain enters its load; any density ratio) or
     /// "rigid_inner_fluid" (eq. 5–6 of the paper; unstable as ρ_p/ρ → 1).
-    #[serde(default = "default_formulation")]
-    pub formulation: String,
+    #[serde(default)]
+    pub formulation: FormulationName,
     /// Gap between surfaces, in fluid cells, at which grains start touching
     /// (each other or a wall); 0, the paper's choice, unless set.
     #[serde(default = "default_contact_gap")]
@@ -261,8 +261,28 @@ pub struct CouplingSection {
     /// eq. 19, which the flow does not resolve; glued grains still do) or
     /// "forced" (the paper's forcing, which reaches the walls and seals
     /// them under a grain at contact).
-    #[serde(default = "default_wall_layer")]
-    pub wall_layer: String,
+    #[serde(default)]
+    pub wall_layer: WallLayerName,
+}
+
+/// `coupling.formulation` as the case names it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FormulationName {
+    #[default]
+    InnerFluidMomentum,
+    RigidInnerFluid,
+}
+
+/// `coupling.wall_layer` as the case names it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WallLayerName {
+    /// The moving grains leave the first cells along a wall to the fluid.
+    #[default]
+    Free,
+    /// The paper's forcing, which reaches the walls.
+    Forced,
 }
 
 /// `coupling.layer_forcing` as the case names it.
@@ -275,6 +295,14 @@ pub enum LayerForcingName {
 }
 
 impl CouplingSection {
+    /// The load the section asks for.
+    pub fn coupling(&self) -> Coupling {
+        match self.formulation {
+            FormulationName::InnerFluidMomentum => Coupling::InnerFluidMomentum,
+            FormulationName::RigidInnerFluid => Coupling::RigidInnerFluid,
+        }
+    }
+
     /// The layer's forcing the section asks for: held at
     /// `coupling.forcing_step` where set (the case refuses it beside
     /// "renewal").
@@ -290,25 +318,17 @@ impl CouplingSection {
 impl Default for CouplingSection {
     fn default() -> Self {
         CouplingSection {
-            formulation: default_formulation(),
+            formulation: FormulationName::InnerFluidMomentum,
             contact_gap: default_contact_gap(),
             forcing_step: None,
             layer_forcing: LayerForcingName::EveryStage,
-            wall_layer: default_wall_layer(),
+            wall_layer: WallLayerName::Free,
         }
     }
 }
 
-fn default_wall_layer() -> String {
-    "free".into()
-}
-
 fn default_contact_gap() -> f64 {
     0.0
-}
-
-fn default_formulation() -> String {
-    "inner_fluid_momentum".into()
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]

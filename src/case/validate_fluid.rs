@@ -371,18 +371,6 @@ impl Case {
             ));
         }
         if let Some(c) = &self.coupling {
-            if !matches!(
-                c.formulation.as_str(),
-                "inner_fluid_momentum" | "rigid_inner_fluid"
-            ) {
-                return Err(invalid(
-                    "coupling.formulation",
-                    &c.formulation,
-                    "allowed: \"inner_fluid_momentum\" or \"rigid_inner_fluid\"",
-                ));
-            }
-        }
-        if let Some(c) = &self.coupling {
             if !(c.contact_gap >= 0.0 && c.contact_gap <= 3.0) {
                 return Err(invalid(
                     "coupling.contact_gap",
@@ -400,14 +388,6 @@ impl Case {
                          grain's own rate: set one of the two",
                     ));
                 }
-            }
-            if !matches!(c.wall_layer.as_str(), "free" | "forced") {
-                return Err(invalid(
-                    "coupling.wall_layer",
-                    &c.wall_layer,
-                    "allowed: \"free\" (the grains leave the first cells along a wall to the \
-                     fluid) or \"forced\" (the paper's forcing)",
-                ));
             }
         }
         if let Some(l) = &self.lubrication {

@@ -4,7 +4,7 @@
 //! cells, the faces along x and y its wall, those along z its ends — and
 //! the grains on its axis coupled to it.
 
-use crate::case::Case;
+use crate::case::{Case, WallLayerName};
 use crate::scene;
 use grainflow_core::Communicator;
 use grainflow_fluid::axisymmetric::{
@@ -12,7 +12,6 @@ use grainflow_fluid::axisymmetric::{
 };
 use grainflow_fluid::{clustered_faces, Clustering};
 use grainflow_ibm::axisymmetric::{AxisymmetricCoupledSystem, EndLayers};
-use grainflow_ibm::Coupling;
 
 /// The radial faces `0 = r_0 < … < r_n = R` of the case: uniform, or as
 /// `[fluid.stretching]` spaces them; the reason if they make no grid.
@@ -111,16 +110,17 @@ pub fn build(
     let contact_time = crate::simulation::dry::shortest_contact_time(&dem);
     let ratio = case.time.dt_over_contact_time.unwrap_or(0.02);
     let section = case.coupling.clone().unwrap_or_default();
-    let coupling = match section.formulation.as_str() {
-        "rigid_inner_fluid" => Coupling::RigidInnerFluid,
-        _ => Coupling::InnerFluidMomentum,
-    };
     let density = case.fluid_section().density;
-    let mut system =
-        AxisymmetricCoupledSystem::new(flow, dem, density, coupling, ratio * contact_time)
-            .map_err(|e| e.to_string())?;
+    let mut system = AxisymmetricCoupledSystem::new(
+        flow,
+        dem,
+        density,
+        section.coupling(),
+        ratio * contact_time,
+    )
+    .map_err(|e| e.to_string())?;
     system.immersed.layer = section.layer_forcing();
-    if section.wall_layer != "free" {
+    if section.wall_layer == WallLayerName::Forced {
         system.immersed.free_end_layers = EndLayers { ends: [false; 2] };
     }
     Ok((system, contact_time))

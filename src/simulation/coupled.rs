@@ -6,7 +6,7 @@
 use super::dry::shortest_contact_time;
 use super::fluid::cfl_overrun;
 use crate::analysis::sphere_in_fluid::SphereInFluid;
-use crate::case::{AnalysisSection, Case};
+use crate::case::{AnalysisSection, Case, WallLayerName};
 use crate::stability::TimeStepVerdict;
 use crate::{scene, scene::fluid as fluid_scene, sharing, stability, RunError};
 use grainflow_core::{Communicator, State, StateError};
@@ -49,15 +49,12 @@ pub fn build_on(case: &Case, communicator: Communicator) -> Result<(CoupledSyste
     let dem = scene::build_with(case, communicator, Some(ranks), reach)?;
     let contact_time = shortest_contact_time(&dem);
     let ratio = case.time.dt_over_contact_time.unwrap_or(0.02);
-    let coupling = match case.coupling.as_ref().map(|c| c.formulation.as_str()) {
-        Some("rigid_inner_fluid") => Coupling::RigidInnerFluid,
-        _ => Coupling::InnerFluidMomentum,
-    };
-    let density = case.fluid_section().density;
-    let mut system = CoupledSystem::new(flow, dem, density, coupling, ratio * contact_time);
     let coupling_section = case.coupling.clone().unwrap_or_default();
+    let density = case.fluid_section().density;
+    let coupling = coupling_section.coupling();
+    let mut system = CoupledSystem::new(flow, dem, density, coupling, ratio * contact_time);
     system.immersed.layer = coupling_section.layer_forcing();
-    if coupling_section.wall_layer == "free" {
+    if coupling_section.wall_layer == WallLayerName::Free {
         system.immersed.free_wall_layers = WallLayer::along_walls(
             &system.flow.grid,
             &system.flow.boundaries,
