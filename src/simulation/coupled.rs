@@ -12,9 +12,8 @@ use crate::{scene, scene::fluid as fluid_scene, sharing, stability, RunError};
 use grainflow_core::{Communicator, State, StateError};
 use grainflow_fluid::time_step_for_cfl_rates;
 use grainflow_ibm::forcing::WallLayer;
-use grainflow_ibm::LayerForcing;
 use grainflow_ibm::{
-    CoupledReport, CoupledSystem, Coupling, Timings, RIGID_INNER_FLUID_FAILS_BELOW,
+    CoupledReport, CoupledSystem, Coupling, LayerForcing, Timings, RIGID_INNER_FLUID_FAILS_BELOW,
     RIGID_INNER_FLUID_WARNS_BELOW,
 };
 use serde_json::{json, Map, Value};
