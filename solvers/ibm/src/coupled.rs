@@ -61,8 +61,8 @@ use grainflow_fluid::{stage_fraction, Block, FlowSolver, FluidError, StepReport,
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use crate::forcing::{vectors_on_owners, Bodies, ImmersedBoundaries, Loads};
-use crate::layer_forcing::{renewal_exponent, slip_from_sums, LayerForcing, SLIP_SUMS};
+use crate::forcing::{vectors_on_owners, Bodies, Exponents, ImmersedBoundaries, Loads};
+use crate::layer_forcing::{renewal_exponent, slip_from_sums, SLIP_SUMS};
 
 /// Density ratio `ρ_p/ρ` below which the rigid-inner-fluid load (eq. 5–6)
 /// blows up: in translation within a few time units at 1.6 and below, at
@@ -212,14 +212,13 @@ impl CoupledSystem {
             let clock = self.lap(clock, Part::Loads);
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);
-            let renewal = self.renewal_exponents(&bodies, dt);
+            let exponents = self.layer_exponents(&bodies, dt);
             let forcing = self.immersed.apply(
                 &self.flow.grid,
                 &mut self.flow.velocity,
                 &bodies,
                 stage_dt,
-                dt,
-                renewal.as_deref(),
+                &exponents,
             );
             let forcing = forcing.summed_on_owners(&self.dem);
             let clock = self.lap(clock, Part::Forcing);
@@ -268,14 +267,14 @@ impl CoupledSystem {
         })
     }
 
-    /// Each local particle's exponent `r Δt` under
-    /// [`LayerForcing::Renewal`], from its layer's slip in the predicted
-    /// flow summed over the ranks and copied onto its ghosts, so that every
-    /// copy of a grain forces with one rate; `None` under the other
-    /// forcings. Collective.
-    fn renewal_exponents(&self, bodies: &Bodies, dt: f64) -> Option<Vec<f64>> {
-        if self.immersed.layer != LayerForcing::Renewal {
-            return None;
+    /// The grains' exponents of the stage's forcing in a step of `dt`:
+    /// under [`crate::LayerForcing::Renewal`] each local particle's `r Δt`, from
+    /// its layer's slip in the predicted flow summed over the ranks and
+    /// copied onto its ghosts, so that every copy of a grain forces with
+    /// one rate (collective); under the others, one for all.
+    fn layer_exponents(&self, bodies: &Bodies, dt: f64) -> Exponents {
+        if let Some(exponent) = self.immersed.layer.uniform_exponent(dt) {
+            return Exponents::Uniform(exponent);
         }
         let mut sums = self.immersed.layer_slips(&self.flow.velocity, bodies);
         self.dem.sum_onto_owners(&mut sums, SLIP_SUMS);
@@ -285,7 +284,7 @@ impl CoupledSystem {
             .chunks_exact(SLIP_SUMS)
             .map(|own| renewal_exponent(slip_from_sums(own), self.flow.viscosity, spacing, dt))
             .collect();
-        Some(exponents)
+        Exponents::PerParticle(exponents)
     }
 
     /// Adds the time since `clock` to `part`; returns the time now.

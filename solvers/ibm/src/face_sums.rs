@@ -22,7 +22,7 @@ impl ImmersedBoundaries {
     /// threads, and a body's rows are read where they lie, one after the
     /// other (plane by plane, a body's rows of each plane were fetched
     /// apart, which took twice as long).
-    pub(crate) fn add_forcing_sums(&mut self, grid: &Grid, bodies: &Bodies, exponents: Exponents) {
+    pub(crate) fn add_forcing_sums(&mut self, grid: &Grid, bodies: &Bodies, exponents: &Exponents) {
         let dim = grid.dim();
         let slow = dim - 1;
         let plane = grid.stride(slow);

@@ -301,7 +301,7 @@ impl ImmersedBoundaries {
             })
             .collect();
         let per_body: Vec<(Vec3, Vec3)> = if self.layer == LayerForcing::EveryStage {
-            self.add_forcing_sums(grid, &bodies, Exponents::Uniform(1.0));
+            self.add_forcing_sums(grid, &bodies, &Exponents::Uniform(1.0));
             bodies.forcing_sums_made = true;
             self.forcing_sums_pending = true;
             let totals = &self.total_fraction;
@@ -349,32 +349,26 @@ impl ImmersedBoundaries {
         sums
     }
 
-    /// Applies the direct forcing of a stage of length `stage_dt` of a step
-    /// `step_dt` to the predicted velocity and returns the loads on each
-    /// local particle from this rank's faces, per unit fluid density
-    /// (eq. 5–7 without the density factors).
+    /// Applies the direct forcing of a stage of length `stage_dt` to the
+    /// predicted velocity and returns the loads on each local particle
+    /// from this rank's faces, per unit fluid density (eq. 5–7 without the
+    /// density factors).
     ///
     /// Each stage moves a face of solid fraction `α` by `β = 1 − (1 −
-    /// α)^e` of the way to the rigid velocity, `e` the grain's exponent
-    /// ([`crate::layer_forcing`]): 1 for eq. 7, `Δt/Δt_f` with the layer
-    /// held at `Δt_f`, and with [`LayerForcing::Renewal`] each local
-    /// particle's own from `renewal_exponents` (one per local particle).
+    /// α)^e` of the way to the rigid velocity, `e` the grain's exponent in
+    /// `exponents` ([`crate::layer_forcing`]): 1 for eq. 7, `Δt/Δt_f` with
+    /// the layer held at `Δt_f`, each grain's own under
+    /// [`LayerForcing::Renewal`].
     pub fn apply(
         &mut self,
         grid: &Grid,
         velocity: &mut [Vec<f64>],
         bodies: &Bodies,
         stage_dt: f64,
-        step_dt: f64,
-        renewal_exponents: Option<&[f64]>,
+        exponents: &Exponents,
     ) -> Loads {
         let dim = grid.dim();
         let volume = grid.cell_volume();
-        let exponents = match (self.layer.uniform_exponent(step_dt), renewal_exponents) {
-            (Some(exponent), _) => Exponents::Uniform(exponent),
-            (None, Some(each)) => Exponents::PerParticle(each),
-            (None, None) => panic!("the layer's renewal needs each grain's exponent"),
-        };
 
         // 1. Σ β_p and Σ β_p U_p on the faces, unless the bodies were
         // made with them (eq. 7: β = α, summed before the shares).
@@ -579,20 +573,20 @@ impl ImmersedBoundaries {
 }
 
 /// The exponent `e` of each grain's forcing `1 − (1 − α)^e` in a stage.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum Exponents<'a> {
-    /// The same for every grain.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Exponents {
+    /// The same for every grain (eq. 7: 1).
     Uniform(f64),
-    /// One per local particle.
-    PerParticle(&'a [f64]),
+    /// One per local particle, owned then ghosts.
+    PerParticle(Vec<f64>),
 }
 
-impl Exponents<'_> {
+impl Exponents {
     /// The exponent of local particle `particle`.
     #[inline]
     pub(crate) fn of(&self, particle: usize) -> f64 {
-        match *self {
-            Exponents::Uniform(exponent) => exponent,
+        match self {
+            Exponents::Uniform(exponent) => *exponent,
             Exponents::PerParticle(each) => each[particle],
         }
     }

@@ -7,7 +7,7 @@ use grainflow_core::{Communicator, Dimension, Domain, Vec3};
 use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::{Boundaries, FlowSolver, Grid, Location};
-use grainflow_ibm::forcing::ghost_reach;
+use grainflow_ibm::forcing::{ghost_reach, Exponents};
 use grainflow_ibm::solid_fraction::solid_fraction;
 use grainflow_ibm::ImmersedBoundaries;
 
@@ -181,7 +181,13 @@ fn the_stages_forcing_of_pressed_grains_equals_the_shared_forcing() {
             let momentum = immersed.inner_momentum(&grid, &fluid.velocity, &bodies);
             (bodies, momentum)
         };
-        let loads = immersed.apply(&grid, &mut fluid.velocity, &bodies, 0.1, 0.1, None);
+        let loads = immersed.apply(
+            &grid,
+            &mut fluid.velocity,
+            &bodies,
+            0.1,
+            &Exponents::Uniform(1.0),
+        );
         let n = dem.particles.n_owned;
         let vectors = |loads: &grainflow_ibm::Loads| {
             let mut all = loads.force[..n].to_vec();

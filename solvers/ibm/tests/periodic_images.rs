@@ -8,7 +8,7 @@ use grainflow_core::{Communicator, Dimension, Domain, Vec3};
 use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::{Boundaries, FlowSolver, Grid};
-use grainflow_ibm::forcing::ghost_reach;
+use grainflow_ibm::forcing::{ghost_reach, Exponents};
 use grainflow_ibm::ImmersedBoundaries;
 
 /// One sphere of radius 0.5 at `centre`, with its periodic images.
@@ -71,7 +71,13 @@ fn a_sphere_across_periodic_edges_acts_like_one_inside() {
         dem.sum_onto_owners(&mut volume, 1);
         let volume = volume[0];
         let loads = immersed
-            .apply(&grid, &mut flow.velocity, &bodies, 0.1, 0.1, None)
+            .apply(
+                &grid,
+                &mut flow.velocity,
+                &bodies,
+                0.1,
+                &Exponents::Uniform(1.0),
+            )
             .summed_on_owners(&dem);
         let (force, torque) = (loads.force[0], loads.torque[0]);
         let momentum: Vec<f64> = (0..3)

@@ -6,7 +6,7 @@ use grainflow_core::{Communicator, Dimension, Domain, Vec3};
 use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid};
-use grainflow_ibm::forcing::{ghost_reach, WallLayer};
+use grainflow_ibm::forcing::{ghost_reach, Exponents, WallLayer};
 use grainflow_ibm::solid_fraction::{solid_fraction, transition_width};
 use grainflow_ibm::ImmersedBoundaries;
 
@@ -93,7 +93,13 @@ fn forced_once_at(at: Vec3, fixed: bool, free: bool) -> (Vec3, Vec<Vec<f64>>) {
     let unknowns: Vec<_> = (0..3).map(|c| *flow.velocity_unknowns(c)).collect();
     let bodies = immersed.bodies(&dem.particles, &grid, &unknowns);
     let volumes = immersed.grid_volumes(&grid, &bodies)[0];
-    immersed.apply(&grid, &mut flow.velocity, &bodies, 0.1, 0.1, None);
+    immersed.apply(
+        &grid,
+        &mut flow.velocity,
+        &bodies,
+        0.1,
+        &Exponents::Uniform(1.0),
+    );
     (volumes, flow.velocity)
 }
 
