@@ -102,10 +102,10 @@ impl AxisymmetricModel {
         self.system.flow.time >= end * (1.0 - 1e-12)
     }
 
-    /// `time.dt`, or with `time.cfl` the step at which the flow (with a
-    /// sliding wall and the body force of a periodic pipe) and the grains
-    /// (speed over the smallest cell) reach that CFL number, at most
-    /// `time.dt`.
+    /// `time.dt`, or with `time.cfl` the step at which the flow (cell by
+    /// cell, with a sliding wall and the body force of a periodic pipe) or
+    /// the grain (speed over the smallest cell) reaches that CFL number, at
+    /// most `time.dt`: the larger rate, as in 3D (`coupled::step_size`).
     fn step_size(&self, case: &Case) -> f64 {
         let largest = case
             .time
@@ -116,7 +116,7 @@ impl AxisymmetricModel {
         };
         let flow = &self.system.flow;
         let h = flow.grid.smallest_width().min(flow.grid.dz);
-        let speed_rate = flow.max_cfl(1.0) + self.system.dem.max_speed() / h;
+        let speed_rate = flow.max_cfl(1.0).max(self.system.dem.max_speed() / h);
         let acceleration_rate = flow.body_force.abs() / flow.grid.dz;
         largest.min(time_step_for_cfl_rates(cfl, speed_rate, acceleration_rate))
     }

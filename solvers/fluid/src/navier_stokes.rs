@@ -64,9 +64,10 @@ pub fn stage_fraction(stage: usize) -> f64 {
     GAMMA[stage] + ZETA[stage]
 }
 
-/// Stability limit of the convective CFL number `Δt Σ_a max|u_a| / h_a`:
-/// central differences put the eigenvalues of convection on the imaginary
-/// axis, up to `i Σ_a |u_a| / h_a`, and the RK3 amplification factor
+/// Stability limit of the convective CFL number `Δt max_cells Σ_a |u_a| / h_a`
+/// ([`FlowSolver::max_cfl`]): central differences put the eigenvalues of
+/// convection on the imaginary axis, up to `i Σ_a |u_a| / h_a` where the
+/// velocity is `u` (frozen coefficients), and the RK3 amplification factor
 /// `|1 + z + z²/2 + z³/6|` exceeds 1 on the imaginary axis beyond `|z| = √3`.
 /// The viscous term is implicit and sets no limit.
 pub const CFL_LIMIT: f64 = 1.732_050_807_568_877_2;
@@ -96,7 +97,8 @@ pub enum ViscousScheme {
 pub struct StepReport {
     /// `½ ∫ |u|² dV` (m⁵/s² per unit density; m⁴/s² per unit depth in 2D).
     pub kinetic_energy: f64,
-    /// `Δt Σ_a max|u_a| / h_a`, an upper bound of the convective CFL number.
+    /// `Δt max_cells Σ_a |u_a| / h_a`, the convective CFL number cell by
+    /// cell ([`FlowSolver::max_cfl`]).
     pub max_cfl: f64,
     /// Largest `|D u|` (1/s) after any of the step's three projections.
     pub max_divergence: f64,

@@ -75,6 +75,67 @@ fn convection_is_stable_up_to_cfl_root_three() {
     assert!(above >= 1e6, "{above}");
 }
 
+/// An inviscid Taylor–Green vortex, `u = sin x cos y`, `v = −cos x sin y`
+/// on a doubly periodic `2π` square of 32², with a rough perturbation of
+/// 1e-6. `|u| + |v| ≤ 1` everywhere while `max|u| + max|v| = 2`: the fast
+/// flow along x and along y is in different places.
+fn perturbed_vortex() -> FlowSolver {
+    let side = std::f64::consts::TAU;
+    let grid = Grid::new(Dimension::Two, [32, 32, 1], [0.0; 3], [side, side, 1.0]);
+    let mut solver =
+        FlowSolver::new(grid, Boundaries::periodic(), 0.0, Communicator::serial()).unwrap();
+    solver.set_velocity(|c, [x, y, _]| {
+        let vortex = if c == 0 { x.sin() * y.cos() } else { -x.cos() * y.sin() };
+        vortex + 1e-6 * rough(c, [x, y, 0.0])
+    });
+    solver.remove_divergence();
+    solver
+}
+
+/// Kinetic energy of the vortex after `steps` steps at the pointwise CFL
+/// number `cfl`, over its initial energy.
+fn vortex_energy_growth(cfl: f64, steps: usize) -> f64 {
+    let mut solver = perturbed_vortex();
+    solver.cfl_limit = f64::INFINITY;
+    let dt = solver.time_step_for_cfl(cfl);
+    let before = solver.kinetic_energy();
+    for _ in 0..steps {
+        solver.step(dt).unwrap();
+    }
+    solver.kinetic_energy() / before
+}
+
+#[test]
+fn the_cfl_number_is_taken_cell_by_cell_and_holds_where_the_streams_are_apart() {
+    let solver = perturbed_vortex();
+    let h = std::f64::consts::TAU / 32.0;
+    // Cell by cell |u| + |v| ≤ 1; the larger of each cell's two faces
+    // adds at most the change over half a cell, sin(h/2) ≈ 0.1.
+    let rate = solver.max_cfl(1.0) * h;
+    println!("pointwise max (|u| + |v|) = {rate:.4}");
+    assert!((1.0..=1.0 + (0.5 * h).sin()).contains(&rate), "{rate}");
+    // Stable just below √3 in that number, where the sum of each
+    // component's largest speed would read about 2 √3, and broken above.
+    let largest = |c: usize| {
+        let mut largest: f64 = 0.0;
+        solver.grid.for_each(solver.velocity_unknowns(c), |index, _| {
+            largest = largest.max(solver.velocity[c][index].abs())
+        });
+        largest
+    };
+    let summed = (largest(0) + largest(1)) / h * solver.time_step_for_cfl(0.95 * CFL_LIMIT);
+    println!("at pointwise 0.95 √3 the summed number is {:.3} √3", summed / CFL_LIMIT);
+    assert!(summed > 1.7 * CFL_LIMIT, "{summed}");
+    let below = vortex_energy_growth(0.95 * CFL_LIMIT, 400);
+    let above = vortex_energy_growth(1.3 * CFL_LIMIT, 300);
+    println!("vortex energy: after 400 steps at CFL 0.95 √3 {below:.6}, after 300 at 1.3 √3 {above:.3e}");
+    // Central differences conserve energy; RK3 below its limit only
+    // removes some. Above it the perturbation grows until the run
+    // overflows (NaN counts as broken).
+    assert!(below <= 1.0, "{below}");
+    assert!(!(above < 10.0), "{above}");
+}
+
 #[test]
 fn a_step_beyond_the_limit_is_refused() {
     let mut solver = perturbed_stream();

@@ -347,30 +347,31 @@ impl AxisymmetricFlow {
         cfl / self.max_cfl(1.0)
     }
 
-    /// `Δt (max |u_r|/Δr + max |u_z|/h)`, each speed over its local
-    /// spacing: an upper bound of the convective CFL number.
+    /// The CFL number of a step of `dt` at the current velocity, cell by
+    /// cell: `Δt max_cells (|u_r|/w_i + |u_z|/h)`, each speed the larger of
+    /// the cell's two faces, as in 3D
+    /// ([`FlowSolver::max_cfl`](crate::FlowSolver::max_cfl)); a sliding
+    /// outer wall's speed over `h` if larger. NaN for a velocity that is
+    /// not finite, which the CFL check refuses.
     pub fn max_cfl(&self, dt: f64) -> f64 {
         let grid = &self.grid;
         let [nr, nz] = grid.cells;
-        let (mut radial, mut axial): (f64, f64) = (0.0, 0.0);
+        let larger = |a: f64, b: f64| 0.5 * (a.abs() + b.abs() + (a.abs() - b.abs()).abs());
+        let mut largest: f64 = 0.0;
         let mut finite = true;
-        for k in 0..nz + 2 {
-            for i in 1..nr {
-                let value = self.radial[grid.index(i, k)];
-                finite &= value.is_finite();
-                radial = radial.max(value.abs() / grid.gap(i));
-            }
+        for k in 1..=nz {
             for i in 1..=nr {
-                let value = self.axial[grid.index(i, k)];
-                finite &= value.is_finite();
-                axial = axial.max(value.abs());
+                let (index, below) = (grid.index(i, k), grid.index(i, k - 1));
+                let rate = larger(self.radial[index], self.radial[index - 1]) / grid.width(i)
+                    + larger(self.axial[index], self.axial[below]) / grid.dz;
+                finite &= rate.is_finite();
+                largest = largest.max(rate);
             }
         }
         if !finite {
-            // A NaN or infinite velocity is refused by the CFL check.
             return f64::NAN;
         }
-        dt * (radial + (axial + self.walls.outer_speed().abs()) / grid.dz)
+        dt * largest.max(self.walls.outer_speed().abs() / grid.dz)
     }
 }
 
