@@ -85,7 +85,11 @@ fn perturbed_vortex() -> FlowSolver {
     let mut solver =
         FlowSolver::new(grid, Boundaries::periodic(), 0.0, Communicator::serial()).unwrap();
     solver.set_velocity(|c, [x, y, _]| {
-        let vortex = if c == 0 { x.sin() * y.cos() } else { -x.cos() * y.sin() };
+        let vortex = if c == 0 {
+            x.sin() * y.cos()
+        } else {
+            -x.cos() * y.sin()
+        };
         vortex + 1e-6 * rough(c, [x, y, 0.0])
     });
     solver.remove_divergence();
@@ -118,17 +122,24 @@ fn the_cfl_number_is_taken_cell_by_cell_and_holds_where_the_streams_are_apart() 
     // component's largest speed would read about 2 √3, and broken above.
     let largest = |c: usize| {
         let mut largest: f64 = 0.0;
-        solver.grid.for_each(solver.velocity_unknowns(c), |index, _| {
-            largest = largest.max(solver.velocity[c][index].abs())
-        });
+        solver
+            .grid
+            .for_each(solver.velocity_unknowns(c), |index, _| {
+                largest = largest.max(solver.velocity[c][index].abs())
+            });
         largest
     };
     let summed = (largest(0) + largest(1)) / h * solver.time_step_for_cfl(0.95 * CFL_LIMIT);
-    println!("at pointwise 0.95 √3 the summed number is {:.3} √3", summed / CFL_LIMIT);
+    println!(
+        "at pointwise 0.95 √3 the summed number is {:.3} √3",
+        summed / CFL_LIMIT
+    );
     assert!(summed > 1.7 * CFL_LIMIT, "{summed}");
     let below = vortex_energy_growth(0.95 * CFL_LIMIT, 400);
     let above = vortex_energy_growth(1.3 * CFL_LIMIT, 300);
-    println!("vortex energy: after 400 steps at CFL 0.95 √3 {below:.6}, after 300 at 1.3 √3 {above:.3e}");
+    println!(
+        "vortex energy: after 400 steps at CFL 0.95 √3 {below:.6}, after 300 at 1.3 √3 {above:.3e}"
+    );
     // Central differences conserve energy; RK3 below its limit only
     // removes some. Above it the perturbation grows until the run
     // overflows (NaN counts as broken).
