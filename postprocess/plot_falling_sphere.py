@@ -66,8 +66,7 @@ by_resolution = {}
 for r in chart_runs:
     key = int(r["cells_per_diameter"])
     # One point per resolution: the run at the paper's CFL (dt scaled with
-    # dx); the last such row wins (at D/dx = 24 the step capped by time.cfl
-    # with the forcing step held at the paper's).
+    # dx); the last such row wins.
     if abs(float(r["dt_sqrt_g_over_d"]) * key / 20.0 - 0.04) < 1e-6:
         by_resolution[key] = r
 points = sorted(by_resolution.items())
