@@ -5,6 +5,7 @@
 trajectories stay in the work directory for postprocess/plot_ten_cate.py.
 
     scripts/ten_cate_runs.py --out docs/validation/ten_cate.csv [--cells-per-diameter 12]
+        [--set coupling.layer_forcing=renewal]
 """
 import argparse
 import csv
@@ -30,6 +31,8 @@ def main():
     parser.add_argument("--case", action="append", choices=sorted(CASES))
     parser.add_argument("--binary", default="target/release/grainflow")
     parser.add_argument("--workdir", default="/tmp/grainflow_ten_cate")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="a further setting for every run (grainflow run --set)")
     args = parser.parse_args()
     n = args.cells_per_diameter
     cells = [round(0.1 / D * n), round(0.1 / D * n), round(0.16 / D * n)]
@@ -48,6 +51,8 @@ def main():
                        "--set", f"fluid.viscosity={viscosity}",
                        "--set", f"fluid.cells=[{cells[0]},{cells[1]},{cells[2]}]",
                        "--set", f"time.end={end}"]
+            for setting in args.set:
+                command += ["--set", setting]
             subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
             summary = json.load(open(os.path.join(out, "summary.json")))
             m = summary["metrics"]

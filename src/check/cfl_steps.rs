@@ -1,9 +1,9 @@
 //! How many steps a run of grains in a fluid adapted to `time.cfl` makes,
 //! for `check`, which cannot run the flow to see. Each step is the one at
-//! which the flow's largest speeds along the axes and the fastest grain's,
-//! summed and over the cell size, reach the CFL number, at most `time.dt`
-//! (`simulation::coupled::step_size`). `check` takes the speed scales the
-//! scene is set up to reach:
+//! which the larger of the flow's CFL rate, `max_cells Σ_a |u_a|/w_a`, and
+//! the fastest grain's speed over the cell size reaches the CFL number, at
+//! most `time.dt` (`simulation::coupled::step_size`). `check` takes the
+//! speed scales the scene is set up to reach:
 //!
 //! - grains settling from rest towards their Schiller–Naumann terminal
 //!   velocity `U_t`, as `U_t tanh(a₀ t/U_t)` from the start of eq. 20,
@@ -15,14 +15,13 @@
 //!
 //! and counts `N = ∫ max(1/Δt_max, K U(t)/(C h)) dt` to the end time, `U`
 //! the larger of the two, `C` the CFL number, `h` the smallest cell. `K`,
-//! the sum of the flow's component maxima and the grain's speed over the
-//! grain's speed, is 2.8 in the ten Cate run (steps of 4.1 ms at 0.109 m/s
-//! on cells of 1.25 mm at CFL 1). The counts against the steps the cases
-//! made: ten Cate 437 (296: the sphere stops on the floor), the 3D bouncing
-//! sphere 885 (595) and its (r, z) twin 1,440 (743: both bounce before
-//! their terminal velocity), the immersed avalanche 18,119 (11,041: the
-//! erodible bed's grains move slower than the film above them). Each is
-//! an upper bound within a factor 2.
+//! the flow's CFL rate over the settling grain's `U/h`, is 1.28 in the
+//! ten Cate run E4 at its plateau (steps of 8.6 ms at 0.114 m/s on cells of
+//! 1.25 mm at CFL 1; 1.22 for the falling sphere at D/Δx = 24): the fastest
+//! flow, beside the grain, is a little faster than the grain. The counts
+//! against the steps the cases made: ten Cate 201 (149: the sphere stops on
+//! the floor, and the step grows to its largest). Each is an upper bound
+//! within a factor 2.
 
 use grainflow_fluid::BoundaryCondition;
 use grainflow_ibm::settling::{
@@ -31,9 +30,9 @@ use grainflow_ibm::settling::{
 use grainflow_ibm::{particle_volume, CoupledSystem};
 use std::f64::consts::PI;
 
-/// The sum of the flow's largest component speeds and the fastest grain's
-/// speed over the speed scale (measured on the ten Cate run).
-pub const SPEED_SUM_OVER_SCALE: f64 = 2.8;
+/// The flow's CFL rate, `max_cells Σ_a |u_a|/w_a`, over the settling
+/// grain's speed over the cell size (measured on the ten Cate run).
+pub const FLOW_RATE_OVER_GRAIN_RATE: f64 = 1.28;
 
 /// Plane-averaged solid fraction above which a grain layer counts as the
 /// bed the driven flow runs over.
@@ -147,7 +146,7 @@ impl SpeedScales {
                 let t = (i as f64 + 0.5) * width;
                 let driven = self.driven.map_or(0.0, |d| d.fastest_speed(t));
                 let speed = self.settling.speed(t).max(driven);
-                (1.0 / largest).max(SPEED_SUM_OVER_SCALE * speed / (cfl * cell)) * width
+                (1.0 / largest).max(FLOW_RATE_OVER_GRAIN_RATE * speed / (cfl * cell)) * width
             })
             .sum::<f64>()
             .ceil()
@@ -343,7 +342,8 @@ mod tests {
         };
         let (end, cfl, cell): (f64, f64, f64) = (2.0, 0.5, 1e-3);
         let ramp: f64 = 0.1 / 0.5;
-        let exact = SPEED_SUM_OVER_SCALE * 0.1 / (cfl * cell) * ramp * (end / ramp).cosh().ln();
+        let exact =
+            FLOW_RATE_OVER_GRAIN_RATE * 0.1 / (cfl * cell) * ramp * (end / ramp).cosh().ln();
         let steps = scales.steps(end, 0.1, cfl, cell);
         assert!(
             (steps - exact).abs() <= 1.0 + 1e-6 * exact,

@@ -157,10 +157,10 @@ pub(crate) fn scales_line(scales: &SpeedScales, cfl: f64, steps: f64) -> String 
     };
     format!(
         "  time.cfl = {cfl}: about {steps:.0} steps, counted at the speeds the scene is set to \
-         reach (grains settling at {:.4e} m/s{driven}; the flow's and the grains' speeds summed \
-         at {} times the larger, as measured on the ten Cate run)",
+         reach (grains settling at {:.4e} m/s{driven}; the flow's CFL rate taken as {} \
+         times the larger speed over the cell, as measured on the ten Cate run)",
         scales.settling.terminal,
-        cfl_steps::SPEED_SUM_OVER_SCALE
+        cfl_steps::FLOW_RATE_OVER_GRAIN_RATE
     )
 }
 
