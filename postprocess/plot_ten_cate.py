@@ -4,7 +4,7 @@ velocity against time (TRACKS: case, t, z, vz, from the runs of
 scripts/ten_cate_runs.py) beside the measured curves (digitized,
 ../shared/reference/tencate2002; read there, not copied).
 
-usage: postprocess/plot_ten_cate.py [TRACKS] [PNG] [REFERENCE_DIR]
+usage: postprocess/plot_ten_cate.py [TRACKS] [PNG] [REFERENCE_DIR] [TITLE]
 """
 import csv
 import os
@@ -19,6 +19,7 @@ root = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "docs/validation/ten_cate_tracks.csv")
 target = sys.argv[2] if len(sys.argv) > 2 else os.path.join(root, "docs/validation/ten_cate.png")
 reference = sys.argv[3] if len(sys.argv) > 3 else os.path.join(root, "../shared/reference/tencate2002")
+title = sys.argv[4] if len(sys.argv) > 4 else "ten Cate et al. (2002), D/Δx = 12"
 names = {"E1": "Re1_5", "E2": "Re4_1", "E3": "Re11_6", "E4": "Re32_2"}
 D = 0.015
 
@@ -53,7 +54,7 @@ gap.set_ylabel("gap above the floor / D")
 gap.legend(fontsize=7, ncol=2)
 velocity.set_xlabel("t [s]")
 velocity.set_ylabel("vertical velocity [m/s]")
-velocity.set_title("ten Cate et al. (2002), D/Δx = 12")
+velocity.set_title(title)
 fig.tight_layout()
 fig.savefig(target, dpi=120)
 print(f"wrote {target}")
