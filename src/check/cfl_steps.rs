@@ -20,8 +20,9 @@
 //! 1.25 mm at CFL 1; 1.22 for the falling sphere at D/Δx = 24): the fastest
 //! flow, beside the grain, is a little faster than the grain. The counts
 //! against the steps the cases made: ten Cate 201 (149: the sphere stops on
-//! the floor, and the step grows to its largest). Each is an upper bound
-//! within a factor 2.
+//! the floor, and the step grows to its largest), the immersed avalanche
+//! 8,376 (7,511: the bed's grains move slower than the film above them).
+//! Each is an upper bound within a factor 2.
 
 use grainflow_fluid::BoundaryCondition;
 use grainflow_ibm::settling::{
