@@ -152,8 +152,9 @@ pub fn forcing_step_warning(cfl: f64) -> Option<String> {
             "warning: the grains' CFL number (speed Δt/Δx) is {cfl:.2}: the direct forcing \
              drags the transition layer along at every stage, so the shorter the step the \
              larger the grain looks (about 8 % slower settling from CFL 1 to 0.5 at D/Δx = 8); \
-             the forcing is calibrated near CFL 1 (a larger time.dt, time.cfl ≈ 1, or \
-             coupling.forcing_step = Δx/U)"
+             the forcing is calibrated near CFL 1 (a larger time.dt, time.cfl ≈ 1, \
+             coupling.forcing_step = Δx/U, or coupling.layer_forcing = \"renewal\", whose \
+             grain does not depend on the step)"
         )
     })
 }
