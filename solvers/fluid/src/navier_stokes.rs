@@ -47,6 +47,7 @@ use crate::poisson::{DirectSolver, TransformBackend};
 
 mod measures;
 mod step_limits;
+pub(crate) use step_limits::larger_magnitude;
 
 pub use step_limits::time_step_for_cfl_rates;
 

@@ -12,7 +12,7 @@
 //! `∇²u_r − u_r/r²` for `u_r`. Every solve is direct ([`super::solver`]).
 
 use crate::error::FluidError;
-use crate::navier_stokes::{stage_fraction, StepReport, CFL_LIMIT, STAGES};
+use crate::navier_stokes::{larger_magnitude, stage_fraction, StepReport, CFL_LIMIT, STAGES};
 use crate::transform::AxisTransform;
 
 use super::grid::RzGrid;
@@ -356,14 +356,14 @@ impl AxisymmetricFlow {
     pub fn max_cfl(&self, dt: f64) -> f64 {
         let grid = &self.grid;
         let [nr, nz] = grid.cells;
-        let larger = |a: f64, b: f64| 0.5 * (a.abs() + b.abs() + (a.abs() - b.abs()).abs());
         let mut largest: f64 = 0.0;
         let mut finite = true;
         for k in 1..=nz {
             for i in 1..=nr {
                 let (index, below) = (grid.index(i, k), grid.index(i, k - 1));
-                let rate = larger(self.radial[index], self.radial[index - 1]) / grid.width(i)
-                    + larger(self.axial[index], self.axial[below]) / grid.dz;
+                let rate = larger_magnitude(self.radial[index], self.radial[index - 1])
+                    / grid.width(i)
+                    + larger_magnitude(self.axial[index], self.axial[below]) / grid.dz;
                 finite &= rate.is_finite();
                 largest = largest.max(rate);
             }

@@ -107,16 +107,15 @@ impl FlowSolver {
         let dim = grid.dim();
         let (line, strides) = (grid.line_axis(), [0, 1, 2].map(|a| grid.stride(a)));
         let inverse_widths = [0, 1, 2].map(|a| 1.0 / grid.spacing[a]);
+        let stretched = [0, 1, 2].map(|a| a == line && !grid.is_uniform(a));
         let velocity = &self.velocity;
         let largest = grid.par_max(&grid.cell_block(), |index, plane| {
             let mut rate = 0.0;
             for axis in 0..dim {
                 let field = &velocity[axis];
-                let (upper, lower) = (field[index].abs(), field[index - strides[axis]].abs());
-                // The larger of the two, written so that a NaN is kept.
-                let speed = 0.5 * (upper + lower + (upper - lower).abs());
+                let speed = larger_magnitude(field[index], field[index - strides[axis]]);
                 rate += speed
-                    * if axis == line && !grid.is_uniform(axis) {
+                    * if stretched[axis] {
                         1.0 / grid.width(axis, plane)
                     } else {
                         inverse_widths[axis]
@@ -139,4 +138,12 @@ impl FlowSolver {
 /// gives `cfl / b` exactly; infinite when both rates vanish.
 pub fn time_step_for_cfl_rates(cfl: f64, speed_rate: f64, acceleration_rate: f64) -> f64 {
     2.0 * cfl / (speed_rate + (speed_rate * speed_rate + 4.0 * acceleration_rate * cfl).sqrt())
+}
+
+/// The larger of `|a|` and `|b|`, written so that a NaN in either is kept
+/// (`f64::max` would pass over it): the speed of a cell from its two faces.
+#[inline]
+pub(crate) fn larger_magnitude(a: f64, b: f64) -> f64 {
+    let (a, b) = (a.abs(), b.abs());
+    0.5 * (a + b + (a - b).abs())
 }
