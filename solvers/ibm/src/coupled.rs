@@ -7,7 +7,11 @@
 //! 1. the flow's prediction (convection, viscous term);
 //! 2. the direct forcing towards the particles' rigid velocities, which
 //!    gives each particle its hydrodynamic load (eq. 5–7);
-//! 3. the projection;
+//! 3. the projection; where a grain's forcing exponent exceeds one (a
+//!    layer relaxed faster than eq. 7 does at this step,
+//!    [`crate::layer_forcing`]), 2 and 3 run in as many passes as it takes
+//!    to keep every pass's exponent at most one
+//!    ([`crate::forcing::Exponents::passes`]);
 //! 4. the fluid momentum inside each particle, `I = ∫ α_p u dV`, on the
 //!    faces of the particle where it stands;
 //! 5. the DEM over `h` in sub-steps no longer than `dem_dt`, with the
@@ -213,13 +217,29 @@ impl CoupledSystem {
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);
             let exponents = self.layer_exponents(&bodies, dt);
-            let forcing = self.immersed.apply(
+            let passes = exponents.passes(&self.dem.communicator);
+            let exponents = exponents.per_pass(passes);
+            let mut forcing = self.immersed.apply(
                 &self.flow.grid,
                 &mut self.flow.velocity,
                 &bodies,
                 stage_dt,
                 &exponents,
             );
+            let mut clock = clock;
+            for _ in 1..passes {
+                clock = self.lap(clock, Part::Forcing);
+                max_divergence = max_divergence.max(self.flow.project(stage, dt));
+                clock = self.lap(clock, Part::Flow);
+                let pass = self.immersed.apply(
+                    &self.flow.grid,
+                    &mut self.flow.velocity,
+                    &bodies,
+                    stage_dt,
+                    &exponents,
+                );
+                forcing.add(&pass);
+            }
             let forcing = forcing.summed_on_owners(&self.dem);
             let clock = self.lap(clock, Part::Forcing);
             max_divergence = max_divergence.max(self.flow.project(stage, dt));

@@ -45,7 +45,7 @@
 //! ghosts' shares are added to their owners by the DEM
 //! (`DemSystem::sum_onto_owners`).
 
-use grainflow_core::{Dimension, Vec3};
+use grainflow_core::{Communicator, Dimension, Vec3};
 use grainflow_dem::Particles;
 use grainflow_fluid::{Block, Grid, Location};
 use rayon::prelude::*;
@@ -582,6 +582,43 @@ pub enum Exponents {
 }
 
 impl Exponents {
+    /// The number of passes of forcing and projection a stage takes so
+    /// that no pass forces a grain with an exponent above one: the
+    /// largest exponent of `self` on every rank, rounded up (collective).
+    ///
+    /// Each pass moves a face at most its own fraction of the way to the
+    /// rigid velocity, as eq. 7 does, and the projection follows it.
+    /// Forced at once with an exponent `e > 1`, a face deep in a grain's
+    /// layer keeps only `(1 − α)^e` of the prediction and its pressure
+    /// gradient; where two touching grains move differently their rigid
+    /// velocities do not add up to a flow without divergence, and the
+    /// pressure the projection needs there grows as `(1 − α)^{−e}`, in the
+    /// lens where their fractions add up to one or more without bound
+    /// (`tests/overlapping_grains.rs`; the immersed avalanche's bed under
+    /// the renewal forcing went unstable). Passes of `e/n` compose to the
+    /// same relaxation of a grain's layer, `1 − (1 − α)^e`.
+    pub fn passes(&self, communicator: &Communicator) -> usize {
+        let largest = match self {
+            Exponents::Uniform(exponent) => *exponent,
+            Exponents::PerParticle(each) => {
+                communicator.max(each.iter().copied().fold(0.0, f64::max))
+            }
+        };
+        (largest.ceil() as usize).max(1)
+    }
+
+    /// Each exponent divided by `passes`.
+    pub fn per_pass(self, passes: usize) -> Exponents {
+        let n = passes as f64;
+        match self {
+            _ if passes == 1 => self,
+            Exponents::Uniform(exponent) => Exponents::Uniform(exponent / n),
+            Exponents::PerParticle(each) => {
+                Exponents::PerParticle(each.into_iter().map(|e| e / n).collect())
+            }
+        }
+    }
+
     /// The exponent of local particle `particle`.
     #[inline]
     pub(crate) fn of(&self, particle: usize) -> f64 {

@@ -17,7 +17,11 @@
 //!
 //! (the same `β` at each of the three stages, as eq. 7 is), which relaxes
 //! the layer at `−3 r ln(1 − α)` whatever the step; where `α = 1`, `β = 1`
-//! and the inside of the grain moves rigidly at every stage.
+//! and the inside of the grain moves rigidly at every stage. Where
+//! `r Δt > 1` a stage forces in `n = ⌈r Δt⌉` passes of `r Δt/n`, each
+//! followed by the projection: they compose to the same `β`, and the
+//! pressure between touching grains stays bounded, as under eq. 7
+//! ([`crate::forcing::Exponents::passes`]).
 //!
 //! [`LayerForcing::Renewal`] takes `r` as the rate at which the flow
 //! itself renews the layer, by advection across a cell and diffusion

@@ -20,6 +20,16 @@ impl Loads {
         }
     }
 
+    /// Adds `other`, particle by particle.
+    pub(crate) fn add(&mut self, other: &Loads) {
+        for (sum, value) in self.force.iter_mut().zip(&other.force) {
+            *sum += value;
+        }
+        for (sum, value) in self.torque.iter_mut().zip(&other.torque) {
+            *sum += value;
+        }
+    }
+
     /// The loads on `dem`'s owned particles from loads on every local one:
     /// each ghost's share goes to its owner (on this rank for a periodic
     /// image, on another for another rank's grain; collective).
