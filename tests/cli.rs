@@ -386,6 +386,17 @@ fn check_warns_of_a_short_forcing_step_unless_it_is_held() {
         renewal.contains("relaxed at the rate the flow renews it"),
         "{renewal}"
     );
+    // At this step the viscous renewal (ν Δt/(0.8 Δx²) = 0.019) needs one
+    // pass of forcing a stage; at 5e-2 s (1.92) two where grains touch,
+    // and `check` says so.
+    assert!(!renewal.contains("passes"), "{renewal}");
+    let long = check(&["coupling.layer_forcing=\"renewal\"", "time.dt=5.0e-2"]);
+    assert!(
+        long.contains(
+            "r dt = 1.92: where the supports of grains meet, a stage forces in at least 2 passes"
+        ),
+        "{long}"
+    );
     // A held step and the renewal rate are two answers to one question.
     let both = grainflow()
         .args(["check", &case("falling_sphere.toml"), "--set"])

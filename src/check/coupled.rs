@@ -90,6 +90,24 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
     let _ = writeln!(out, "particles: {n}");
     let moving: Vec<usize> = (0..n).filter(|&k| !p.is_fixed(k)).collect();
     let dt = case.time.dt.expect("validated");
+    if system.immersed.layer == LayerForcing::Renewal {
+        // The viscous part of r Δt alone (the slip adds to it).
+        let viscous = grainflow_ibm::layer_forcing::renewal_exponent(
+            0.0,
+            system.flow.viscosity,
+            grid.spacing[0],
+            dt,
+        );
+        if viscous > 1.0 {
+            let _ = writeln!(
+                out,
+                "  at dt = {dt:e} s the layer's viscous renewal alone gives r dt = {viscous:.2}: \
+                 where the supports of grains meet, a stage forces in at least {} passes, each \
+                 followed by a projection (a shorter step takes fewer)",
+                viscous.ceil()
+            );
+        }
+    }
     if let Some(&k) = moving
         .iter()
         .min_by(|&&a, &&b| p.mass[a].total_cmp(&p.mass[b]))

@@ -217,7 +217,7 @@ impl CoupledSystem {
             self.flow.predict(stage, dt);
             let clock = self.lap(clock, Part::Flow);
             let exponents = self.layer_exponents(&bodies, dt);
-            let passes = exponents.passes(&self.dem.communicator);
+            let passes = exponents.passes(&bodies, &self.dem.communicator);
             let exponents = exponents.per_pass(passes);
             let mut forcing = self.immersed.apply(
                 &self.flow.grid,

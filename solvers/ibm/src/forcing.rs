@@ -191,6 +191,8 @@ pub struct Bodies {
     /// already (`bodies_with_inner_momentum`), from the fractions before
     /// their shares.
     forcing_sums_made: bool,
+    /// Whether each body's support meets another's ([`pressed_bodies`]).
+    pub(crate) pressed: Vec<bool>,
 }
 
 /// The immersed spheres' action on the flow of one subdomain.
@@ -300,6 +302,8 @@ impl ImmersedBoundaries {
                 (!pressed).then(|| body.inner_momentum(velocity, volume))
             })
             .collect();
+        bodies.pressed = pressed;
+        let pressed = &bodies.pressed;
         let per_body: Vec<(Vec3, Vec3)> = if self.layer == LayerForcing::EveryStage {
             self.add_forcing_sums(grid, &bodies, &Exponents::Uniform(1.0));
             bodies.forcing_sums_made = true;
@@ -314,6 +318,7 @@ impl ImmersedBoundaries {
                 })
                 .collect()
         } else {
+            let pressed = pressed.clone();
             self.share_overlaps(grid, &mut bodies, &pressed);
             bodies
                 .list
@@ -488,6 +493,7 @@ impl ImmersedBoundaries {
             .for_each(|body| body.faces = self.body_faces(particles, grid, unknowns, body));
         let pressed = pressed_bodies(&bodies, self.width);
         self.share_overlaps(grid, &mut bodies, &pressed);
+        bodies.pressed = pressed;
         bodies
     }
 
@@ -550,6 +556,7 @@ impl ImmersedBoundaries {
             count: particles.len(),
             list,
             forcing_sums_made: false,
+            pressed: Vec::new(),
         }
     }
 
@@ -582,29 +589,32 @@ pub enum Exponents {
 }
 
 impl Exponents {
-    /// The number of passes of forcing and projection a stage takes so
-    /// that no pass forces a grain with an exponent above one: the
-    /// largest exponent of `self` on every rank, rounded up (collective).
+    /// The number of passes of forcing and projection a stage of `bodies`
+    /// takes so that no grain whose support meets another's is forced
+    /// with an exponent above one in a pass: the largest exponent of those
+    /// grains on every rank, rounded up (collective).
     ///
-    /// Each pass moves a face at most its own fraction of the way to the
-    /// rigid velocity, as eq. 7 does, and the projection follows it.
-    /// Forced at once with an exponent `e > 1`, a face deep in a grain's
-    /// layer keeps only `(1 − α)^e` of the prediction and its pressure
-    /// gradient; where two touching grains move differently their rigid
-    /// velocities do not add up to a flow without divergence, and the
-    /// pressure the projection needs there grows as `(1 − α)^{−e}`, in the
-    /// lens where their fractions add up to one or more without bound
+    /// Each pass moves a face of two grains at most its fraction of the
+    /// way to the rigid velocities, as eq. 7 does, and the projection
+    /// follows it. Forced at once with an exponent `e > 1`, a face deep in
+    /// the lens between two grains keeps only `(1 − α)^e` of the prediction
+    /// and its pressure gradient; where the two move differently their
+    /// rigid velocities do not add up to a flow without divergence, and
+    /// the pressure the projection needs there grows as `(1 − α)^{−e}`, in
+    /// the lens where their fractions add up to one or more without bound
     /// (`tests/overlapping_grains.rs`; the immersed avalanche's bed under
-    /// the renewal forcing went unstable). Passes of `e/n` compose to the
-    /// same relaxation of a grain's layer, `1 − (1 − α)^e`.
-    pub fn passes(&self, communicator: &Communicator) -> usize {
-        let largest = match self {
-            Exponents::Uniform(exponent) => *exponent,
-            Exponents::PerParticle(each) => {
-                communicator.max(each.iter().copied().fold(0.0, f64::max))
-            }
-        };
-        (largest.ceil() as usize).max(1)
+    /// the renewal forcing went unstable). A grain alone has no such lens
+    /// and is forced in one pass at any exponent. Passes of `e/n` compose
+    /// to the same relaxation of a grain's layer, `1 − (1 − α)^e`.
+    pub fn passes(&self, bodies: &Bodies, communicator: &Communicator) -> usize {
+        let largest = bodies
+            .list
+            .iter()
+            .zip(&bodies.pressed)
+            .filter(|(_, &pressed)| pressed)
+            .map(|(body, _)| self.of(body.particle))
+            .fold(0.0, f64::max);
+        (communicator.max(largest).ceil() as usize).max(1)
     }
 
     /// Each exponent divided by `passes`.
