@@ -219,10 +219,17 @@ impl CoupledSystem {
             let exponents = self.layer_exponents(&bodies, dt);
             let passes = exponents.passes(&bodies, &self.dem.communicator);
             let exponents = exponents.per_pass(passes);
+            // Every pass forces with the same fractions 1 − (1 − α)^e:
+            // made once, then forced as eq. 7 forces its fractions.
+            let raised = (exponents != Exponents::Uniform(1.0)).then(|| bodies.raised(&exponents));
+            let (forced, exponents) = match &raised {
+                Some(raised) => (raised, Exponents::Uniform(1.0)),
+                None => (&bodies, exponents),
+            };
             let mut forcing = self.immersed.apply(
                 &self.flow.grid,
                 &mut self.flow.velocity,
-                &bodies,
+                forced,
                 stage_dt,
                 &exponents,
             );
@@ -234,7 +241,7 @@ impl CoupledSystem {
                 let pass = self.immersed.apply(
                     &self.flow.grid,
                     &mut self.flow.velocity,
-                    &bodies,
+                    forced,
                     stage_dt,
                     &exponents,
                 );

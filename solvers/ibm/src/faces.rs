@@ -255,6 +255,16 @@ impl FaceRows {
         self.rows_from(0..self.rows.len(), 0)
     }
 
+    /// The same faces with each fraction `α` replaced by `f(α)`.
+    pub fn mapped(&self, f: impl Fn(f64) -> f64) -> FaceRows {
+        let alpha: Vec<f64> = self.alpha.iter().map(|&a| f(a)).collect();
+        FaceRows {
+            sum: alpha.iter().sum(),
+            alpha,
+            ..self.clone()
+        }
+    }
+
     /// The rows of the planes `planes` (padded indices along the slowest
     /// active axis of a `dim`-dimensional grid).
     pub fn rows_in(&self, dim: usize, planes: Range<usize>) -> impl Iterator<Item = Row<'_>> {

@@ -85,6 +85,18 @@ pub(crate) struct Body {
 }
 
 impl Body {
+    /// The body without its faces.
+    fn clone_without_faces(&self) -> Body {
+        Body {
+            particle: self.particle,
+            centre: self.centre,
+            velocity: self.velocity,
+            angular_velocity: self.angular_velocity,
+            radius: self.radius,
+            faces: Vec::new(),
+        }
+    }
+
     /// Rigid velocity `u_p + ω_p × r` at offset `r` from the centre.
     #[inline]
     fn velocity_at(&self, offset: &Vec3) -> Vec3 {
@@ -183,6 +195,7 @@ impl Body {
 /// particle (owned or ghost) whose support reaches its cells. Built once
 /// per stage ([`ImmersedBoundaries::bodies`]), while the particles stand
 /// still.
+#[derive(Clone)]
 pub struct Bodies {
     /// Local particles (the loads have one entry each).
     count: usize,
@@ -586,6 +599,37 @@ pub enum Exponents {
     Uniform(f64),
     /// One per local particle, owned then ghosts.
     PerParticle(Vec<f64>),
+}
+
+impl Bodies {
+    /// The bodies with each fraction `α` replaced by `β = 1 − (1 −
+    /// α)^e`, `e` the body's exponent in `exponents`: forced with eq. 7's
+    /// weights (exponent one), they are forced as `exponents` forces the
+    /// bodies themselves, with the exponential made once for every pass of
+    /// a stage rather than twice in each.
+    pub fn raised(&self, exponents: &Exponents) -> Bodies {
+        let list = self
+            .list
+            .par_iter()
+            .map(|body| {
+                let exponent = exponents.of(body.particle);
+                Body {
+                    faces: body
+                        .faces
+                        .iter()
+                        .map(|faces| faces.mapped(|alpha| forced_fraction(alpha, exponent)))
+                        .collect(),
+                    ..body.clone_without_faces()
+                }
+            })
+            .collect();
+        Bodies {
+            count: self.count,
+            list,
+            forcing_sums_made: false,
+            pressed: self.pressed.clone(),
+        }
+    }
 }
 
 impl Exponents {
