@@ -259,9 +259,17 @@ impl FaceRows {
     pub fn mapped(&self, f: impl Fn(f64) -> f64) -> FaceRows {
         let alpha: Vec<f64> = self.alpha.iter().map(|&a| f(a)).collect();
         FaceRows {
+            stencil: self.stencil,
+            origin: self.origin,
+            strides: self.strides,
+            lines: self.lines.clone(),
+            lines_y: self.lines_y,
+            lines_z: self.lines_z,
+            plane_starts: self.plane_starts.clone(),
+            rows: self.rows.clone(),
             sum: alpha.iter().sum(),
             alpha,
-            ..self.clone()
+            step: self.step,
         }
     }
 

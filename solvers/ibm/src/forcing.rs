@@ -195,7 +195,6 @@ impl Body {
 /// particle (owned or ghost) whose support reaches its cells. Built once
 /// per stage ([`ImmersedBoundaries::bodies`]), while the particles stand
 /// still.
-#[derive(Clone)]
 pub struct Bodies {
     /// Local particles (the loads have one entry each).
     count: usize,
@@ -315,8 +314,6 @@ impl ImmersedBoundaries {
                 (!pressed).then(|| body.inner_momentum(velocity, volume))
             })
             .collect();
-        bodies.pressed = pressed;
-        let pressed = &bodies.pressed;
         let per_body: Vec<(Vec3, Vec3)> = if self.layer == LayerForcing::EveryStage {
             self.add_forcing_sums(grid, &bodies, &Exponents::Uniform(1.0));
             bodies.forcing_sums_made = true;
@@ -331,7 +328,6 @@ impl ImmersedBoundaries {
                 })
                 .collect()
         } else {
-            let pressed = pressed.clone();
             self.share_overlaps(grid, &mut bodies, &pressed);
             bodies
                 .list
@@ -342,6 +338,7 @@ impl ImmersedBoundaries {
                 })
                 .collect()
         };
+        bodies.pressed = pressed;
         let momentum = self.gather(&bodies, &per_body);
         (bodies, momentum)
     }
