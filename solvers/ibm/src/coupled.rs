@@ -226,26 +226,22 @@ impl CoupledSystem {
                 Some(raised) => (raised, Exponents::Uniform(1.0)),
                 None => (&bodies, exponents),
             };
-            let mut forcing = self.immersed.apply(
-                &self.flow.grid,
-                &mut self.flow.velocity,
-                forced,
-                stage_dt,
-                &exponents,
-            );
+            // Each pass but the last is projected here, the last below.
+            let mut forcing = Loads::zeros(self.dem.particles.len());
             let mut clock = clock;
-            for _ in 1..passes {
-                clock = self.lap(clock, Part::Forcing);
-                max_divergence = max_divergence.max(self.flow.project(stage, dt));
-                clock = self.lap(clock, Part::Flow);
-                let pass = self.immersed.apply(
+            for pass in 0..passes {
+                if pass > 0 {
+                    clock = self.lap(clock, Part::Forcing);
+                    max_divergence = max_divergence.max(self.flow.project(stage, dt));
+                    clock = self.lap(clock, Part::Flow);
+                }
+                forcing.add(&self.immersed.apply(
                     &self.flow.grid,
                     &mut self.flow.velocity,
                     forced,
                     stage_dt,
                     &exponents,
-                );
-                forcing.add(&pass);
+                ));
             }
             let forcing = forcing.summed_on_owners(&self.dem);
             let clock = self.lap(clock, Part::Forcing);
