@@ -205,8 +205,8 @@ fn check_warns_between_the_accuracy_and_the_stability_limit() {
 /// `check --ranks N` shows, before a cluster job, how a scene would be
 /// shared: the process grid, each rank's load (the 2,700 grains of the 3D
 /// column, the 32³ cells of the Beltrami flow), the warning when ranks hold
-/// too little, and the refusal of what does not run on several ranks (for
-/// COCD, with the separator its program would have).
+/// too little, the separator of a COCD program, and the refusal of what does
+/// not run on several ranks.
 #[test]
 fn check_shows_how_a_scene_is_shared_among_ranks() {
     let text = |args: &[&str]| {
@@ -243,20 +243,24 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
         "fluid.cells=[128,128,128]",
     ]);
     assert!(!chosen.contains("warning: "), "{chosen}");
+    // COCD on two ranks, with the separator the ranks factorise together:
+    // 400 discs, three unknowns each, split across x.
+    let boxed = text(&["check", &case("static_box.toml"), "--ranks", "2"]);
+    assert!(
+        boxed.contains(
+            "COCD on 2 ranks (process grid 2 x 1 x 1): the contact program's separator: "
+        ) && boxed.contains(" of 1200 unknowns"),
+        "{boxed}"
+    );
+    // Clarabel has no ranks.
     let refused = grainflow()
         .args(["check", &case("static_box.toml"), "--ranks", "2"])
+        .args(["--set", "contact.conic_solver=\"clarabel\""])
         .output()
         .unwrap();
     assert_eq!(refused.status.code(), Some(2));
     let refusal = String::from_utf8_lossy(&refused.stderr);
-    assert!(refusal.contains("COCD"), "{refusal}");
-    // With the separator its program would have there: 400 discs, three
-    // unknowns each, split across x.
-    assert!(
-        refusal.contains("on 2 ranks (process grid 2 x 1 x 1) the contact program's separator: ")
-            && refusal.contains(" of 1200 unknowns"),
-        "{refusal}"
-    );
+    assert!(refusal.contains("COCD solved by Clarabel"), "{refusal}");
 }
 
 /// With `time.cfl`, `check` counts the steps at the speeds the scene is

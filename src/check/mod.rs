@@ -27,9 +27,7 @@ use std::fmt::Write;
 /// [`report`], and with `ranks` above one how the scene would be shared
 /// among that many MPI ranks ([`sharing::report`]).
 pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
-    if let Err(refusal) = crate::simulation::check_ranks(case, ranks) {
-        return Err(with_separator(case, ranks, refusal));
-    }
+    crate::simulation::check_ranks(case, ranks)?;
     // Before anything is built: a scene too large for the machine is
     // refused by its keys, not by a failed allocation.
     Footprint::of(case).check_fits(ranks, machine_memory())?;
@@ -48,38 +46,36 @@ pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
             _ => sharing::report(case, None, grid.as_ref(), ranks),
         };
         text += &sharing.map_err(RunError::Case)?;
+        text += &cocd_separator(case, ranks).map_err(RunError::Case)?;
     }
     Ok(text)
 }
 
-/// A COCD scene refused on several ranks: the refusal, with the size of
-/// the separator its program would have on them ([`sharing::Separator`]).
-fn with_separator(case: &Case, ranks: usize, refusal: RunError) -> RunError {
+/// For a COCD scene on several ranks, the separator its program has at
+/// the start ([`sharing::Separator`]): the unknowns the ranks factorise
+/// together at every iteration. Empty for other scenes.
+fn cocd_separator(case: &Case, ranks: usize) -> Result<String, String> {
     let Some(hard) = case
         .has_grains()
         .then(|| scene::hard_contact(case))
         .flatten()
         .filter(|hard| hard.method == grainflow_contact::Method::Cocd)
     else {
-        return refusal;
+        return Ok(String::new());
     };
-    let separator = scene::build(case).and_then(|mut system| {
-        hard.prepare(&mut system);
-        let centres = &system.particles.position[..system.particles.n_owned];
-        let range = system.range_for(system.particles.max_radius());
-        let grid = scene::process_grid_of(case, &system.domain, ranks, range, centres)?;
-        Ok((grid, sharing::Separator::of(&system, hard.threshold, grid)))
-    });
-    match separator {
-        Ok((grid, separator)) => RunError::Case(format!(
-            "{refusal}\n  on {ranks} ranks (process grid {} x {} x {}) {}",
-            grid[0],
-            grid[1],
-            grid[2],
-            separator.describe()
-        )),
-        Err(_) => refusal,
-    }
+    let mut system = scene::build(case)?;
+    hard.prepare(&mut system);
+    let centres = &system.particles.position[..system.particles.n_owned];
+    let range = system.range_for(system.particles.max_radius());
+    let grid = scene::process_grid_of(case, &system.domain, ranks, range, centres)?;
+    let separator = sharing::Separator::of(&system, hard.threshold, grid);
+    Ok(format!(
+        "  COCD on {ranks} ranks (process grid {} x {} x {}): {}\n",
+        grid[0],
+        grid[1],
+        grid[2],
+        separator.describe()
+    ))
 }
 
 /// The report of `check` on one rank.

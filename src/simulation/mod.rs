@@ -21,7 +21,7 @@ use crate::checkpoint::{self, case_changes};
 use crate::output::writers::{Writers, WritersRecord};
 use crate::output::RunDirectory;
 use crate::{scene, RunError};
-use grainflow_contact::Method;
+use grainflow_contact::{ConicSolver, Method};
 use grainflow_core::Communicator;
 use model::Model;
 use schedule::Schedule;
@@ -123,13 +123,16 @@ pub(crate) fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
         Err(RunError::Case(format!(
             "{what} runs on one rank in this version; started on {ranks} ranks: run it \
              without mpirun (its threads use every core of a node); allowed on several \
-             ranks: scenes with contact.model = \"soft\" or \"nscd\" and scenes of a fluid alone"
+             ranks: scenes with contact.model = \"soft\", \"nscd\" or \"cocd\" (solved by \
+             grainflow's interior point) and scenes of a fluid alone"
         )))
     };
     if case.has_grains()
-        && scene::hard_contact(case).is_some_and(|hard| hard.method == Method::Cocd)
+        && scene::hard_contact(case).is_some_and(|hard| {
+            hard.method == Method::Cocd && hard.conic_solver == ConicSolver::Clarabel
+        })
     {
-        return refuse("COCD (contact.model = \"cocd\"; its program is factorised whole)");
+        return refuse("COCD solved by Clarabel (contact.conic_solver = \"clarabel\")");
     }
     if case.domain.geometry == crate::case::Geometry::Axisymmetric {
         return refuse("an axisymmetric scene (domain.geometry = \"axisymmetric\")");

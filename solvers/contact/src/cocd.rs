@@ -22,11 +22,12 @@
 //! is eq. 6–8 (section 2.3).
 
 use crate::contacts::{tangents, Bodies, ContactSet, Scales, STATIC};
+use crate::shared_program::{Ranks, SharedProgram};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
-use grainflow_core::{Dimension, Vec3};
+use grainflow_core::{Communicator, Dimension, Vec3};
 
 /// End-of-step velocities of the bodies and the impulses of the contacts.
 #[derive(Clone, Debug, Default)]
@@ -185,6 +186,29 @@ impl ConicProgram {
     pub fn row_scale(&self) -> f64 {
         self.scales.gap_per_velocity()
     }
+
+    /// The same rows over other columns ([`crate::shared_program`]).
+    pub(crate) fn with_columns(
+        &self,
+        mass: Vec<f64>,
+        free: Vec<f64>,
+        a_matrix: CscMatrix<f64>,
+        column_position: Vec<[f64; 3]>,
+    ) -> ConicProgram {
+        ConicProgram {
+            mass,
+            free,
+            a_matrix,
+            b: self.b.clone(),
+            linear_rows: self.linear_rows,
+            cone_count: self.cone_count,
+            column_position,
+            kinds: self.kinds.clone(),
+            first_row: self.first_row.clone(),
+            dimension: self.dimension,
+            scales: self.scales,
+        }
+    }
 }
 
 /// Solves the step's conic program with `solver` (Clarabel taking over a
@@ -204,7 +228,8 @@ pub fn solve(
     // over (and stops the run if it fails too).
     let mut fallback_reason = None;
     let (x, z, iterations, reduced_accuracy) = if solver == ConicSolver::InteriorPoint {
-        match crate::interior_point::solve(&program, tolerance, max_iterations) {
+        let ranks = Ranks::alone(program.mass.len());
+        match crate::interior_point::solve(&program, tolerance, max_iterations, ranks) {
             Ok(solution) => solution,
             Err(why) => {
                 fallback_reason = Some(why.clone());
@@ -218,6 +243,44 @@ pub fn solve(
     let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
     solution.fallback_reason = fallback_reason;
     Ok(solution)
+}
+
+/// Solves the step's program shared among the ranks of `communicator`
+/// (collective; [`crate::shared_program`]): each rank holds its own
+/// `contacts` and `bodies`, `separator[b]` for the bodies whose grain
+/// another rank's pairs also reach, `ids` the local grains' ids. Only
+/// grainflow's interior point solves a shared program (Clarabel has no
+/// ranks): its failure stops the step.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_shared(
+    contacts: &ContactSet,
+    bodies: &Bodies,
+    dimension: Dimension,
+    scales: &Scales,
+    tolerance: f64,
+    max_iterations: u32,
+    separator: &[bool],
+    ids: &[u64],
+    communicator: &Communicator,
+) -> Result<Solution, String> {
+    let program = build(contacts, bodies, dimension, scales);
+    let d = dofs(dimension);
+    let shared = SharedProgram::new(&program, bodies, d, separator, ids, communicator)?;
+    let ranks = Ranks {
+        communicator: Some(communicator),
+        interior: shared.interior,
+    };
+    let (x, z, iterations, reduced_accuracy) =
+        crate::interior_point::solve(&shared.program, tolerance, max_iterations, ranks)?;
+    let x = shared.local_unknowns(&x, d);
+    Ok(recover(
+        contacts,
+        &program,
+        &x,
+        &z,
+        iterations,
+        reduced_accuracy,
+    ))
 }
 
 /// Assembles the program of the step.

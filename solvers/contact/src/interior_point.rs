@@ -32,6 +32,7 @@
 use crate::cocd::ConicProgram;
 use crate::normal_factor::{is_factorised_whole, NormalFactor};
 use crate::second_order_cone::{self, Cone3, NtScaling};
+use crate::shared_program::Ranks;
 use clarabel::algebra::CscMatrix;
 
 /// Fraction of the distance to the boundary of the cone taken by a step.
@@ -55,7 +56,9 @@ struct NormalPattern {
 }
 
 impl NormalPattern {
-    fn new(a: &CscMatrix<f64>, scale: f64, columns: usize) -> Self {
+    /// `reorder`: whether a factor of the whole matrix may renumber the
+    /// unknowns (not where the ranks share the separator, which stays last).
+    fn new(a: &CscMatrix<f64>, scale: f64, columns: usize, reorder: bool) -> Self {
         let rows = a.m;
         let mut row_start = vec![0usize; rows + 1];
         for &r in &a.rowval {
@@ -81,7 +84,7 @@ impl NormalPattern {
         // A split factor orders each half itself: the unknowns keep their
         // numbers.
         let (mut colptr, mut rowval) = upper_pattern(&row_start, &row_column, columns);
-        let ordered = is_factorised_whole(columns);
+        let ordered = reorder && is_factorised_whole(columns);
         let order = if ordered {
             let order = minimum_degree_order(&colptr, &rowval, columns);
             let mut label = vec![0usize; columns];
@@ -321,12 +324,14 @@ fn step_in_cones(v: &[f64], dv: &[f64], linear: usize, cones: usize) -> f64 {
 }
 
 /// Shifts v into the interior of the cones along their identity where its
-/// lowest eigenvalue is not positive (as CVXOPT's coneqp starts).
-fn shift_inside(v: &mut [f64], linear: usize, cones: usize) {
+/// lowest eigenvalue, over every rank's rows, is not positive (as CVXOPT's
+/// coneqp starts).
+fn shift_inside(v: &mut [f64], linear: usize, cones: usize, ranks: &Ranks) {
     let lowest = (0..cones)
         .map(|c| second_order_cone::lowest_eigenvalue(&cone_of(v, linear, c)))
         .chain(v[..linear].iter().copied())
         .fold(f64::INFINITY, f64::min);
+    let lowest = ranks.min(lowest);
     if lowest <= 0.0 {
         v[..linear].iter_mut().for_each(|e| *e += 1.0 - lowest);
         for c in 0..cones {
@@ -348,19 +353,26 @@ fn shift_inside(v: &mut [f64], linear: usize, cones: usize) {
 ///
 /// with r_c = λ ∘ λ for the predictor and λ ∘ λ + (W⁻¹Δs_a) ∘ (WΔz_a) − σμe
 /// for Mehrotra's corrector.
+///
+/// On several ranks (`ranks`, [`crate::shared_program`]) each holds its
+/// rows and its columns then the separator's; every sum and extreme is
+/// taken over all ranks, so that each takes the same steps and stops
+/// together.
 pub fn solve(
     program: &ConicProgram,
     tolerance: f64,
     max_iterations: u32,
+    ranks: Ranks,
 ) -> Result<(Vec<f64>, Vec<f64>, u32, bool), String> {
     let n = program.mass.len();
     let m = program.b.len();
     let linear = program.linear_rows;
     let cones = program.cone_count;
-    let degree = (linear + cones) as f64;
+    let degree = ranks.sum((linear + cones) as f64);
     let kappa = program.row_scale();
     let b: Vec<f64> = program.b.iter().map(|v| v / kappa).collect();
-    let mut pattern = NormalPattern::new(&program.a_matrix, kappa, n);
+    let shared = ranks.shared();
+    let mut pattern = NormalPattern::new(&program.a_matrix, kappa, n, shared.is_none());
     let fail = |what: String| format!("the interior point ({m} rows, {n} unknowns): {what}");
     for c in 0..cones {
         let r = linear + 3 * c;
@@ -382,14 +394,20 @@ pub fn solve(
     let unit = NtScaling::new(&[1.0, 0.0, 0.0], &[1.0, 0.0, 0.0]);
     pattern.assemble(&mass, &vec![1.0; linear]);
     pattern.add_cone_blocks(linear, &vec![unit; cones]);
-    let mut factor = NormalFactor::new(&pattern.matrix, pattern.ordered, &program.column_position)
-        .map_err(fail)?;
+    let mut factor = match shared {
+        None => NormalFactor::new(&pattern.matrix, pattern.ordered, &program.column_position),
+        Some(communicator) => {
+            NormalFactor::shared(&pattern.matrix, ranks.interior, &mass, communicator)
+        }
+    }
+    .map_err(fail)?;
     factor.factorise(&pattern.matrix).map_err(fail)?;
 
     // Start: the minimiser of ½xᵀPx + qᵀx + ½|Ax − b|², then s and z
     // shifted into the interior (as in CVXOPT's coneqp).
     let mut x = vec![0.0; n];
     pattern.transpose_times(&b, &mut x);
+    ranks.sum_separator(&mut x);
     for (xc, qc) in x.iter_mut().zip(&q) {
         *xc -= qc;
     }
@@ -398,12 +416,19 @@ pub fn solve(
     pattern.times(&x, &mut ax);
     let mut s: Vec<f64> = b.iter().zip(&ax).map(|(bi, axi)| bi - axi).collect();
     let mut z: Vec<f64> = s.iter().map(|v| -v).collect();
-    shift_inside(&mut s, linear, cones);
-    shift_inside(&mut z, linear, cones);
+    shift_inside(&mut s, linear, cones, &ranks);
+    shift_inside(&mut z, linear, cones, &ranks);
 
-    let size = program.size();
-    let norm_b = infinity_norm(&b);
-    let norm_q = infinity_norm(&q);
+    // ŨᵀM̃Ũ, the size of the objective.
+    let weighted: Vec<f64> = program
+        .mass
+        .iter()
+        .zip(&program.free)
+        .map(|(m, u)| m * u)
+        .collect();
+    let size = ranks.dot_columns(&weighted, &program.free);
+    let norm_b = ranks.max(infinity_norm(&b));
+    let norm_q = ranks.max(infinity_norm(&q));
     let (mut r_p, mut r_d, mut px, mut atz) =
         (vec![0.0; m], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let (mut theta, mut rhs, mut dx, mut ds, mut dz) = (
@@ -424,6 +449,7 @@ pub fn solve(
         // Residuals and the stopping test.
         pattern.times(&x, &mut ax);
         pattern.transpose_times(&z, &mut atz);
+        ranks.sum_separator(&mut atz);
         for c in 0..n {
             px[c] = mass[c] * x[c];
             r_d[c] = px[c] + q[c] + atz[c];
@@ -431,14 +457,13 @@ pub fn solve(
         for i in 0..m {
             r_p[i] = ax[i] + s[i] - b[i];
         }
-        let gap = dot(&s, &z);
-        let quadratic = 0.5 * dot(&x, &px);
-        let primal = quadratic + dot(&q, &x);
-        let dual = -quadratic - dot(&b, &z);
-        let primal_ok = infinity_norm(&r_p)
-            <= tolerance * (1.0 + norm_b.max(infinity_norm(&ax)).max(infinity_norm(&s)));
-        let dual_ok = infinity_norm(&r_d)
-            <= tolerance * (1.0 + norm_q.max(infinity_norm(&px)).max(infinity_norm(&atz)));
+        let gap = ranks.sum(dot(&s, &z));
+        let quadratic = 0.5 * ranks.dot_columns(&x, &px);
+        let primal = quadratic + ranks.dot_columns(&q, &x);
+        let dual = -quadratic - ranks.sum(dot(&b, &z));
+        let norm = |v: &[f64]| ranks.max(infinity_norm(v));
+        let primal_ok = norm(&r_p) <= tolerance * (1.0 + norm_b.max(norm(&ax)).max(norm(&s)));
+        let dual_ok = norm(&r_d) <= tolerance * (1.0 + norm_q.max(norm(&px)).max(norm(&atz)));
         let gap_ok = gap <= tolerance * size.max(primal.abs().min(dual.abs()));
         if primal_ok && dual_ok && gap_ok {
             let z_out = z.iter().map(|v| v / kappa).collect();
@@ -488,6 +513,7 @@ pub fn solve(
                     scaled_rc[c] = w_inv_d;
                 }
                 pattern.transpose_times(&theta, &mut rhs);
+                ranks.sum_separator(&mut rhs);
                 for c in 0..n {
                     dx[c] = rhs[c] - r_d[c];
                 }
@@ -516,11 +542,13 @@ pub fn solve(
             set_cone(&mut rc, linear, c, &second_order_cone::jordan_product(l, l));
         }
         direction(&rc, &mut dx, &mut ds, &mut dz);
-        let alpha =
-            step_in_cones(&s, &ds, linear, cones).min(step_in_cones(&z, &dz, linear, cones));
-        let affine_gap: f64 = (0..m)
-            .map(|i| (s[i] + alpha * ds[i]) * (z[i] + alpha * dz[i]))
-            .sum();
+        let alpha = ranks
+            .min(step_in_cones(&s, &ds, linear, cones).min(step_in_cones(&z, &dz, linear, cones)));
+        let affine_gap: f64 = ranks.sum(
+            (0..m)
+                .map(|i| (s[i] + alpha * ds[i]) * (z[i] + alpha * dz[i]))
+                .sum(),
+        );
         let sigma = (affine_gap / gap).powi(3).min(1.0);
         for i in 0..linear {
             rc[i] = s[i] * z[i] + ds[i] * dz[i] - sigma * mu;
@@ -541,7 +569,9 @@ pub fn solve(
         }
         direction(&rc, &mut dx, &mut ds, &mut dz);
         let alpha = (STEP_FRACTION
-            * step_in_cones(&s, &ds, linear, cones).min(step_in_cones(&z, &dz, linear, cones)))
+            * ranks.min(
+                step_in_cones(&s, &ds, linear, cones).min(step_in_cones(&z, &dz, linear, cones)),
+            ))
         .min(1.0);
         for c in 0..n {
             x[c] += alpha * dx[c];

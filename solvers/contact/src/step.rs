@@ -209,7 +209,9 @@ impl HardContact {
         let (contacts, scales, solution, bounds, unconverged, end_motion) = loop {
             programs += 1;
             let program = listed.subset(&in_program);
-            let (contacts, bodies, scales) = match Sharing::of(system) {
+            // On several ranks, the bodies whose grain other ranks' pairs
+            // reach too: the copies, and the owned grains touched elsewhere.
+            let (contacts, bodies, scales, shared_bodies) = match Sharing::of(system) {
                 Some(sharing) => {
                     let elsewhere = sharing.touched_elsewhere(&program);
                     let (contacts, bodies) = contacts::with_bodies_marked(
@@ -224,17 +226,21 @@ impl HardContact {
                     sums[3] = 0.0;
                     sharing.sum_each(&mut sums);
                     sums[3] = fastest;
-                    (contacts, bodies, Scales::of_sums(sums, dt, &gravity))
+                    let shared_bodies = (0..bodies.len())
+                        .map(|b| b >= bodies.owned || elsewhere[bodies.grain[b] as usize])
+                        .collect();
+                    let scales = Scales::of_sums(sums, dt, &gravity);
+                    (contacts, bodies, scales, shared_bodies)
                 }
                 None => {
                     let (contacts, bodies) =
                         contacts::with_bodies(system, program, &free_velocity, &free_spin);
                     let scales = Scales::of(&bodies, dt, &gravity);
-                    (contacts, bodies, scales)
+                    (contacts, bodies, scales, Vec::new())
                 }
             };
             let (solution, bounds, unconverged) =
-                self.solve(system, &contacts, &bodies, &scales, dt)?;
+                self.solve(system, &contacts, &bodies, &scales, dt, &shared_bodies)?;
             let mut end_motion =
                 candidates::end_motion(system, &bodies, &solution, &free_velocity, &free_spin);
             end_motion.0.resize(local, Vec3::zeros());
@@ -370,6 +376,8 @@ impl HardContact {
 
     /// One program over `contacts`: the solution, the normal bound b_α of
     /// each contact and whether the solver stopped short of its tolerance.
+    /// `shared_bodies`: on several ranks, the bodies another rank's pairs
+    /// reach too (empty on one).
     fn solve(
         &mut self,
         system: &DemSystem,
@@ -377,23 +385,35 @@ impl HardContact {
         bodies: &Bodies,
         scales: &Scales,
         dt: f64,
+        shared_bodies: &[bool],
     ) -> Result<(Solution, Vec<f64>, bool), String> {
         match self.method {
             Method::Cocd => {
-                if system.communicator.size() > 1 {
-                    return Err(
-                        "COCD runs on one rank in this version (its program is factorised \
-                                whole); NSCD runs on several"
-                            .into(),
-                    );
-                }
                 let bounds: Vec<f64> = contacts.gap.iter().map(|d| -d / dt).collect();
-                let solution = if contacts.is_empty() {
+                // Reductions over the ranks return the rank's own value on one.
+                let solution = if system.communicator.sum_count(contacts.len()) == 0 {
                     Solution {
                         velocity: bodies.free_velocity.clone(),
                         spin: bodies.free_spin.clone(),
                         ..Solution::default()
                     }
+                } else if system.communicator.size() > 1 {
+                    if self.conic_solver == ConicSolver::Clarabel {
+                        return Err("Clarabel solves COCD on one rank only; on several ranks \
+                                    grainflow's interior point solves the shared program"
+                            .into());
+                    }
+                    cocd::solve_shared(
+                        contacts,
+                        bodies,
+                        system.dimension(),
+                        scales,
+                        self.tolerance,
+                        self.max_iterations,
+                        shared_bodies,
+                        &system.particles.id,
+                        &system.communicator,
+                    )?
                 } else {
                     cocd::solve(
                         contacts,

@@ -45,10 +45,12 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Accum, Conj, Mat, MatMut, Par, Side};
 
+mod shared;
 mod split;
 #[cfg(test)]
 mod tests;
 
+use shared::SharedFactor;
 use split::SplitFactor;
 
 /// Unknowns from which a matrix is split in two. On two threads the split
@@ -109,10 +111,11 @@ fn factorise_numeric(
         .map_err(|e| format!("the normal matrix is not positive definite: {e:?}"))
 }
 
-/// The factor of K, whole or split.
+/// The factor of K, whole, split, or shared among ranks.
 pub(crate) enum NormalFactor {
     Whole(Box<WholeFactor>),
     Split(Box<SplitFactor>),
+    Shared(Box<SharedFactor>),
 }
 
 impl NormalFactor {
@@ -147,11 +150,31 @@ impl NormalFactor {
         )?)))
     }
 
+    /// The factor shared among the ranks of `communicator`: `matrix` over
+    /// the rank's `interior` columns then the separator's, `mass` the
+    /// diagonal P of every column ([`shared`]; collective).
+    pub(crate) fn shared(
+        matrix: &CscMatrix<f64>,
+        interior: usize,
+        mass: &[f64],
+        communicator: &grainflow_core::Communicator,
+    ) -> Result<Self, String> {
+        let shared = SharedFactor::new(matrix, interior, mass, communicator);
+        // A rank that cannot build its part fails every rank.
+        if communicator.any(shared.is_err()) {
+            return Err(shared
+                .err()
+                .unwrap_or_else(|| "the symbolic factorisation failed on another rank".into()));
+        }
+        shared.map(|s| NormalFactor::Shared(Box::new(s)))
+    }
+
     /// Factorises `matrix` (the pattern given to `new`).
     pub(crate) fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
         match self {
             NormalFactor::Whole(whole) => whole.factorise(matrix),
             NormalFactor::Split(split) => split.factorise(matrix),
+            NormalFactor::Shared(shared) => shared.factorise(matrix),
         }
     }
 
@@ -160,6 +183,7 @@ impl NormalFactor {
         match self {
             NormalFactor::Whole(whole) => whole.solve(rhs),
             NormalFactor::Split(split) => split.solve(rhs),
+            NormalFactor::Shared(shared) => shared.solve(rhs),
         }
     }
 }

@@ -7,7 +7,7 @@ use super::*;
 /// (its interior by AMD, then the separator).
 pub(crate) struct Half {
     /// Unknown of K of each column of M_i.
-    unknown: Vec<usize>,
+    pub(super) unknown: Vec<usize>,
     /// Interior columns (the separator's follow).
     interior: usize,
     /// M_i's upper pattern and values, and the entry of K each value
@@ -19,7 +19,7 @@ pub(crate) struct Half {
     work: MemBuffer,
     /// Λ_i (lower triangular) and T_i = Λ_i Λ_iᵀ.
     lambda: Mat<f64>,
-    schur_part: Mat<f64>,
+    pub(super) schur_part: Mat<f64>,
     /// w_i of the last forward solve.
     forward_solution: Vec<f64>,
 }
@@ -157,7 +157,7 @@ impl SplitFactor {
 }
 
 impl Half {
-    fn new(
+    pub(super) fn new(
         matrix: &CscMatrix<f64>,
         interior: &[usize],
         separator: &[usize],
@@ -236,9 +236,24 @@ impl Half {
     }
 
     /// Factorises M_i, then reads Λ_i and forms T_i = Λ_i Λ_iᵀ.
-    fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
+    pub(super) fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
+        self.factorise_shifted(matrix, &[])
+    }
+
+    /// As `factorise`, with `shift` (one per separator unknown, or none)
+    /// added to K_SS's diagonal.
+    pub(super) fn factorise_shifted(
+        &mut self,
+        matrix: &CscMatrix<f64>,
+        shift: &[f64],
+    ) -> Result<(), String> {
         for (value, &k) in self.matrix.nzval.iter_mut().zip(&self.source) {
             *value = matrix.nzval[k];
+        }
+        for (t, added) in shift.iter().enumerate() {
+            // The diagonal closes its column of the upper triangle.
+            let diagonal = self.matrix.colptr[self.interior + t + 1] - 1;
+            self.matrix.nzval[diagonal] += added;
         }
         factorise_numeric(
             &self.symbolic,
@@ -287,7 +302,7 @@ impl Half {
     }
 
     /// w_i = L(M_i)⁻¹ [r_i; 0]; returns −(K_Si K_ii⁻¹ r_i) = Λ_i w_S.
-    fn forward(&mut self, rhs: &[f64]) -> Vec<f64> {
+    pub(super) fn forward(&mut self, rhs: &[f64]) -> Vec<f64> {
         let size = self.unknown.len();
         let mut w = std::mem::take(&mut self.forward_solution);
         for (k, &u) in self.unknown.iter().enumerate() {
@@ -317,7 +332,7 @@ impl Half {
     }
 
     /// The interior's x_i from the last forward solve and x_S.
-    fn backward(&mut self, x_s: faer::MatRef<'_, f64>) -> Vec<f64> {
+    pub(super) fn backward(&mut self, x_s: faer::MatRef<'_, f64>) -> Vec<f64> {
         let size = self.unknown.len();
         let ns = size - self.interior;
         let mut w = std::mem::take(&mut self.forward_solution);

@@ -1,0 +1,250 @@
+//! The normal matrix factorised by several ranks together
+//! ([`crate::shared_program`]).
+//!
+//! On rank r the unknowns read [x_I; x_S]: its interior I_r, which only its
+//! rows reach, and the separator S, held by every rank. The whole matrix
+//! is K = P + Σ_r A_rᵀΘ_rA_r, and its interior blocks are the ranks' own:
+//!
+//!   K = [K_11 0 … K_1S; 0 K_22 … K_2S; … ; K_S1 K_S2 … K_SS].
+//!
+//! Each rank assembles its part over its interior and the columns of S its
+//! rows reach (its "touched" separator, S_r), and factorises it with S_r
+//! last (the half of a two-way split, [`super::split`]). On S_r's diagonal
+//! it puts the whole matrix's diagonal, D_S (P and every rank's rows,
+//! summed over the ranks at each factorisation): its matrix
+//! M_r = [K_rr K_rS; K_Sr K_SS^r + E_r], E_r = D_S − diag(K_SS^r), is then
+//! as well conditioned as K. With the mass alone there, a rank's part held
+//! by contacts much stiffer than the masses (Θ of 1e12 near the solution)
+//! lost its positive pivots to round-off. The last block gives
+//! T_r = K_SS^r + E_r − K_Sr K_rr⁻¹ K_rS, and the Schur complement of the
+//! whole matrix is
+//!
+//!   Σ = P_S + Σ_r (T_r − P_{S_r} − E_r),
+//!
+//! dense over S: each rank adds its part, the ranks sum them (one
+//! reduction of the lower triangle per factorisation), and every rank
+//! factorises the same Σ. A solve K x = r is that of the split: per rank
+//! the forward solve, one reduction of the separator's right-hand side,
+//! x_S from Σ on every rank, and per rank the back solve of its interior.
+
+use super::split::Half;
+use super::*;
+use grainflow_core::Communicator;
+
+/// The factor of the normal matrix shared among ranks.
+pub(crate) struct SharedFactor {
+    /// Interior columns (the separator's follow, `mass.len()` of them).
+    interior: usize,
+    /// The rank's interior with its touched separator; None where the rank
+    /// has no interior.
+    half: Option<Half>,
+    /// Separator columns (0-based within S) the rank's rows reach, in
+    /// order.
+    touched: Vec<usize>,
+    /// Where the rank has no interior: (row, column) within `touched` and
+    /// the entry of the matrix of each of its K_SS^r values (upper).
+    touched_entries: Vec<(usize, usize, usize)>,
+    /// Entry of the matrix of each touched column's diagonal, and E_r.
+    touched_diagonal: Vec<usize>,
+    shift: Vec<f64>,
+    /// P on the separator.
+    mass: Vec<f64>,
+    /// Σ's lower triangle, packed by columns, as the ranks sum it.
+    packed: Vec<f64>,
+    schur: Mat<f64>,
+    dense_work: MemBuffer,
+    communicator: Communicator,
+}
+
+impl SharedFactor {
+    /// The factor of `matrix` (upper triangle over [x_I; x_S], `interior`
+    /// columns first), `mass`: P of every column.
+    pub(super) fn new(
+        matrix: &CscMatrix<f64>,
+        interior: usize,
+        mass: &[f64],
+        communicator: &Communicator,
+    ) -> Result<Self, String> {
+        let n = matrix.n;
+        let ns = n - interior;
+        // The separator's columns reached by an entry off their diagonal
+        // (a column with its mass alone couples to nothing here).
+        let mut reached = vec![false; ns];
+        for column in 0..n {
+            for k in matrix.colptr[column]..matrix.colptr[column + 1] {
+                let row = matrix.rowval[k];
+                if row != column {
+                    for u in [row, column] {
+                        if u >= interior {
+                            reached[u - interior] = true;
+                        }
+                    }
+                }
+            }
+        }
+        let touched: Vec<usize> = (0..ns).filter(|&k| reached[k]).collect();
+        let touched_columns: Vec<usize> = touched.iter().map(|&k| interior + k).collect();
+        let (half, touched_entries) = if interior > 0 {
+            let own: Vec<usize> = (0..interior).collect();
+            (Some(Half::new(matrix, &own, &touched_columns)?), Vec::new())
+        } else {
+            let mut position = vec![usize::MAX; n];
+            for (t, &u) in touched_columns.iter().enumerate() {
+                position[u] = t;
+            }
+            let mut entries = Vec::new();
+            for column in 0..n {
+                for k in matrix.colptr[column]..matrix.colptr[column + 1] {
+                    let (r, c) = (position[matrix.rowval[k]], position[column]);
+                    if r != usize::MAX && c != usize::MAX {
+                        entries.push((r, c, k));
+                    }
+                }
+            }
+            (None, entries)
+        };
+        let dense_work = MemBuffer::new(
+            faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
+                ns,
+                Par::Seq,
+                Default::default(),
+            ),
+        );
+        // The diagonal closes its column of the upper triangle.
+        let touched_diagonal: Vec<usize> = touched_columns
+            .iter()
+            .map(|&u| matrix.colptr[u + 1] - 1)
+            .collect();
+        Ok(SharedFactor {
+            interior,
+            half,
+            shift: vec![0.0; touched.len()],
+            touched,
+            touched_entries,
+            touched_diagonal,
+            mass: mass[interior..].to_vec(),
+            packed: vec![0.0; ns * (ns + 1) / 2],
+            schur: Mat::zeros(ns, ns),
+            dense_work,
+            communicator: communicator.clone(),
+        })
+    }
+
+    /// Position of Σ(i, j), i ≥ j, in the packed lower triangle.
+    fn packed_at(ns: usize, i: usize, j: usize) -> usize {
+        j * ns - j * (j + 1) / 2 + i
+    }
+
+    /// Factorises `matrix` (the pattern given to `new`), with the other
+    /// ranks (collective: a failure on any rank fails them all).
+    pub(super) fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
+        let ns = self.mass.len();
+        // D_S, the whole matrix's diagonal on S, and this rank's E_r.
+        let mut diagonal = vec![0.0; ns];
+        for (&i, &k) in self.touched.iter().zip(&self.touched_diagonal) {
+            diagonal[i] = matrix.nzval[k] - self.mass[i];
+        }
+        self.communicator.sum_each(&mut diagonal);
+        for (t, (&i, &k)) in self.touched.iter().zip(&self.touched_diagonal).enumerate() {
+            self.shift[t] = diagonal[i] + self.mass[i] - matrix.nzval[k];
+        }
+        let own = match &mut self.half {
+            Some(half) => half.factorise_shifted(matrix, &self.shift),
+            None => Ok(()),
+        };
+        let failed_here = own.is_err();
+        if self.communicator.any(failed_here) {
+            return Err(own.err().unwrap_or_else(|| {
+                "the normal matrix is not positive definite on another rank".into()
+            }));
+        }
+        // This rank's part of Σ: T_r − P − E_r over its touched separator
+        // (K_SS^r − P where it has no interior).
+        self.packed.fill(0.0);
+        let touched = &self.touched;
+        match &self.half {
+            Some(half) => {
+                let t = &half.schur_part;
+                for (b, &j) in touched.iter().enumerate() {
+                    for (a, &i) in touched.iter().enumerate().skip(b) {
+                        self.packed[Self::packed_at(ns, i, j)] += t[(a, b)];
+                    }
+                }
+            }
+            None => {
+                for &(r, c, k) in &self.touched_entries {
+                    let (i, j) = (touched[r.max(c)], touched[r.min(c)]);
+                    self.packed[Self::packed_at(ns, i, j)] += matrix.nzval[k];
+                }
+            }
+        }
+        for (t, &i) in touched.iter().enumerate() {
+            let shift = if self.half.is_some() {
+                self.shift[t]
+            } else {
+                0.0
+            };
+            self.packed[Self::packed_at(ns, i, i)] -= self.mass[i] + shift;
+        }
+        self.communicator.sum_each(&mut self.packed);
+        for j in 0..ns {
+            for i in j..ns {
+                self.schur[(i, j)] = self.packed[Self::packed_at(ns, i, j)];
+            }
+            self.schur[(j, j)] += self.mass[j];
+        }
+        // Every rank holds the same Σ and factorises it alike.
+        faer::linalg::cholesky::llt::factor::cholesky_in_place(
+            self.schur.as_mut(),
+            no_regularisation(),
+            Par::Seq,
+            MemStack::new(&mut self.dense_work),
+            Default::default(),
+        )
+        .map(|_| ())
+        .map_err(|e| format!("the separator's Schur complement is not positive definite: {e:?}"))
+    }
+
+    /// Overwrites `rhs` ([r_I; r_S], r_S the same on every rank) with
+    /// K⁻¹ rhs (collective).
+    pub(super) fn solve(&mut self, rhs: &mut [f64]) {
+        let (interior, ns) = (self.interior, self.mass.len());
+        // 1. −K_Sr K_rr⁻¹ r_r on the touched separator, summed over ranks.
+        let mut right = vec![0.0; ns];
+        if let Some(half) = &mut self.half {
+            for (&i, value) in self.touched.iter().zip(half.forward(rhs)) {
+                right[i] = value;
+            }
+        }
+        self.communicator.sum_each(&mut right);
+        // 2. x_S = Σ⁻¹ (r_S − Σ_r K_Sr K_rr⁻¹ r_r), on every rank.
+        let mut x_s = Mat::<f64>::zeros(ns, 1);
+        for k in 0..ns {
+            x_s[(k, 0)] = rhs[interior + k] + right[k];
+        }
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            self.schur.as_ref(),
+            x_s.as_mut(),
+            Par::Seq,
+        );
+        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+            self.schur.transpose(),
+            x_s.as_mut(),
+            Par::Seq,
+        );
+        // 3. The interior's back solve with x_S on the touched separator.
+        if let Some(half) = &mut self.half {
+            let mut x_touched = Mat::<f64>::zeros(self.touched.len(), 1);
+            for (t, &i) in self.touched.iter().enumerate() {
+                x_touched[(t, 0)] = x_s[(i, 0)];
+            }
+            let x_i = half.backward(x_touched.as_ref());
+            for (&u, value) in half.unknown.iter().zip(x_i) {
+                rhs[u] = value;
+            }
+        }
+        for k in 0..ns {
+            rhs[interior + k] = x_s[(k, 0)];
+        }
+    }
+}

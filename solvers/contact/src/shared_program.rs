@@ -1,0 +1,206 @@
+//! COCD on several ranks: one conic program over every rank's contacts,
+//! each rank holding its own rows and the columns they reach.
+//!
+//! Each rank holds the pairs of its own grains (a pair across ranks on the
+//! rank of its lower id, [`crate::contacts::listed`]), hence the rows of A
+//! of those pairs, and a body for every grain they reach, its copies of
+//! other ranks' grains included ([`crate::contacts::with_bodies_marked`]).
+//! The program's columns then fall in two kinds:
+//!
+//! - the **interior** of a rank: its own grains that no other rank's pairs
+//!   reach; only this rank's rows touch them;
+//! - the **separator** S: the grains whose columns stand on more than one
+//!   rank (a copy reached by the pairs of the rank that holds it, and the
+//!   grain on its owner). Every rank holds all of S, in the order of the
+//!   grains' ids, with the same values: the owners' masses and free
+//!   velocities, and after each Aᵀz the ranks' parts summed.
+//!
+//! On a rank the unknowns read [x_I; x_S]. Sums over the columns add the
+//! ranks' interiors and S once; sums and extremes over the rows add or
+//! compare the ranks' rows. The normal matrix K = P + AᵀΘA is the sum of
+//! the ranks' parts, and is factorised by the ranks together through the
+//! Schur complement of S ([`crate::normal_factor`]). The iterates are those
+//! of one rank up to the order of the sums: the same solution to round-off
+//! once the tolerance is tight.
+
+use crate::cocd::ConicProgram;
+use crate::contacts::Bodies;
+use clarabel::algebra::CscMatrix;
+use grainflow_core::Communicator;
+
+/// How the interior point's unknowns are shared among ranks: the first
+/// `interior` columns are the rank's own, the rest the separator held on
+/// every rank (none on one rank).
+#[derive(Clone, Copy)]
+pub struct Ranks<'a> {
+    pub communicator: Option<&'a Communicator>,
+    pub interior: usize,
+}
+
+impl<'a> Ranks<'a> {
+    /// One rank: every column is interior, every reduction the rank's own
+    /// value.
+    pub fn alone(columns: usize) -> Self {
+        Ranks {
+            communicator: None,
+            interior: columns,
+        }
+    }
+
+    /// Whether the program is shared (a separator factorised together).
+    pub fn shared(&self) -> Option<&'a Communicator> {
+        self.communicator
+    }
+
+    /// Sum over the ranks of a sum over their rows.
+    pub fn sum(&self, local: f64) -> f64 {
+        self.communicator.map_or(local, |c| c.sum(local))
+    }
+
+    pub fn max(&self, local: f64) -> f64 {
+        self.communicator.map_or(local, |c| c.max(local))
+    }
+
+    pub fn min(&self, local: f64) -> f64 {
+        -self.max(-local)
+    }
+
+    /// aᵀb over the columns: the ranks' interiors and the separator once.
+    pub fn dot_columns(&self, a: &[f64], b: &[f64]) -> f64 {
+        let i = self.interior;
+        self.sum(dot(&a[..i], &b[..i])) + dot(&a[i..], &b[i..])
+    }
+
+    /// Adds up the ranks' parts of a column vector on the separator (Aᵀz
+    /// from each rank's rows).
+    pub fn sum_separator(&self, values: &mut [f64]) {
+        if let Some(communicator) = self.communicator {
+            communicator.sum_each(&mut values[self.interior..]);
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The rank's program with its columns as the ranks share them, and where
+/// each of the rank's bodies stands in it.
+pub struct SharedProgram {
+    pub program: ConicProgram,
+    /// Interior columns (the separator's follow).
+    pub interior: usize,
+    /// First column of each body of the rank's program.
+    pub body_column: Vec<usize>,
+}
+
+impl SharedProgram {
+    /// Shares `program` (over `bodies`, `d` unknowns each) among the
+    /// ranks: `separator[b]` says whether body b's columns stand on another
+    /// rank too; `ids` are the local grains' ids (collective).
+    pub fn new(
+        program: &ConicProgram,
+        bodies: &Bodies,
+        d: usize,
+        separator: &[bool],
+        ids: &[u64],
+        communicator: &Communicator,
+    ) -> Result<Self, String> {
+        // The owners tell every rank the separator's grains: id, then the
+        // columns' masses and free velocities, then the position.
+        let record = 1 + 2 * d + 3;
+        let mut mine = Vec::new();
+        for b in 0..bodies.owned {
+            if separator[b] {
+                mine.push(ids[bodies.grain[b] as usize] as f64);
+                mine.extend_from_slice(&program.mass[b * d..(b + 1) * d]);
+                mine.extend_from_slice(&program.free[b * d..(b + 1) * d]);
+                mine.extend_from_slice(&program.column_position[b * d]);
+            }
+        }
+        let received = communicator.exchange(vec![mine; communicator.size()]);
+        let mut records: Vec<&[f64]> = received.iter().flat_map(|m| m.chunks(record)).collect();
+        records.sort_by_key(|r| r[0] as u64);
+        let place: std::collections::HashMap<u64, usize> = records
+            .iter()
+            .enumerate()
+            .map(|(k, r)| (r[0] as u64, k))
+            .collect();
+
+        let interior_bodies: Vec<usize> = (0..bodies.len()).filter(|&b| !separator[b]).collect();
+        let interior = d * interior_bodies.len();
+        let columns = interior + d * records.len();
+        let mut body_column = vec![0usize; bodies.len()];
+        for (k, &b) in interior_bodies.iter().enumerate() {
+            body_column[b] = d * k;
+        }
+        for b in (0..bodies.len()).filter(|&b| separator[b]) {
+            let id = ids[bodies.grain[b] as usize];
+            let Some(&k) = place.get(&id) else {
+                return Err(format!(
+                    "grain {id}, reached by the pairs of rank {}, is not announced by its owner",
+                    communicator.rank()
+                ));
+            };
+            body_column[b] = interior + d * k;
+        }
+
+        let (mut mass, mut free) = (vec![0.0; columns], vec![0.0; columns]);
+        let mut column_position = vec![[0.0; 3]; columns];
+        for &b in &interior_bodies {
+            let (from, to) = (b * d, body_column[b]);
+            mass[to..to + d].copy_from_slice(&program.mass[from..from + d]);
+            free[to..to + d].copy_from_slice(&program.free[from..from + d]);
+            column_position[to..to + d].copy_from_slice(&program.column_position[from..from + d]);
+        }
+        for (k, r) in records.iter().enumerate() {
+            let to = interior + d * k;
+            mass[to..to + d].copy_from_slice(&r[1..1 + d]);
+            free[to..to + d].copy_from_slice(&r[1 + d..1 + 2 * d]);
+            column_position[to..to + d].fill([r[1 + 2 * d], r[2 + 2 * d], r[3 + 2 * d]]);
+        }
+
+        // A's columns renumbered; two bodies of one grain (a grain and its
+        // periodic copy on the same rank) add into the same column.
+        let a = &program.a_matrix;
+        let mut entries: Vec<(usize, usize, f64)> = Vec::with_capacity(a.nzval.len());
+        for c in 0..a.n {
+            let to = body_column[c / d] + c % d;
+            for k in a.colptr[c]..a.colptr[c + 1] {
+                entries.push((to, a.rowval[k], a.nzval[k]));
+            }
+        }
+        entries.sort_unstable_by_key(|&(c, r, _)| (c, r));
+        let mut colptr = vec![0usize; columns + 1];
+        let (mut rowval, mut nzval): (Vec<usize>, Vec<f64>) = (Vec::new(), Vec::new());
+        let mut last = (usize::MAX, usize::MAX);
+        for (c, r, v) in entries {
+            if (c, r) == last {
+                *nzval.last_mut().expect("an entry before") += v;
+                continue;
+            }
+            last = (c, r);
+            colptr[c + 1] += 1;
+            rowval.push(r);
+            nzval.push(v);
+        }
+        for c in 0..columns {
+            colptr[c + 1] += colptr[c];
+        }
+        let a_matrix = CscMatrix::new(a.m, columns, colptr, rowval, nzval);
+        Ok(SharedProgram {
+            program: program.with_columns(mass, free, a_matrix, column_position),
+            interior,
+            body_column,
+        })
+    }
+
+    /// The solution's unknowns in the layout of the rank's own program.
+    pub fn local_unknowns(&self, x: &[f64], d: usize) -> Vec<f64> {
+        let mut local = vec![0.0; d * self.body_column.len()];
+        for (b, &c) in self.body_column.iter().enumerate() {
+            local[b * d..(b + 1) * d].copy_from_slice(&x[c..c + d]);
+        }
+        local
+    }
+}
