@@ -11,10 +11,15 @@ to rest (e = 0.2, t_c = 2e-4 s, mu = 0.3); their radii are then shrunk by
 contact refuses) and ten COCD steps of 1 ms settle them. From that state
 one step of 1 ms is timed per configuration (`seconds_per_solve`, the
 conic solve with its assembly), --repeats times, alternating the
-configurations. Prints the table and writes it as JSON.
+configurations. With --ranks 1,2 each configuration also runs on that
+many MPI ranks (mpirun, one thread each beyond one rank; the binary built
+with --features mpi): the program shared among them, its separator's
+Schur complement factorised together. Prints the table and writes it as
+JSON.
 
 usage: scripts/bench/cocd_step_3d.py [--spheres 10000] [--tolerances 1e-8,1e-5]
-         [--threads 1,2] [--repeats 2] [--clarabel] [--work DIR] [--json FILE]
+         [--threads 1,2] [--ranks 1] [--repeats 2] [--clarabel] [--work DIR]
+         [--json FILE]
 """
 import argparse, csv, json, math, os, subprocess, sys
 
@@ -70,8 +75,10 @@ def write(path, text):
         f.write(text)
 
 
-def run(binary, case, out, *sets, threads=2):
+def run(binary, case, out, *sets, threads=2, ranks=1):
     args = [binary, "run", case, "--out", out, "--threads", str(threads), "--json"]
+    if ranks > 1:
+        args = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] + args
     for s in sets:
         args += ["--set", s]
     subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
@@ -128,6 +135,7 @@ def main():
     ap.add_argument("--tolerances", default="1e-8,1e-5")
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--ranks", default="1", help="MPI ranks, e.g. 1,2")
     ap.add_argument("--clarabel", action="store_true")
     ap.add_argument("--work", default="/tmp/grainflow_cocd3d_bench")
     ap.add_argument("--binary", default="target/release/grainflow")
@@ -141,24 +149,25 @@ def main():
         box = json.load(f)
     case = os.path.join(work, "step.toml")
     write(case, step_case(box["side"], box["height"], "rest.csv", "end = 1.0e-3\ndt = 1.0e-3"))
-    configs = [("interior_point", t, float(e)) for e in a.tolerances.split(",")
-               for t in map(int, a.threads.split(","))]
+    configs = [("interior_point", t, float(e), r) for e in a.tolerances.split(",")
+               for r in map(int, a.ranks.split(","))
+               for t in (map(int, a.threads.split(",")) if r == 1 else [1])]
     if a.clarabel:
-        configs += [("clarabel", 2, float(e)) for e in a.tolerances.split(",")]
+        configs += [("clarabel", 2, float(e), 1) for e in a.tolerances.split(",")]
     results = {c: [] for c in configs}
     for _ in range(a.repeats):
         for c in configs:
-            solver, threads, tol = c
+            solver, threads, tol, ranks = c
             s = run(binary, case, os.path.join(work, "step"), f"contact.tolerance={tol}",
-                    f'contact.conic_solver="{solver}"', threads=threads)
+                    f'contact.conic_solver="{solver}"', threads=threads, ranks=ranks)
             results[c].append(s["metrics"])
     table = []
-    print(f"{'solver':15} {'threads':>7} {'eps':>7} {'s per step':>22} {'iterations':>10} {'candidates':>10}")
-    for (solver, threads, tol), ms in results.items():
+    print(f"{'solver':15} {'ranks':>5} {'threads':>7} {'eps':>7} {'s per step':>22} {'iterations':>10} {'candidates':>10}")
+    for (solver, threads, tol, ranks), ms in results.items():
         times = [m["seconds_per_solve"] for m in ms]
-        print(f"{solver:15} {threads:7d} {tol:7.0e} {', '.join(f'{t:.1f}' for t in times):>22} "
+        print(f"{solver:15} {ranks:5d} {threads:7d} {tol:7.0e} {', '.join(f'{t:.1f}' for t in times):>22} "
               f"{ms[0]['mean_iterations']:10.0f} {ms[0]['mean_candidates']:10.0f}")
-        table.append({"solver": solver, "threads": threads, "tolerance": tol,
+        table.append({"solver": solver, "ranks": ranks, "threads": threads, "tolerance": tol,
                       "seconds_per_solve": times, "iterations": ms[0]["mean_iterations"],
                       "candidates": ms[0]["mean_candidates"],
                       "max_penetration": max(m["max_penetration"] for m in ms),

@@ -66,10 +66,10 @@ impl Separator {
             }
             pairs += 1;
             if owner[i] != owner[j] {
-                // The rank of the lower id holds the pair; the other grain's
-                // columns then stand on both ranks.
+                // The lower rank holds the pair; the other grain's columns
+                // then stand on both ranks.
                 crossing_pairs += 1;
-                let higher = if p.id[i] > p.id[j] { i } else { j };
+                let higher = if owner[i] > owner[j] { i } else { j };
                 in_separator[higher] = true;
             }
         }

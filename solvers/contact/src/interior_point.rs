@@ -397,7 +397,14 @@ pub fn solve(
     let mut factor = match shared {
         None => NormalFactor::new(&pattern.matrix, pattern.ordered, &program.column_position),
         Some(communicator) => {
-            NormalFactor::shared(&pattern.matrix, ranks.interior, &mass, communicator)
+            let positions = &program.column_position;
+            NormalFactor::shared(
+                &pattern.matrix,
+                ranks.interior,
+                &mass,
+                positions,
+                communicator,
+            )
         }
     }
     .map_err(fail)?;

@@ -2,16 +2,18 @@
 //! each rank holding its own rows and the columns they reach.
 //!
 //! Each rank holds the pairs of its own grains (a pair across ranks on the
-//! rank of its lower id, [`crate::contacts::listed`]), hence the rows of A
-//! of those pairs, and a body for every grain they reach, its copies of
-//! other ranks' grains included ([`crate::contacts::with_bodies_marked`]).
+//! lower rank, [`crate::contacts::CrossingPairs::LowerRank`]), hence the
+//! rows of A of those pairs, and a body for every grain they reach, its
+//! copies of other ranks' grains included
+//! ([`crate::contacts::with_bodies_marked`]).
 //! The program's columns then fall in two kinds:
 //!
 //! - the **interior** of a rank: its own grains that no other rank's pairs
 //!   reach; only this rank's rows touch them;
 //! - the **separator** S: the grains whose columns stand on more than one
 //!   rank (a copy reached by the pairs of the rank that holds it, and the
-//!   grain on its owner). Every rank holds all of S, in the order of the
+//!   grain on its owner): the higher rank's layer of grains along each
+//!   boundary. Every rank holds all of S, in the order of the
 //!   grains' ids, with the same values: the owners' masses and free
 //!   velocities, and after each Aᵀz the ranks' parts summed.
 //!

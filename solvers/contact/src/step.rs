@@ -192,7 +192,11 @@ impl HardContact {
             system.rebuild();
             return self.step(system, dt);
         }
-        let listed = contacts::listed(system, threshold);
+        let holder = match self.method {
+            Method::Cocd => contacts::CrossingPairs::LowerRank,
+            Method::Nscd { .. } => contacts::CrossingPairs::LowerId,
+        };
+        let listed = contacts::listed_held(system, threshold, holder);
         let mut in_program =
             candidates::within_reach(&listed, (&free_velocity, &free_spin), self.threshold, dt);
         if self.whole_list {

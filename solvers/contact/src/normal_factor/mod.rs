@@ -157,9 +157,10 @@ impl NormalFactor {
         matrix: &CscMatrix<f64>,
         interior: usize,
         mass: &[f64],
+        positions: &[[f64; 3]],
         communicator: &grainflow_core::Communicator,
     ) -> Result<Self, String> {
-        let shared = SharedFactor::new(matrix, interior, mass, communicator);
+        let shared = SharedFactor::new(matrix, interior, mass, positions, communicator);
         // A rank that cannot build its part fails every rank.
         if communicator.any(shared.is_err()) {
             return Err(shared

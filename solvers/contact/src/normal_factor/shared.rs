@@ -58,11 +58,13 @@ pub(crate) struct SharedFactor {
 
 impl SharedFactor {
     /// The factor of `matrix` (upper triangle over [x_I; x_S], `interior`
-    /// columns first), `mass`: P of every column.
+    /// columns first), `mass`: P of every column, `positions`: the body of
+    /// each (a large interior may be ordered by planes through them).
     pub(super) fn new(
         matrix: &CscMatrix<f64>,
         interior: usize,
         mass: &[f64],
+        positions: &[[f64; 3]],
         communicator: &Communicator,
     ) -> Result<Self, String> {
         let n = matrix.n;
@@ -86,7 +88,17 @@ impl SharedFactor {
         let touched_columns: Vec<usize> = touched.iter().map(|&k| interior + k).collect();
         let (half, touched_entries) = if interior > 0 {
             let own: Vec<usize> = (0..interior).collect();
-            (Some(Half::new(matrix, &own, &touched_columns)?), Vec::new())
+            // The rank's interior on the threads of its pool (faer runs the
+            // dense blocks of each supernode there, in the same order).
+            let threads = rayon::current_num_threads();
+            let par = if threads > 1 {
+                Par::rayon(threads)
+            } else {
+                Par::Seq
+            };
+            let positions = (positions.len() == n).then_some(positions);
+            let half = Half::new(matrix, &own, &touched_columns, positions, par)?;
+            (Some(half), Vec::new())
         } else {
             let mut position = vec![usize::MAX; n];
             for (t, &u) in touched_columns.iter().enumerate() {

@@ -17,6 +17,8 @@ pub(crate) struct Half {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
     work: MemBuffer,
+    /// Threads of its numeric factorisation.
+    par: Par,
     /// Λ_i (lower triangular) and T_i = Λ_i Λ_iᵀ.
     lambda: Mat<f64>,
     pub(super) schur_part: Mat<f64>,
@@ -58,7 +60,7 @@ impl SplitFactor {
         }
         let half = |which: u8| -> Result<Half, String> {
             let interior: Vec<usize> = (0..n).filter(|&u| side_of[u] == which).collect();
-            Half::new(matrix, &interior, &separator)
+            Half::new(matrix, &interior, &separator, None, Par::Seq)
         };
         let halves = [half(0)?, half(1)?];
         let mut separator_entries = Vec::new();
@@ -157,13 +159,18 @@ impl SplitFactor {
 }
 
 impl Half {
+    /// The half over `interior` then `separator` (unknowns of `matrix`),
+    /// its interior ordered by AMD, or where `positions` (of each unknown
+    /// of `matrix`) are given and the interior is large, by nested
+    /// dissection if that fills less; factorised on `par`.
     pub(super) fn new(
         matrix: &CscMatrix<f64>,
         interior: &[usize],
         separator: &[usize],
+        positions: Option<&[[f64; 3]]>,
+        par: Par,
     ) -> Result<Self, String> {
         let n = matrix.n;
-        // The interior's own pattern, ordered by AMD.
         let mut local = vec![usize::MAX; n];
         for (k, &u) in interior.iter().enumerate() {
             local[u] = k;
@@ -181,6 +188,13 @@ impl Half {
             MemStack::new(&mut amd_work),
         )
         .map_err(|e| format!("ordering: {e:?}"))?;
+        if let Some(positions) = positions.filter(|_| ni >= SPLIT_FROM_UNKNOWNS) {
+            let own: Vec<[f64; 3]> = interior.iter().map(|&u| positions[u]).collect();
+            let dissected = crate::dissection::order(&colptr, &rowval, ni, Some(&own));
+            if fill(&colptr, &rowval, &dissected)? < fill(&colptr, &rowval, &forward)? {
+                forward = dissected;
+            }
+        }
         // Columns of M_i: the interior in AMD order, then the separator.
         let unknown: Vec<usize> = forward
             .iter()
@@ -210,7 +224,7 @@ impl Half {
             return Err("the split factor needs a supernodal factorisation".into());
         };
         let scratch = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
             supernodal.solve_in_place_scratch::<f64>(1, Par::Seq),
         ]);
         let ns = separator.len();
@@ -222,6 +236,7 @@ impl Half {
             values: vec![0.0; symbolic.len_val()],
             symbolic,
             work: MemBuffer::new(scratch),
+            par,
             lambda: Mat::zeros(ns, ns),
             schur_part: Mat::zeros(ns, ns),
             forward_solution: vec![0.0; size],
@@ -260,7 +275,7 @@ impl Half {
             &mut self.values,
             &mut self.work,
             &self.matrix,
-            Par::Seq,
+            self.par,
         )?;
         let first = self.interior;
         let mut lambda = std::mem::replace(&mut self.lambda, Mat::new());
@@ -442,6 +457,24 @@ pub(super) fn bisect(neighbours: &[Vec<usize>]) -> Option<Vec<u8>> {
         })
         .collect();
     Some(side_of)
+}
+
+/// Entries of the Cholesky factor of the pattern (upper triangle, CSC) in
+/// the order `forward` (the unknown at each position).
+fn fill(colptr: &[usize], rowval: &[usize], forward: &[usize]) -> Result<usize, String> {
+    let n = forward.len();
+    let mut inverse = vec![0usize; n];
+    for (new, &old) in forward.iter().enumerate() {
+        inverse[old] = new;
+    }
+    let symbolic = factorize_symbolic_cholesky(
+        SymbolicSparseColMatRef::new_checked(n, n, colptr, None, rowval),
+        faer::Side::Upper,
+        SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(forward, &inverse, n)),
+        CholeskySymbolicParams::default(),
+    )
+    .map_err(|e| format!("symbolic factorisation: {e:?}"))?;
+    Ok(symbolic.len_val())
 }
 
 /// The upper pattern of `matrix` restricted to the unknowns with a local

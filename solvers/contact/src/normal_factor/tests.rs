@@ -188,7 +188,7 @@ fn the_factor_shared_among_ranks_solves_as_accurately_as_the_whole_one() {
     let mass = vec![1.0; n];
     let interior = n - 3 * 60;
     let communicator = grainflow_core::Communicator::serial();
-    let mut shared = NormalFactor::shared(&matrix, interior, &mass, &communicator).unwrap();
+    let mut shared = NormalFactor::shared(&matrix, interior, &mass, &[], &communicator).unwrap();
     let mut whole = NormalFactor::with_split_from(&matrix, usize::MAX, false, &[]).unwrap();
     let x_shared = solve_with(&mut shared, &matrix, &b);
     let x_whole = solve_with(&mut whole, &matrix, &b);
