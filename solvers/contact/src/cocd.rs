@@ -187,6 +187,11 @@ impl ConicProgram {
         self.scales.gap_per_velocity()
     }
 
+    /// Whether the bodies are spheres (six unknowns each), not discs.
+    pub fn is_three_dimensional(&self) -> bool {
+        self.dimension == Dimension::Three
+    }
+
     /// The same rows over other columns ([`crate::shared_program`]).
     pub(crate) fn with_columns(
         &self,
