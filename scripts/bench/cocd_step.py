@@ -12,11 +12,13 @@ dt = 1e-3 s with contact.model = "cocd" at the same tolerance; its
 seconds_per_solve is the mean time of the conic solve per step (assembly
 included). Prints, per size, the median over --repeats runs of each, their
 ratio, the iterations and contacts, and writes the table as JSON. grainflow
-runs on each thread count of --threads (its results are the same on any).
+runs on each thread count of --threads (its results are the same on any),
+and with --ranks 2 also on that many MPI ranks of one thread each (mpirun;
+the binary built with --features mpi), the program shared among them.
 
 usage: scripts/bench/cocd_step.py [--sizes 8000,50000] [--tolerance 1e-8]
-         [--repeats 3] [--threads 1,2] [--shared ../shared] [--work DIR]
-         [--json FILE]
+         [--repeats 3] [--threads 1,2] [--ranks 2] [--shared ../shared]
+         [--work DIR] [--json FILE]
 """
 import argparse, json, os, shutil, statistics, subprocess, sys
 
@@ -90,11 +92,13 @@ def grainflow_case(npz, work, n, tolerance):
     return case, len(inst["ci"])
 
 
-def run_grainflow(binary, case, work, tag, threads):
+def run_grainflow(binary, case, work, tag, threads, ranks=1):
     out = os.path.join(work, f"out_{tag}")
     shutil.rmtree(out, ignore_errors=True)
-    subprocess.run([binary, "run", case, "--out", out, "--threads", str(threads)], check=True,
-                   stdout=subprocess.DEVNULL)
+    args = [binary, "run", case, "--out", out, "--threads", str(threads)]
+    if ranks > 1:
+        args = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] + args
+    subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, "summary.json")) as f:
         s = json.load(f)
     m = s["metrics"]
@@ -118,6 +122,7 @@ def main():
     ap.add_argument("--tolerance", type=float, default=1e-8)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--threads", default="1,2")
+    ap.add_argument("--ranks", default="", help="MPI ranks of one thread each, e.g. 2")
     ap.add_argument("--shared", default=os.path.join(os.path.dirname(__file__), "../../../shared"))
     ap.add_argument("--work", default="/tmp/grainflow_cocd_bench")
     ap.add_argument("--binary", default="target/release/grainflow")
@@ -130,12 +135,15 @@ def main():
     for n in [int(s) for s in a.sizes.split(",")]:
         npz = make_instance(shared, a.work, n)
         case, peer_contacts = grainflow_case(npz, a.work, n, a.tolerance)
-        threads = [int(t) for t in a.threads.split(",")]
-        ours, peer = {t: [] for t in threads}, []
+        # (ranks, threads) of each configuration, labelled "t2" or "r2".
+        configs = {f"t{t}": (1, int(t)) for t in a.threads.split(",")}
+        configs.update({f"r{r}": (int(r), 1) for r in a.ranks.split(",") if r})
+        ours, peer = {c: [] for c in configs}, []
         for r in range(a.repeats):  # interleaved, so that all see the same machine load
-            for t in threads:
-                ours[t].append(run_grainflow(binary, case, a.work, f"{n}_{r}_t{t}", t))
+            for c, (ranks, t) in configs.items():
+                ours[c].append(run_grainflow(binary, case, a.work, f"{n}_{r}_{c}", t, ranks))
             peer.append(run_peer(shared, npz, a.tolerance, a.work))
+        threads = list(configs)
         first = ours[threads[0]][0]
         row = dict(
             N=n, tolerance=a.tolerance,
@@ -149,12 +157,14 @@ def main():
             samples_peer=[p["seconds"] for p in peer],
         )
         line = f"N={n}: "
-        for t in threads:
-            seconds = statistics.median(o["seconds"] for o in ours[t])
-            row[f"grainflow_seconds_t{t}"] = seconds
-            row[f"samples_grainflow_t{t}"] = [o["seconds"] for o in ours[t]]
-            row[f"ratio_t{t}"] = row["peer_seconds"] / seconds
-            line += f"grainflow {seconds:.3f} s/step on {t} thread(s) (ratio {row[f'ratio_t{t}']:.2f}), "
+        for c in threads:
+            seconds = statistics.median(o["seconds"] for o in ours[c])
+            row[f"grainflow_seconds_{c}"] = seconds
+            row[f"samples_grainflow_{c}"] = [o["seconds"] for o in ours[c]]
+            row[f"ratio_{c}"] = row["peer_seconds"] / seconds
+            ranks, t = configs[c]
+            where = f"{ranks} ranks" if ranks > 1 else f"{t} thread(s)"
+            line += f"grainflow {seconds:.3f} s/step on {where} (ratio {row[f'ratio_{c}']:.2f}), "
         table.append(row)
         print(line + f"{row['grainflow_iterations']:.0f} it, {row['grainflow_contacts']:.0f} contacts; "
               f"Clarabel from Python {row['peer_seconds']:.3f} s ({row['peer_iterations']} it, "

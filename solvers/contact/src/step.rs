@@ -8,9 +8,10 @@
 //! 4. the contact law's residual at the solution;
 //! 5. c^{k+1} = c^k + Δt v^{k+1}; the largest overlap after the move.
 //!
-//! On several ranks (NSCD) each rank solves its own pairs, the copies of
-//! its grains kept in step ([`crate::sharing`]), and every test and
-//! figure of the step is taken over all ranks.
+//! On several ranks each rank holds its own pairs: NSCD sweeps them, the
+//! copies of its grains kept in step ([`crate::sharing`]); COCD solves one
+//! program over all ranks' pairs together ([`crate::shared_program`]).
+//! Every test and figure of the step is taken over all ranks.
 
 use crate::candidates::{self, LeftOutLaw};
 use crate::certificate;

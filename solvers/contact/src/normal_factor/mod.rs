@@ -31,6 +31,11 @@
 //! Each side is sequential, and the two sides' arithmetic does not depend
 //! on which thread runs it: results are the same on any number of
 //! threads, and two threads share the work.
+//!
+//! On several MPI ranks the same algebra runs with one side per rank and
+//! the separator the grains whose columns stand on two ranks
+//! ([`shared`]): each rank factorises its side, the ranks sum their parts
+//! of Σ.
 
 use clarabel::algebra::CscMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
