@@ -1050,15 +1050,16 @@ fn open_column(dir: &Path, time: &str) -> PathBuf {
     column
 }
 
-/// The inclined bed and the column collapse on 2 ranks, resumed on 2 ranks
-/// from their first checkpoint (step 4 of 16, step 100 of 1000): the same
-/// bytes in every series as the run that never stopped.
+/// The inclined bed, the column collapse and the COCD column collapse on 2
+/// ranks, resumed on 2 ranks from their first checkpoint (step 4 of 16,
+/// step 100 of 1000, step 6 of 12): the same bytes in every series as the
+/// run that never stopped.
 #[test]
 fn runs_on_2_ranks_resume_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let column = open_column(dir.path(), "end = 0.005");
-    let scenes: [(PathBuf, Vec<&str>, &[&str], u64); 2] = [
+    let scenes: [(PathBuf, Vec<&str>, &[&str], u64); 3] = [
         (
             root.join("cases/immersed_avalanche.toml"),
             vec![
@@ -1081,6 +1082,17 @@ fn runs_on_2_ranks_resume_bit_for_bit() {
             vec!["parallel.process_grid=[2,1,1]", "output.interval=0.0005"],
             &["series.csv", "tracked.csv", "final_particles.csv"],
             100,
+        ),
+        // COCD's program shared by the two ranks.
+        (
+            root.join("cases/column_collapse_cocd_2d.toml"),
+            vec![
+                "parallel.process_grid=[2,1]",
+                "time.end=0.012",
+                "output.interval=0.004",
+            ],
+            &["series.csv", "final_particles.csv"],
+            6,
         ),
     ];
     for (case, settings, files, every) in scenes {
