@@ -252,15 +252,19 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
         ) && boxed.contains(" of 1200 unknowns"),
         "{boxed}"
     );
-    // Clarabel has no ranks.
+    // An axisymmetric scene runs on one rank.
     let refused = grainflow()
-        .args(["check", &case("static_box.toml"), "--ranks", "2"])
-        .args(["--set", "contact.conic_solver=\"clarabel\""])
+        .args([
+            "check",
+            &case("falling_sphere_axisymmetric.toml"),
+            "--ranks",
+            "2",
+        ])
         .output()
         .unwrap();
     assert_eq!(refused.status.code(), Some(2));
     let refusal = String::from_utf8_lossy(&refused.stderr);
-    assert!(refusal.contains("COCD solved by Clarabel"), "{refusal}");
+    assert!(refusal.contains("an axisymmetric scene"), "{refusal}");
 }
 
 /// With `time.cfl`, `check` counts the steps at the speeds the scene is

@@ -20,8 +20,7 @@ use crate::checkpoint::extent::states_to_read;
 use crate::checkpoint::{self, case_changes};
 use crate::output::writers::{Writers, WritersRecord};
 use crate::output::RunDirectory;
-use crate::{scene, RunError};
-use grainflow_contact::{ConicSolver, Method};
+use crate::RunError;
 use grainflow_core::Communicator;
 use model::Model;
 use schedule::Schedule;
@@ -123,17 +122,10 @@ pub(crate) fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
         Err(RunError::Case(format!(
             "{what} runs on one rank in this version; started on {ranks} ranks: run it \
              without mpirun (its threads use every core of a node); allowed on several \
-             ranks: scenes with contact.model = \"soft\", \"nscd\" or \"cocd\" (solved by \
-             grainflow's interior point) and scenes of a fluid alone"
+             ranks: scenes of grains (any contact model), of a fluid alone and of grains in \
+             a fluid"
         )))
     };
-    if case.has_grains()
-        && scene::hard_contact(case).is_some_and(|hard| {
-            hard.method == Method::Cocd && hard.conic_solver == ConicSolver::Clarabel
-        })
-    {
-        return refuse("COCD solved by Clarabel (contact.conic_solver = \"clarabel\")");
-    }
     if case.domain.geometry == crate::case::Geometry::Axisymmetric {
         return refuse("an axisymmetric scene (domain.geometry = \"axisymmetric\")");
     }

@@ -192,6 +192,31 @@ impl ConicProgram {
         self.dimension == Dimension::Three
     }
 
+    /// The program of `rows` over `mass.len()` columns, of the same step as
+    /// `self` (the ranks' programs gathered into one,
+    /// [`crate::shared_program`]): for Clarabel, which needs no more.
+    pub(crate) fn gathered(
+        &self,
+        (mass, free): (Vec<f64>, Vec<f64>),
+        a_matrix: CscMatrix<f64>,
+        b: Vec<f64>,
+        (linear_rows, cone_count): (usize, usize),
+    ) -> ConicProgram {
+        ConicProgram {
+            mass,
+            free,
+            a_matrix,
+            b,
+            linear_rows,
+            cone_count,
+            column_position: Vec::new(),
+            kinds: Vec::new(),
+            first_row: Vec::new(),
+            dimension: self.dimension,
+            scales: self.scales,
+        }
+    }
+
     /// The same rows over other columns ([`crate::shared_program`]).
     pub(crate) fn with_columns(
         &self,
@@ -253,9 +278,10 @@ pub fn solve(
 /// Solves the step's program shared among the ranks of `communicator`
 /// (collective; [`crate::shared_program`]): each rank holds its own
 /// `contacts` and `bodies`, `separator[b]` for the bodies whose grain
-/// another rank's pairs also reach, `ids` the local grains' ids. Only
-/// grainflow's interior point solves a shared program (Clarabel has no
-/// ranks): its failure stops the step.
+/// another rank's pairs also reach, `ids` the local grains' ids.
+/// grainflow's interior point solves it shared; Clarabel, on request or
+/// where the interior point fails, solves the whole program gathered on
+/// every rank.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_shared(
     contacts: &ContactSet,
@@ -264,6 +290,7 @@ pub fn solve_shared(
     scales: &Scales,
     tolerance: f64,
     max_iterations: u32,
+    solver: ConicSolver,
     separator: &[bool],
     ids: &[u64],
     communicator: &Communicator,
@@ -275,17 +302,30 @@ pub fn solve_shared(
         communicator: Some(communicator),
         interior: shared.interior,
     };
-    let (x, z, iterations, reduced_accuracy) =
-        crate::interior_point::solve(&shared.program, tolerance, max_iterations, ranks)?;
+    let gathered = || {
+        let (whole, layout) = shared.gathered(communicator);
+        let (x, z, iterations, reduced) = solve_with_clarabel(&whole, tolerance, max_iterations)?;
+        let (x, z) = layout.rank_part(&x, &z);
+        Ok::<_, String>((x, z, iterations, reduced))
+    };
+    // The interior point's decisions are taken over all ranks: it fails on
+    // every rank alike, and every rank takes Clarabel's solve.
+    let mut fallback_reason = None;
+    let (x, z, iterations, reduced_accuracy) = if solver == ConicSolver::InteriorPoint {
+        match crate::interior_point::solve(&shared.program, tolerance, max_iterations, ranks) {
+            Ok(solution) => solution,
+            Err(why) => {
+                fallback_reason = Some(why.clone());
+                gathered().map_err(|again| format!("{why}; then {again}"))?
+            }
+        }
+    } else {
+        gathered()?
+    };
     let x = shared.local_unknowns(&x, d);
-    Ok(recover(
-        contacts,
-        &program,
-        &x,
-        &z,
-        iterations,
-        reduced_accuracy,
-    ))
+    let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
+    solution.fallback_reason = fallback_reason;
+    Ok(solution)
 }
 
 /// Assembles the program of the step.
@@ -454,7 +494,7 @@ fn csc_from_triplets(
 }
 
 /// Solves the program with Clarabel: (x, z, iterations, reduced accuracy).
-fn solve_with_clarabel(
+pub(crate) fn solve_with_clarabel(
     program: &ConicProgram,
     tolerance: f64,
     max_iterations: u32,

@@ -206,3 +206,124 @@ impl SharedProgram {
         local
     }
 }
+
+/// Where a rank's columns and rows stand in the program gathered from
+/// every rank ([`SharedProgram::gathered`]).
+pub struct GatheredLayout {
+    /// First column of the rank's interior, its length, and the first
+    /// column of the separator.
+    interior_start: usize,
+    interior: usize,
+    separator_start: usize,
+    /// Row of the gathered program of each of the rank's rows.
+    rows: Vec<usize>,
+}
+
+impl GatheredLayout {
+    /// The rank's part of the gathered program's solution: x over its
+    /// interior then the separator, z over its rows.
+    pub fn rank_part(&self, x: &[f64], z: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let mut own = x[self.interior_start..self.interior_start + self.interior].to_vec();
+        own.extend_from_slice(&x[self.separator_start..]);
+        (own, self.rows.iter().map(|&r| z[r]).collect())
+    }
+}
+
+impl SharedProgram {
+    /// The whole program, every rank's rows and interior with the
+    /// separator, on every rank (collective): the ranks' interiors in rank
+    /// order then the separator; the ranks' linear rows in rank order, then
+    /// their cones. For Clarabel, which factorises it whole.
+    pub fn gathered(&self, communicator: &Communicator) -> (ConicProgram, GatheredLayout) {
+        let own = &self.program;
+        let (ni, a) = (self.interior, &own.a_matrix);
+        // The rank's message: its sizes, interior masses and free
+        // velocities, b, then A's entries as (row, column, value).
+        let mut message = vec![
+            ni as f64,
+            own.linear_rows as f64,
+            own.cone_count as f64,
+            a.nzval.len() as f64,
+        ];
+        message.extend_from_slice(&own.mass[..ni]);
+        message.extend_from_slice(&own.free[..ni]);
+        message.extend_from_slice(&own.b);
+        for c in 0..a.n {
+            for k in a.colptr[c]..a.colptr[c + 1] {
+                message.extend([a.rowval[k] as f64, c as f64, a.nzval[k]]);
+            }
+        }
+        let received = communicator.exchange(vec![message; communicator.size()]);
+        let sizes: Vec<[usize; 4]> = received
+            .iter()
+            .map(|m| [0, 1, 2, 3].map(|k| m[k] as usize))
+            .collect();
+        let total = |k: usize| sizes.iter().map(|s| s[k]).sum::<usize>();
+        let (interiors, linear, cones) = (total(0), total(1), total(2));
+        let separator = own.mass.len() - ni;
+        let columns = interiors + separator;
+        let rows = linear + 3 * cones;
+        let (mut mass, mut free, mut b) =
+            (Vec::with_capacity(columns), Vec::new(), vec![0.0; rows]);
+        let mut entries: Vec<(usize, usize, f64)> = Vec::new();
+        let (mut column_start, mut linear_start, mut cone_start) = (0, 0, 0);
+        let mut layout = None;
+        for (rank, (message, &[n_i, n_linear, n_cones, nnz])) in
+            received.iter().zip(&sizes).enumerate()
+        {
+            let row_of = |r: usize| {
+                if r < n_linear {
+                    linear_start + r
+                } else {
+                    linear + 3 * cone_start + (r - n_linear)
+                }
+            };
+            let column_of = |c: usize| {
+                if c < n_i {
+                    column_start + c
+                } else {
+                    interiors + (c - n_i)
+                }
+            };
+            let n_rows = n_linear + 3 * n_cones;
+            let body = &message[4..];
+            mass.extend_from_slice(&body[..n_i]);
+            free.extend_from_slice(&body[n_i..2 * n_i]);
+            for (r, &value) in body[2 * n_i..2 * n_i + n_rows].iter().enumerate() {
+                b[row_of(r)] = value;
+            }
+            for e in body[2 * n_i + n_rows..].chunks_exact(3).take(nnz) {
+                entries.push((column_of(e[1] as usize), row_of(e[0] as usize), e[2]));
+            }
+            if rank == communicator.rank() {
+                layout = Some(GatheredLayout {
+                    interior_start: column_start,
+                    interior: n_i,
+                    separator_start: interiors,
+                    rows: (0..n_rows).map(row_of).collect(),
+                });
+            }
+            column_start += n_i;
+            linear_start += n_linear;
+            cone_start += n_cones;
+        }
+        mass.extend_from_slice(&own.mass[ni..]);
+        free.extend_from_slice(&own.free[ni..]);
+        entries.sort_unstable_by_key(|&(c, r, _)| (c, r));
+        let mut colptr = vec![0usize; columns + 1];
+        for &(c, _, _) in &entries {
+            colptr[c + 1] += 1;
+        }
+        for c in 0..columns {
+            colptr[c + 1] += colptr[c];
+        }
+        let rowval = entries.iter().map(|e| e.1).collect();
+        let nzval = entries.iter().map(|e| e.2).collect();
+        let a_matrix = CscMatrix::new(rows, columns, colptr, rowval, nzval);
+        let whole = own.gathered((mass, free), a_matrix, b, (linear, cones));
+        (
+            whole,
+            layout.expect("this rank's message among the gathered"),
+        )
+    }
+}

@@ -403,11 +403,6 @@ impl HardContact {
                         ..Solution::default()
                     }
                 } else if system.communicator.size() > 1 {
-                    if self.conic_solver == ConicSolver::Clarabel {
-                        return Err("Clarabel solves COCD on one rank only; on several ranks \
-                                    grainflow's interior point solves the shared program"
-                            .into());
-                    }
                     cocd::solve_shared(
                         contacts,
                         bodies,
@@ -415,6 +410,7 @@ impl HardContact {
                         scales,
                         self.tolerance,
                         self.max_iterations,
+                        self.conic_solver,
                         shared_bodies,
                         &system.particles.id,
                         &system.communicator,
