@@ -194,8 +194,8 @@ impl HardContact {
             return self.step(system, dt);
         }
         let holder = match self.method {
-            Method::Cocd => contacts::CrossingPairs::LowerRank,
-            Method::Nscd { .. } => contacts::CrossingPairs::LowerId,
+            Method::Cocd if shared => contacts::CrossingPairs::LowerRank,
+            _ => contacts::CrossingPairs::LowerId,
         };
         let listed = contacts::listed_held(system, threshold, holder);
         let mut in_program =
