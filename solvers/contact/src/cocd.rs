@@ -254,25 +254,38 @@ pub fn solve(
     solver: ConicSolver,
 ) -> Result<Solution, String> {
     let program = build(contacts, bodies, dimension, scales);
-    // Should grainflow's interior point fail on a step, Clarabel takes it
-    // over (and stops the run if it fails too).
-    let mut fallback_reason = None;
-    let (x, z, iterations, reduced_accuracy) = if solver == ConicSolver::InteriorPoint {
-        let ranks = Ranks::alone(program.mass.len());
-        match crate::interior_point::solve(&program, tolerance, max_iterations, ranks) {
-            Ok(solution) => solution,
-            Err(why) => {
-                fallback_reason = Some(why.clone());
-                solve_with_clarabel(&program, tolerance, max_iterations)
-                    .map_err(|again| format!("{why}; then {again}"))?
-            }
-        }
-    } else {
-        solve_with_clarabel(&program, tolerance, max_iterations)?
-    };
+    let ranks = Ranks::alone(program.mass.len());
+    let ((x, z, iterations, reduced_accuracy), fallback_reason) = with_fallback(
+        solver,
+        || crate::interior_point::solve(&program, tolerance, max_iterations, ranks),
+        || solve_with_clarabel(&program, tolerance, max_iterations),
+    )?;
     let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
     solution.fallback_reason = fallback_reason;
     Ok(solution)
+}
+
+/// (x, z, iterations, reduced accuracy) of a conic solve.
+type ConicSolution = (Vec<f64>, Vec<f64>, u32, bool);
+
+/// The solution of `solver`: grainflow's interior point, Clarabel taking
+/// over a step it fails (and stopping the run if it fails too), with the
+/// interior point's failure; or Clarabel's on request.
+fn with_fallback(
+    solver: ConicSolver,
+    interior_point: impl FnOnce() -> Result<ConicSolution, String>,
+    clarabel: impl FnOnce() -> Result<ConicSolution, String>,
+) -> Result<(ConicSolution, Option<String>), String> {
+    if solver == ConicSolver::Clarabel {
+        return Ok((clarabel()?, None));
+    }
+    match interior_point() {
+        Ok(solution) => Ok((solution, None)),
+        Err(why) => {
+            let solution = clarabel().map_err(|again| format!("{why}; then {again}"))?;
+            Ok((solution, Some(why)))
+        }
+    }
 }
 
 /// Solves the step's program shared among the ranks of `communicator`
@@ -302,26 +315,19 @@ pub fn solve_shared(
         communicator: Some(communicator),
         interior: shared.interior,
     };
-    let gathered = || {
-        let (whole, layout) = shared.gathered(communicator);
-        let (x, z, iterations, reduced) = solve_with_clarabel(&whole, tolerance, max_iterations)?;
-        let (x, z) = layout.rank_part(&x, &z);
-        Ok::<_, String>((x, z, iterations, reduced))
-    };
     // The interior point's decisions are taken over all ranks: it fails on
     // every rank alike, and every rank takes Clarabel's solve.
-    let mut fallback_reason = None;
-    let (x, z, iterations, reduced_accuracy) = if solver == ConicSolver::InteriorPoint {
-        match crate::interior_point::solve(&shared.program, tolerance, max_iterations, ranks) {
-            Ok(solution) => solution,
-            Err(why) => {
-                fallback_reason = Some(why.clone());
-                gathered().map_err(|again| format!("{why}; then {again}"))?
-            }
-        }
-    } else {
-        gathered()?
-    };
+    let ((x, z, iterations, reduced_accuracy), fallback_reason) = with_fallback(
+        solver,
+        || crate::interior_point::solve(&shared.program, tolerance, max_iterations, ranks),
+        || {
+            let (whole, layout) = shared.gathered(communicator);
+            let (x, z, iterations, reduced) =
+                solve_with_clarabel(&whole, tolerance, max_iterations)?;
+            let (x, z) = layout.rank_part(&x, &z);
+            Ok((x, z, iterations, reduced))
+        },
+    )?;
     let x = shared.local_unknowns(&x, d);
     let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
     solution.fallback_reason = fallback_reason;
@@ -498,7 +504,7 @@ pub(crate) fn solve_with_clarabel(
     program: &ConicProgram,
     tolerance: f64,
     max_iterations: u32,
-) -> Result<(Vec<f64>, Vec<f64>, u32, bool), String> {
+) -> Result<ConicSolution, String> {
     let columns = program.mass.len();
     let p_matrix = CscMatrix::new(
         columns,

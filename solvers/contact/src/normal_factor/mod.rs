@@ -94,6 +94,34 @@ fn no_regularisation() -> LltRegularization<f64> {
     }
 }
 
+/// Σ = LLᵀ in place (dense; L in the lower triangle), the separator's
+/// Schur complement.
+fn factorise_schur(schur: &mut Mat<f64>, work: &mut MemBuffer) -> Result<(), String> {
+    faer::linalg::cholesky::llt::factor::cholesky_in_place(
+        schur.as_mut(),
+        no_regularisation(),
+        Par::Seq,
+        MemStack::new(work),
+        Default::default(),
+    )
+    .map(|_| ())
+    .map_err(|e| format!("the separator's Schur complement is not positive definite: {e:?}"))
+}
+
+/// x ← Σ⁻¹ x with the factor of [`factorise_schur`].
+fn solve_schur(schur: &Mat<f64>, x: &mut Mat<f64>) {
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+        schur.as_ref(),
+        x.as_mut(),
+        Par::Seq,
+    );
+    faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+        schur.transpose(),
+        x.as_mut(),
+        Par::Seq,
+    );
+}
+
 /// The numeric factorisation of `matrix` into `values`, sequential.
 fn factorise_numeric(
     symbolic: &SymbolicCholesky<usize>,

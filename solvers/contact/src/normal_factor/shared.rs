@@ -206,15 +206,7 @@ impl SharedFactor {
             self.schur[(j, j)] += self.mass[j];
         }
         // Every rank holds the same Σ and factorises it alike.
-        faer::linalg::cholesky::llt::factor::cholesky_in_place(
-            self.schur.as_mut(),
-            no_regularisation(),
-            Par::Seq,
-            MemStack::new(&mut self.dense_work),
-            Default::default(),
-        )
-        .map(|_| ())
-        .map_err(|e| format!("the separator's Schur complement is not positive definite: {e:?}"))
+        factorise_schur(&mut self.schur, &mut self.dense_work)
     }
 
     /// Overwrites `rhs` ([r_I; r_S], r_S the same on every rank) with
@@ -234,16 +226,7 @@ impl SharedFactor {
         for k in 0..ns {
             x_s[(k, 0)] = rhs[interior + k] + right[k];
         }
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-            self.schur.as_ref(),
-            x_s.as_mut(),
-            Par::Seq,
-        );
-        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
-            self.schur.transpose(),
-            x_s.as_mut(),
-            Par::Seq,
-        );
+        solve_schur(&self.schur, &mut x_s);
         // 3. The interior's back solve with x_S on the touched separator.
         if let Some(half) = &mut self.half {
             let mut x_touched = Mat::<f64>::zeros(self.touched.len(), 1);

@@ -109,15 +109,7 @@ impl SplitFactor {
             let (i, j) = (r.max(c), r.min(c));
             self.schur[(i, j)] -= matrix.nzval[k];
         }
-        faer::linalg::cholesky::llt::factor::cholesky_in_place(
-            self.schur.as_mut(),
-            no_regularisation(),
-            Par::Seq,
-            MemStack::new(&mut self.dense_work),
-            Default::default(),
-        )
-        .map(|_| ())
-        .map_err(|e| format!("the separator's Schur complement is not positive definite: {e:?}"))
+        factorise_schur(&mut self.schur, &mut self.dense_work)
     }
 
     pub(super) fn solve(&mut self, rhs: &mut [f64]) {
@@ -131,16 +123,7 @@ impl SplitFactor {
         for (k, &u) in self.separator.iter().enumerate() {
             x_s[(k, 0)] = rhs[u] + lambda_w1[k] + lambda_w2[k];
         }
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-            self.schur.as_ref(),
-            x_s.as_mut(),
-            Par::Seq,
-        );
-        faer::linalg::triangular_solve::solve_upper_triangular_in_place(
-            self.schur.transpose(),
-            x_s.as_mut(),
-            Par::Seq,
-        );
+        solve_schur(&self.schur, &mut x_s);
         // 3. Back solves of each side's interior.
         let [first, second] = &mut self.halves;
         let (x1, x2) = rayon::join(
