@@ -445,47 +445,56 @@ tracked_interval = 1.0e-3
     assert_eq!(metrics(&out)["unconverged_steps"], 0);
 }
 
-/// COCD on several ranks: the column collapses of `cases/` (2D: 410 discs
-/// on a bed of 90 glued ones; 3D: 2,100 spheres, periodic across the
-/// channel) from their release, the program shared among the ranks (each
-/// holds its rows; the grains that pairs on two ranks reach form a
-/// separator whose Schur complement the ranks factorise together). It is
-/// one rank's program with its sums in another order: the states agree
-/// within 1e-10, positions relative to the largest coordinate, velocities
-/// to the largest speed V, spins as ωR/V. Measured: 2D after 5 steps
-/// 2.0e-11 (2 ranks), 2.6e-11 and 1.5e-11 (4); 3D after 3 steps 5.9e-12
-/// and 4.4e-12. Clarabel on the program gathered on every rank (the
-/// reference, and the interior point's fallback), 2D on 2 ranks: 2.8e-12. Steps further on, the program's own sensitivity to
-/// round-off shows: at the fourth 3D step the serial run with gravity
-/// changed in its 16th digit moves the spins by 2.7e-9 rad/s, the ranks
-/// by 3.2e-9.
+/// COCD on several ranks, the program shared among them (each holds its
+/// rows; the grains that pairs on two ranks reach form a separator whose
+/// Schur complement the ranks factorise together): the 2D column collapse
+/// of `cases/` (410 discs on a bed of 28 glued ones) in a domain cut to
+/// 0.25 × 0.2 m so that the ranks' boxes cut the column (separator of 13
+/// discs on 2 ranks), and the 3D static box (1,600 spheres) with gravity
+/// tilted by 45° so that the packing slumps against its wall (separator of
+/// 234 spheres on 2 ranks, 460 on 4). It is one rank's program with its
+/// sums in another order: the states agree within 1e-10, positions
+/// relative to the largest coordinate, velocities to the largest speed V,
+/// spins as ωR/V. Measured: 2D 4.8e-11 (2 ranks), 2.4e-11 and 1.9e-11 (4)
+/// after 5 steps; 3D 2.0e-11 (2) and 2.8e-11 (4) after 3 steps. Clarabel on
+/// the program gathered on every rank (the reference, and the interior
+/// point's fallback), 2D on 2 ranks: 1.7e-12.
 #[test]
 fn cocd_on_2_and_4_ranks_matches_the_serial_run() {
     let dir = tempfile::tempdir().unwrap();
     let cases = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases");
     let interior_point = "contact.conic_solver=\"interior_point\"";
     let clarabel = "contact.conic_solver=\"clarabel\"";
-    for (name, grains, end, solver, grids) in [
+    let column = [
+        "time.end=0.005",
+        "domain.upper=[0.25,0.2]",
+        "particles.block[0].upper=[0.25,0.0088]",
+    ];
+    let slumping = ["time.end=0.003", "domain.gravity=[6.937,0.0,-6.937]"];
+    for (name, grains, radius, scene, solver, grids) in [
         (
             "column_collapse_cocd_2d.toml",
-            500,
-            "0.005",
+            438,
+            4.0e-3,
+            &column[..],
             interior_point,
             vec![(2, "[2,1]"), (4, "[4,1]"), (4, "[2,2]")],
         ),
         (
             "column_collapse_cocd_2d.toml",
-            500,
-            "0.005",
+            438,
+            4.0e-3,
+            &column[..],
             clarabel,
             vec![(2, "[2,1]")],
         ),
         (
-            "column_collapse_cocd_3d.toml",
-            2460,
-            "0.003",
+            "static_box_3d.toml",
+            1600,
+            5.0e-4,
+            &slumping[..],
             interior_point,
-            vec![(2, "[2,1,1]"), (2, "[1,1,2]")],
+            vec![(2, "[2,1,1]"), (4, "[2,2,1]")],
         ),
     ] {
         let text = std::fs::read_to_string(cases.join(name)).unwrap();
@@ -496,39 +505,34 @@ fn cocd_on_2_and_4_ranks_matches_the_serial_run() {
                 "path = \"data/",
                 &format!("path = \"{}/data/", cases.display()),
             )
-            .replace("seed = 11", &format!("seed = 11\n{}", tracked_all(grains)))
             .replace(
-                "interval = 0.02",
-                "interval = 0.01\ntracked_interval = 1.0e-3",
-            ),
+                "[particles]\n",
+                &format!("[particles]\n{}\n", tracked_all(grains)),
+            )
+            .replace("[output]\n", "[output]\ntracked_interval = 1.0e-3\n"),
         )
         .unwrap();
-        let time = format!("time.end={end}");
+        let mut settings: Vec<&str> = scene.to_vec();
+        settings.push(solver);
         let serial = dir.path().join(format!("{name}_{solver}_serial"));
-        let (code, stderr) = run(
-            &case,
-            &serial,
-            1,
-            &[&time, solver],
-            Duration::from_secs(300),
-        );
+        let (code, stderr) = run(&case, &serial, 1, &settings, Duration::from_secs(300));
         assert_eq!(code, 0, "{stderr}");
         let (end, reference) = final_states(&serial);
         assert_eq!(reference.len(), grains, "{name}");
         let speed = |s: &Vec<f64>| (s[3] * s[3] + s[4] * s[4] + s[5] * s[5]).sqrt();
         let fastest = reference.values().map(speed).fold(0.0, f64::max);
-        // The release has set the column moving.
+        // The release, or the tilted gravity, has set the grains moving.
         assert!(fastest > 0.01, "{name}: {fastest}");
         let extent = reference
             .values()
             .flat_map(|s| s[..3].iter().map(|x| x.abs()))
             .fold(0.0, f64::max);
-        let radius = 4.0e-3;
         for (ranks, grid) in grids {
             let out = dir.path().join(format!("{name}_{solver}_{ranks}_{grid}"));
             let grid = format!("parallel.process_grid={grid}");
-            let settings = [time.as_str(), solver, grid.as_str()];
-            let (code, stderr) = run(&case, &out, ranks, &settings, Duration::from_secs(300));
+            let mut on_ranks = settings.clone();
+            on_ranks.push(&grid);
+            let (code, stderr) = run(&case, &out, ranks, &on_ranks, Duration::from_secs(300));
             assert_eq!(code, 0, "{ranks} ranks {grid}: {stderr}");
             let (other_end, states) = final_states(&out);
             assert_eq!(other_end, end);

@@ -14,8 +14,10 @@
 //! summed over the ranks at each factorisation): its matrix
 //! M_r = [K_rr K_rS; K_Sr K_SS^r + E_r], E_r = D_S − diag(K_SS^r), is then
 //! as well conditioned as K. With the mass alone there, a rank's part held
-//! by contacts much stiffer than the masses (Θ of 1e12 near the solution)
-//! lost its positive pivots to round-off. The last block gives
+//! by contacts much stiffer than the masses lost its positive pivots to
+//! round-off near the solution (a packing of 1,600 spheres slumping on 2
+//! ranks at ε = 1e-9: 3 of 10 steps left to Clarabel, none with D_S, none
+//! on one rank). The last block gives
 //! T_r = K_SS^r + E_r − K_Sr K_rr⁻¹ K_rS, and the Schur complement of the
 //! whole matrix is
 //!
