@@ -452,7 +452,7 @@ tracked_interval = 1.0e-3
 /// 0.25 × 0.2 m so that the ranks' boxes cut the column (separator of 13
 /// discs on 2 ranks), and the 3D static box (1,600 spheres) with gravity
 /// tilted by 45° so that the packing slumps against its wall (separator of
-/// 234 spheres on 2 ranks, 460 on 4). It is one rank's program with its
+/// 117 spheres on 2 ranks, 230 on 4). It is one rank's program with its
 /// sums in another order: the states agree within 1e-10, positions
 /// relative to the largest coordinate, velocities to the largest speed V,
 /// spins as ωR/V. Measured: 2D 4.8e-11 (2 ranks), 2.4e-11 and 1.9e-11 (4)
@@ -1107,6 +1107,9 @@ fn runs_on_2_ranks_resume_bit_for_bit() {
                 "parallel.process_grid=[2,1]",
                 "time.end=0.012",
                 "output.interval=0.004",
+                // The ranks' boxes cut the column.
+                "domain.upper=[0.25,0.2]",
+                "particles.block[0].upper=[0.25,0.0088]",
             ],
             &["series.csv", "final_particles.csv"],
             6,
