@@ -241,9 +241,21 @@ impl ConicProgram {
     }
 }
 
+/// A rank's part of a program shared among ranks ([`crate::shared_program`]):
+/// `separator[b]` for the bodies whose grain another rank's pairs also
+/// reach, `ids` the local grains' ids.
+pub struct RankShare<'a> {
+    pub separator: &'a [bool],
+    pub ids: &'a [u64],
+    pub communicator: &'a Communicator,
+}
+
 /// Solves the step's conic program with `solver` (Clarabel taking over a
 /// step grainflow's interior point fails). `tolerance`: the relative gap and feasibility
-/// tolerances (ε of section 3.2).
+/// tolerances (ε of section 3.2). `shared`: on several ranks, this rank's
+/// part of the program (collective): grainflow's interior point solves it
+/// shared, Clarabel the whole program gathered on every rank.
+#[allow(clippy::too_many_arguments)]
 pub fn solve(
     contacts: &ContactSet,
     bodies: &Bodies,
@@ -252,14 +264,45 @@ pub fn solve(
     tolerance: f64,
     max_iterations: u32,
     solver: ConicSolver,
+    shared: Option<RankShare<'_>>,
 ) -> Result<Solution, String> {
     let program = build(contacts, bodies, dimension, scales);
-    let ranks = Ranks::alone(program.mass.len());
-    let ((x, z, iterations, reduced_accuracy), fallback_reason) = with_fallback(
-        solver,
-        || crate::interior_point::solve(&program, tolerance, max_iterations, ranks),
-        || solve_with_clarabel(&program, tolerance, max_iterations),
-    )?;
+    let ((x, z, iterations, reduced_accuracy), fallback_reason) = match shared {
+        None => {
+            let ranks = Ranks::alone(program.mass.len());
+            with_fallback(
+                solver,
+                || crate::interior_point::solve(&program, tolerance, max_iterations, ranks),
+                || solve_with_clarabel(&program, tolerance, max_iterations),
+            )?
+        }
+        Some(RankShare {
+            separator,
+            ids,
+            communicator,
+        }) => {
+            let d = dofs(dimension);
+            let shared = SharedProgram::new(&program, bodies, d, separator, ids, communicator)?;
+            let ranks = Ranks {
+                communicator: Some(communicator),
+                interior: shared.interior,
+            };
+            // The interior point's decisions are taken over all ranks: it
+            // fails on every rank alike, and every rank takes Clarabel's.
+            let ((x, z, iterations, reduced), why) = with_fallback(
+                solver,
+                || crate::interior_point::solve(&shared.program, tolerance, max_iterations, ranks),
+                || {
+                    let (whole, layout) = shared.gathered(communicator);
+                    let (x, z, iterations, reduced) =
+                        solve_with_clarabel(&whole, tolerance, max_iterations)?;
+                    let (x, z) = layout.rank_part(&x, &z);
+                    Ok((x, z, iterations, reduced))
+                },
+            )?;
+            ((shared.local_unknowns(&x, d), z, iterations, reduced), why)
+        }
+    };
     let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
     solution.fallback_reason = fallback_reason;
     Ok(solution)
@@ -286,52 +329,6 @@ fn with_fallback(
             Ok((solution, Some(why)))
         }
     }
-}
-
-/// Solves the step's program shared among the ranks of `communicator`
-/// (collective; [`crate::shared_program`]): each rank holds its own
-/// `contacts` and `bodies`, `separator[b]` for the bodies whose grain
-/// another rank's pairs also reach, `ids` the local grains' ids.
-/// grainflow's interior point solves it shared; Clarabel, on request or
-/// where the interior point fails, solves the whole program gathered on
-/// every rank.
-#[allow(clippy::too_many_arguments)]
-pub fn solve_shared(
-    contacts: &ContactSet,
-    bodies: &Bodies,
-    dimension: Dimension,
-    scales: &Scales,
-    tolerance: f64,
-    max_iterations: u32,
-    solver: ConicSolver,
-    separator: &[bool],
-    ids: &[u64],
-    communicator: &Communicator,
-) -> Result<Solution, String> {
-    let program = build(contacts, bodies, dimension, scales);
-    let d = dofs(dimension);
-    let shared = SharedProgram::new(&program, bodies, d, separator, ids, communicator)?;
-    let ranks = Ranks {
-        communicator: Some(communicator),
-        interior: shared.interior,
-    };
-    // The interior point's decisions are taken over all ranks: it fails on
-    // every rank alike, and every rank takes Clarabel's solve.
-    let ((x, z, iterations, reduced_accuracy), fallback_reason) = with_fallback(
-        solver,
-        || crate::interior_point::solve(&shared.program, tolerance, max_iterations, ranks),
-        || {
-            let (whole, layout) = shared.gathered(communicator);
-            let (x, z, iterations, reduced) =
-                solve_with_clarabel(&whole, tolerance, max_iterations)?;
-            let (x, z) = layout.rank_part(&x, &z);
-            Ok((x, z, iterations, reduced))
-        },
-    )?;
-    let x = shared.local_unknowns(&x, d);
-    let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
-    solution.fallback_reason = fallback_reason;
-    Ok(solution)
 }
 
 /// Assembles the program of the step.

@@ -402,20 +402,12 @@ impl HardContact {
                         spin: bodies.free_spin.clone(),
                         ..Solution::default()
                     }
-                } else if system.communicator.size() > 1 {
-                    cocd::solve_shared(
-                        contacts,
-                        bodies,
-                        system.dimension(),
-                        scales,
-                        self.tolerance,
-                        self.max_iterations,
-                        self.conic_solver,
-                        shared_bodies,
-                        &system.particles.id,
-                        &system.communicator,
-                    )?
                 } else {
+                    let shared = (system.communicator.size() > 1).then(|| cocd::RankShare {
+                        separator: shared_bodies,
+                        ids: &system.particles.id,
+                        communicator: &system.communicator,
+                    });
                     cocd::solve(
                         contacts,
                         bodies,
@@ -424,6 +416,7 @@ impl HardContact {
                         self.tolerance,
                         self.max_iterations,
                         self.conic_solver,
+                        shared,
                     )?
                 };
                 let reduced = solution.reduced_accuracy;

@@ -360,6 +360,7 @@ fn resting_stacks_carry_the_weights_statics_gives() {
                 TOLERANCE,
                 100,
                 solver,
+                None,
             )
             .unwrap();
             (what, solution)

@@ -116,6 +116,7 @@ fn the_interior_point_solves_3d_cones_as_clarabel_does() {
                 TOLERANCE,
                 200,
                 solver,
+                None,
             )
             .unwrap()
         };
