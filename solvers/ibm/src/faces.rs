@@ -88,8 +88,6 @@ pub(crate) struct FaceRows {
     alpha: Vec<f64>,
     /// `Δx`, the distance between the faces of a row.
     pub step: f64,
-    /// `Σ α` over the faces.
-    pub sum: f64,
 }
 
 impl FaceRows {
@@ -197,7 +195,6 @@ impl FaceRows {
             rows,
             alpha,
             step: grid.spacing[0],
-            sum: 0.0,
         };
         if !layers.is_empty() {
             let mut start = 0;
@@ -210,8 +207,14 @@ impl FaceRows {
                 start += len;
             }
         }
-        faces.sum = faces.alpha.iter().sum();
         faces
+    }
+
+    /// `Σ α` over the faces. (Made when asked: only the grid volumes of a
+    /// scene with a body force read it, and it is a sum in series over
+    /// every face.)
+    pub fn sum(&self) -> f64 {
+        self.alpha.iter().sum()
     }
 
     /// Whether the body has no face of this component here.
@@ -267,7 +270,6 @@ impl FaceRows {
             lines_z: self.lines_z,
             plane_starts: self.plane_starts.clone(),
             rows: self.rows.clone(),
-            sum: alpha.iter().sum(),
             alpha,
             step: self.step,
         }
@@ -306,7 +308,6 @@ impl FaceRows {
     /// `totals[face]`, where that exceeds one: the body's share of a face
     /// that several supports cover.
     pub fn share(&mut self, totals: &[f64]) {
-        let mut changed = false;
         let mut start = 0;
         for row in &self.rows {
             let (first, len) = (self.first(row), row.len as usize);
@@ -315,13 +316,9 @@ impl FaceRows {
             for (alpha, &total) in alpha.iter_mut().zip(faces) {
                 if total > 1.0 {
                     *alpha /= total;
-                    changed = true;
                 }
             }
             start += len;
-        }
-        if changed {
-            self.sum = self.alpha.iter().sum();
         }
     }
 
@@ -330,7 +327,6 @@ impl FaceRows {
     /// becomes its share and is read at once for the fluid's momentum in
     /// the body (the same sums, in the same order, as the two passes).
     pub fn share_and_weigh(&mut self, totals: &[f64], field: &[f64]) -> (f64, Vec3) {
-        let mut changed = false;
         let (mut sum, mut moment) = (0.0, Vec3::zeros());
         let mut start = 0;
         for r in 0..self.rows.len() {
@@ -344,7 +340,6 @@ impl FaceRows {
             for (i, (alpha, (&total, &value))) in rows.enumerate() {
                 if total > 1.0 {
                     *alpha /= total;
-                    changed = true;
                 }
                 let q = *alpha * value;
                 plain += q;
@@ -354,9 +349,6 @@ impl FaceRows {
             moment += self.offset(&stored) * plain;
             moment.x += self.step * along;
             start += len;
-        }
-        if changed {
-            self.sum = self.alpha.iter().sum();
         }
         (sum, moment)
     }

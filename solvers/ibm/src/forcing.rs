@@ -260,7 +260,7 @@ impl ImmersedBoundaries {
         let mut volumes = vec![Vec3::zeros(); bodies.count];
         for body in &bodies.list {
             for (component, faces) in body.faces.iter().enumerate() {
-                volumes[body.particle][component] += faces.sum * volume;
+                volumes[body.particle][component] += faces.sum() * volume;
             }
         }
         volumes
