@@ -401,7 +401,7 @@ fn check_warns_of_a_short_forcing_step_unless_it_is_held() {
     let long = check(&["coupling.layer_forcing=\"renewal\"", "time.dt=5.0e-2"]);
     assert!(
         long.contains(
-            "r dt = 1.92: where the supports of grains meet, a stage forces in at least 2 passes"
+            "r dt = 1.92: a stage forces in at least 2 passes"
         ),
         "{long}"
     );

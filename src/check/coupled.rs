@@ -102,8 +102,8 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
             let _ = writeln!(
                 out,
                 "  at dt = {dt:e} s the layer's viscous renewal alone gives r dt = {viscous:.2}: \
-                 where the supports of grains meet, a stage forces in at least {} passes, each \
-                 followed by a projection (a shorter step takes fewer)",
+                 a stage forces in at least {} passes, each followed by a projection (a \
+                 shorter step takes fewer)",
                 viscous.ceil()
             );
         }

@@ -107,7 +107,21 @@ impl AxisymmetricCoupledSystem {
             let clock = lap(&mut self.timings.loads, clock);
             self.flow.predict(stage, dt);
             let clock = lap(&mut self.timings.flow, clock);
-            let forcing = self.immersed.apply(&mut self.flow, &bodies, stage_dt, dt);
+            // Passes of exponent at most one, each but the last projected
+            // here (`Exponents::passes`); one under eq. 7.
+            let exponents = self.immersed.exponents(&self.flow, &bodies, dt);
+            let passes = (exponents.iter().fold(0.0, |a: f64, &e| a.max(e)).ceil() as usize).max(1);
+            let exponents: Vec<f64> = exponents.iter().map(|e| e / passes as f64).collect();
+            let mut forcing = Loads::zeros(self.dem.particles.len());
+            let mut clock = clock;
+            for pass in 0..passes {
+                if pass > 0 {
+                    clock = lap(&mut self.timings.forcing, clock);
+                    max_divergence = max_divergence.max(self.flow.project(stage, dt));
+                    clock = lap(&mut self.timings.flow, clock);
+                }
+                forcing.add(&self.immersed.apply(&mut self.flow, &bodies, stage_dt, &exponents));
+            }
             let clock = lap(&mut self.timings.forcing, clock);
             max_divergence = max_divergence.max(self.flow.project(stage, dt));
             let clock = lap(&mut self.timings.flow, clock);

@@ -97,17 +97,11 @@ impl AxisymmetricImmersed {
         volumes
     }
 
-    /// Applies the forcing of a stage of length `stage_dt` of a step
-    /// `step_dt` to the predicted velocity of `flow`, and returns each
-    /// grain's load per unit density.
-    pub fn apply(
-        &mut self,
-        flow: &mut AxisymmetricFlow,
-        bodies: &AxialBodies,
-        stage_dt: f64,
-        step_dt: f64,
-    ) -> Loads {
-        let exponents: Vec<f64> = bodies
+    /// Each grain's exponent `e` of the forcing in a step `step_dt`, from
+    /// the predicted velocity of `flow` under the renewal
+    /// ([`crate::layer_forcing`]).
+    pub fn exponents(&self, flow: &AxisymmetricFlow, bodies: &AxialBodies, step_dt: f64) -> Vec<f64> {
+        bodies
             .list
             .iter()
             .map(|body| {
@@ -116,9 +110,24 @@ impl AxisymmetricImmersed {
                     renewal_exponent(slip, flow.viscosity, flow.grid.dz, step_dt)
                 })
             })
-            .collect();
+            .collect()
+    }
+
+    /// Applies the forcing of a stage of length `stage_dt` with the
+    /// grains' `exponents` (in list order) to the predicted velocity of
+    /// `flow`, and returns each grain's load per unit density. A stage
+    /// whose largest exponent exceeds one forces in as many passes
+    /// ([`crate::forcing::Exponents::passes`] says why), each followed by a
+    /// projection.
+    pub fn apply(
+        &mut self,
+        flow: &mut AxisymmetricFlow,
+        bodies: &AxialBodies,
+        stage_dt: f64,
+        exponents: &[f64],
+    ) -> Loads {
         // 1. Σ β_p and Σ β_p U_p on the faces, in list order.
-        for (body, &exponent) in bodies.list.iter().zip(&exponents) {
+        for (body, &exponent) in bodies.list.iter().zip(exponents) {
             for c in 0..2 {
                 let rigid = if c == 0 { 0.0 } else { body.velocity };
                 let faces = &body.faces[c];
@@ -132,7 +141,7 @@ impl AxisymmetricImmersed {
         // 2. The loads, from the velocity before the forcing.
         let mut loads = Loads::zeros(bodies.count);
         let scale = -1.0 / stage_dt;
-        for (body, &exponent) in bodies.list.iter().zip(&exponents) {
+        for (body, &exponent) in bodies.list.iter().zip(exponents) {
             let faces = &body.faces[1];
             let total = &self.total[1];
             let force: f64 = (0..faces.index.len())
