@@ -31,6 +31,35 @@ pub fn immersed_bytes_per_cell(dimension: usize) -> usize {
     16 * dimension
 }
 
+/// Peak bytes of a COCD step beyond the scene's own, `c N^b` for `N`
+/// grains, fitted on the two largest of packings at rest (every grain in
+/// contact: the most a step holds), one thread, ε = 1e-8 (ε = 1e-5 holds
+/// the same within 2 %): the normal matrix `K = P + AᵀΘA`, its Cholesky
+/// factor, the conic program and the interior point's vectors
+/// (`docs/performance.md`, "What a COCD step holds"). The factor
+/// dominates and fills faster than `N`: in 3D nested dissection's top
+/// separator is a slice of the packing. Measured peak resident memory
+/// less the scene's: 3D spheres 98, 236, 602, 1,455 MB at 2,057, 4,312,
+/// 8,748, 17,986 (the fit 1.04, 1.07, 1, 1 times that); 2D discs 91,
+/// 175, 398 MB at 12,500, 25,000, 50,000 (0.85, 1, 1 times: below about
+/// 7,000 discs the matrix is factorised whole, above it split in two).
+const COCD_BYTES_2D: (f64, f64) = (1095.5, 1.1833);
+const COCD_BYTES_3D: (f64, f64) = (8915.9, 1.2251);
+
+/// [`COCD_BYTES_2D`], [`COCD_BYTES_3D`] for `grains` in `dimension`.
+pub fn cocd_step_bytes(dimension: usize, grains: f64) -> f64 {
+    let (c, b) = if dimension == 3 {
+        COCD_BYTES_3D
+    } else {
+        COCD_BYTES_2D
+    };
+    if grains > 0.0 {
+        c * grains.powf(b)
+    } else {
+        0.0
+    }
+}
+
 /// What a scene holds at its largest, counted from the case.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Footprint {
@@ -38,6 +67,9 @@ pub struct Footprint {
     pub grains: Vec<(String, f64)>,
     /// Cells of the fluid grid (zero in a dry scene).
     pub cells: f64,
+    /// Bytes of the hard-contact solve at its largest (COCD; zero for the
+    /// soft DEM and NSCD, whose Gauss–Seidel holds no factor).
+    pub contact_bytes: f64,
     /// Estimated bytes of the whole scene, every rank together.
     pub bytes: f64,
 }
@@ -106,11 +138,19 @@ impl Footprint {
                 0
             };
         let total_grains: f64 = grains.iter().map(|(_, n)| n).sum();
+        let cocd = case.contact.as_ref().is_some_and(|c| c.model == "cocd");
+        let contact_bytes = if cocd {
+            cocd_step_bytes(dim, total_grains)
+        } else {
+            0.0
+        };
         let bytes = total_grains * bytes_per_particle(dim, case.walls.len()) as f64
-            + cells * per_cell as f64;
+            + cells * per_cell as f64
+            + contact_bytes;
         Footprint {
             grains,
             cells,
+            contact_bytes,
             bytes,
         }
     }
@@ -129,6 +169,12 @@ impl Footprint {
         let mut causes = Vec::new();
         if self.cells > 0.0 {
             causes.push(format!("fluid.cells = {:.3e} cells", self.cells));
+        }
+        if self.contact_bytes > 0.5 * self.bytes {
+            causes.push(format!(
+                "contact.model = \"cocd\": about {} for its factor at rest",
+                human_bytes(self.contact_bytes)
+            ));
         }
         let mut largest = self.grains.clone();
         largest.sort_by(|a, b| b.1.total_cmp(&a.1));
@@ -208,6 +254,7 @@ mod tests {
         let footprint = Footprint {
             grains: vec![("particles.block[0].count".into(), 1e12)],
             cells: 1e12,
+            contact_bytes: 0.0,
             bytes: 1e12 * 1000.0,
         };
         let error = footprint.check_fits(1, Some(24e9)).unwrap_err().to_string();
@@ -217,5 +264,35 @@ mod tests {
         assert!(footprint.check_fits(100_000, Some(24e9)).is_ok());
         // Where the machine's memory is unknown nothing is refused.
         assert!(footprint.check_fits(1, None).is_ok());
+    }
+
+    /// A 3D packing of 250,000 spheres at rest fits a 24 GB machine with
+    /// the soft DEM (about 0.4 GB) but not with COCD, whose factor alone
+    /// needs about 37 GB there: `check` and `run` refuse it naming the
+    /// contact model, before anything is built.
+    #[test]
+    fn a_cocd_factor_larger_than_the_machine_is_refused_naming_the_contact_model() {
+        let scene = |model: &str| {
+            let text = format!(
+                "[domain]\ndimension = 3\nlower = [0.0, 0.0, 0.0]\nupper = [0.1, 0.1, 0.1]\n\
+                 gravity = [0.0, 0.0, -9.81]\n\
+                 [particles]\ndensity = 2500.0\nradius = 5.0e-4\n\
+                 [[particles.block]]\nkind = \"random\"\ncount = 250000\n\
+                 lower = [0.0, 0.0, 0.0]\nupper = [0.1, 0.1, 0.1]\n\
+                 [contact]\nmodel = \"{model}\"\nfriction = 0.3\n{}\n\
+                 [time]\nend = 1.0e-3\ndt = 1.0e-3\n",
+                if model == "soft" {
+                    "restitution = 0.5\ncontact_time = 1.0e-4"
+                } else {
+                    ""
+                }
+            );
+            Footprint::of(&Case::from_text(&text, "test", &[]).unwrap())
+        };
+        let (soft, cocd) = (scene("soft"), scene("cocd"));
+        assert_eq!(soft.contact_bytes, 0.0);
+        assert!(soft.check_fits(1, Some(24e9)).is_ok());
+        let error = cocd.check_fits(1, Some(24e9)).unwrap_err().to_string();
+        assert!(error.contains("contact.model = \"cocd\""), "{error}");
     }
 }

@@ -395,14 +395,12 @@ fn check_warns_of_a_short_forcing_step_unless_it_is_held() {
         "{renewal}"
     );
     // At this step the viscous renewal (ν Δt/(0.8 Δx²) = 0.019) needs one
-    // pass of forcing a stage; at 5e-2 s (1.92) two where grains touch,
+    // pass of forcing a stage; at 5e-2 s (1.92) two,
     // and `check` says so.
     assert!(!renewal.contains("passes"), "{renewal}");
     let long = check(&["coupling.layer_forcing=\"renewal\"", "time.dt=5.0e-2"]);
     assert!(
-        long.contains(
-            "r dt = 1.92: a stage forces in at least 2 passes"
-        ),
+        long.contains("r dt = 1.92: a stage forces in at least 2 passes"),
         "{long}"
     );
     // A held step and the renewal rate are two answers to one question.

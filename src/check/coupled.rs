@@ -107,6 +107,11 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
                 viscous.ceil()
             );
         }
+        let cell = grid.spacing[0];
+        let number = system.flow.viscosity * dt / (cell * cell);
+        if let Some(line) = stokes_leak_warning(number) {
+            let _ = writeln!(out, "{line}");
+        }
     }
     if let Some(&k) = moving
         .iter()
@@ -185,4 +190,59 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
     }
     let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)
+}
+
+/// The renewal forcing's drag deficit in Stokes flow through an array of
+/// spheres at D/Δx = 8 against the viscous number of a cell ν Δt/Δx²
+/// (`solvers/ibm/tests/stokes_array.rs`, docs/validation.md §10): the
+/// layer leaks between two forcings once the step exceeds about a viscous
+/// time of a cell.
+const RENEWAL_STOKES_DEFICIT: [(f64, f64); 5] = [
+    (0.8, 0.033),
+    (1.6, 0.044),
+    (3.2, 0.071),
+    (6.4, 0.120),
+    (12.8, 0.203),
+];
+
+/// A warning where the renewal forcing's grain depends on the step: past
+/// ν Δt/Δx² = 1.6 its Stokes drag falls by more than the 4.4 % it keeps
+/// from 0.8 to 1.6. The deficit is read off [`RENEWAL_STOKES_DEFICIT`],
+/// interpolated in the logarithm of the number (extrapolated past 12.8).
+fn stokes_leak_warning(number: f64) -> Option<String> {
+    let table = &RENEWAL_STOKES_DEFICIT;
+    if number <= table[1].0 {
+        return None;
+    }
+    let k = table
+        .windows(2)
+        .position(|w| number <= w[1].0)
+        .unwrap_or(table.len() - 2);
+    let ((n0, d0), (n1, d1)) = (table[k], table[k + 1]);
+    let deficit = d0 + (d1 - d0) * (number / n0).ln() / (n1 / n0).ln();
+    let shorter = table[1].0 / number;
+    Some(format!(
+        "warning: ν Δt/Δx² = {number:.3}: past a viscous time of a cell the fluid leaks through \
+         the forced layer between two forcings, and in Stokes flow the grain's drag falls by \
+         about {:.0} % (D/Δx = 8; 4.4 % at 1.6, 7.1 % at 3.2, 20 % at 12.8: \
+         tests/stokes_array.rs); where the flow is slow and viscous, a step {shorter:.2} times \
+         this one keeps it within 5 %",
+        100.0 * deficit
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_leak_warning_reads_the_measured_deficits_and_is_silent_below_a_viscous_time() {
+        assert!(stokes_leak_warning(0.8).is_none());
+        assert!(stokes_leak_warning(1.6).is_none());
+        let at = |n: f64| stokes_leak_warning(n).unwrap();
+        assert!(at(3.2).contains("about 7 %"), "{}", at(3.2));
+        assert!(at(12.8).contains("about 20 %"), "{}", at(12.8));
+        // Between two measured numbers, between their deficits.
+        assert!(at(2.26).contains("about 6 %"), "{}", at(2.26));
+    }
 }

@@ -167,9 +167,18 @@ fn memory_line(case: &Case) -> String {
         .unwrap_or_default();
     let footprint = Footprint::of(case);
     let keep = case.checkpoint.as_ref().map_or(2, |c| c.keep);
+    let contact = if footprint.contact_bytes > 0.0 {
+        format!(
+            ", of which the COCD step's factor and work {} (a packing at rest; a loose flow \
+             holds less)",
+            human_bytes(footprint.contact_bytes)
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "memory estimate: {}{machine}\ncheckpoint: about {} each on disk, the last {keep} kept \
-         (written on SIGTERM, SIGINT, time.wall_limit{})",
+        "memory estimate: {}{contact}{machine}\ncheckpoint: about {} each on disk, the last \
+         {keep} kept (written on SIGTERM, SIGINT, time.wall_limit{})",
         human_bytes(footprint.bytes),
         human_bytes(footprint.checkpoint_bytes(case.walls.len())),
         if case.checkpoint.is_some() {

@@ -120,7 +120,11 @@ impl AxisymmetricCoupledSystem {
                     max_divergence = max_divergence.max(self.flow.project(stage, dt));
                     clock = lap(&mut self.timings.flow, clock);
                 }
-                forcing.add(&self.immersed.apply(&mut self.flow, &bodies, stage_dt, &exponents));
+                forcing.add(
+                    &self
+                        .immersed
+                        .apply(&mut self.flow, &bodies, stage_dt, &exponents),
+                );
             }
             let clock = lap(&mut self.timings.forcing, clock);
             max_divergence = max_divergence.max(self.flow.project(stage, dt));

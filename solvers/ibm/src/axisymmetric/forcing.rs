@@ -100,7 +100,12 @@ impl AxisymmetricImmersed {
     /// Each grain's exponent `e` of the forcing in a step `step_dt`, from
     /// the predicted velocity of `flow` under the renewal
     /// ([`crate::layer_forcing`]).
-    pub fn exponents(&self, flow: &AxisymmetricFlow, bodies: &AxialBodies, step_dt: f64) -> Vec<f64> {
+    pub fn exponents(
+        &self,
+        flow: &AxisymmetricFlow,
+        bodies: &AxialBodies,
+        step_dt: f64,
+    ) -> Vec<f64> {
         bodies
             .list
             .iter()
