@@ -182,6 +182,15 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
     }
     let (mut stepper, dt, _) = DryStepper::new(case, &mut system)?;
     let steps = (case.time.end / dt).ceil();
+    // A COCD step of a large packing takes minutes to hours: predicted,
+    // not timed.
+    if let Some(h) = hard.as_ref().filter(|h| h.method == Method::Cocd) {
+        if let Some(line) = super::cocd_cost::untimed_line(dim, n, steps, h.conic_solver) {
+            let _ = writeln!(out, "{line}");
+            let _ = writeln!(out, "{}", memory_line(case));
+            return Ok(out);
+        }
+    }
     let limit = case.time.overlap_limit;
     // Timed on the threads the run would use.
     let pool = rayon::ThreadPoolBuilder::new()

@@ -9,6 +9,7 @@
 
 mod axisymmetric;
 pub mod cfl_steps;
+mod cocd_cost;
 pub mod cost_estimate;
 mod coupled;
 mod dry;
