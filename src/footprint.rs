@@ -32,18 +32,20 @@ pub fn immersed_bytes_per_cell(dimension: usize) -> usize {
 }
 
 /// Peak bytes of a COCD step beyond the scene's own, `c N^b` for `N`
-/// grains, fitted on the two largest of packings at rest (every grain in
-/// contact: the most a step holds), one thread, ε = 1e-8 (ε = 1e-5 holds
-/// the same within 2 %): the normal matrix `K = P + AᵀΘA`, its Cholesky
-/// factor, the conic program and the interior point's vectors
-/// (`docs/performance.md`, "What a COCD step holds"). The factor
-/// dominates and fills faster than `N`: in 3D nested dissection's top
-/// separator is a slice of the packing. Measured peak resident memory
-/// less the scene's: 3D spheres 98, 236, 602, 1,455 MB at 2,057, 4,312,
-/// 8,748, 17,986 (the fit 1.04, 1.07, 1, 1 times that); 2D discs 91,
-/// 175, 398 MB at 12,500, 25,000, 50,000 (0.85, 1, 1 times: below about
-/// 7,000 discs the matrix is factorised whole, above it split in two).
-const COCD_BYTES_2D: (f64, f64) = (1095.5, 1.1833);
+/// grains, fitted on packings at rest (every grain in contact: the most a
+/// step holds), one thread, ε = 1e-8 (ε = 1e-5 holds the same within
+/// 2 %): the normal matrix `K = P + AᵀΘA`, its Cholesky factor, the conic
+/// program and the interior point's vectors (`docs/performance.md`, "What
+/// a COCD step holds"). Measured peak resident memory less the scene's:
+///
+/// - 3D spheres: 98, 236, 602, 1,455 MB at 2,057, 4,312, 8,748, 17,986;
+///   fitted through the two largest (the fit 1.04, 1.07, 1, 1 times the
+///   measure). The factor fills faster than `N`: nested dissection's top
+///   separator is a slice of the packing.
+/// - 2D discs: 91, 175, 398, 707 MB at 12,500, 25,000, 50,000, 100,000;
+///   least squares in logarithms (1.00, 1.04, 0.92, 1.04 times): about
+///   linear, the matrix split in two above 7,000 discs.
+const COCD_BYTES_2D: (f64, f64) = (7015.3, 1.0042);
 const COCD_BYTES_3D: (f64, f64) = (8915.9, 1.2251);
 
 /// [`COCD_BYTES_2D`], [`COCD_BYTES_3D`] for `grains` in `dimension`.

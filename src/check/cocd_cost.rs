@@ -6,8 +6,8 @@
 //! Fitted on packings at rest (every grain in contact, the most a step
 //! holds), one thread of this project's 2-core machine, ε = 1e-8, the
 //! other core busy (`docs/performance.md`, "What a COCD step holds"):
-//! 3D 38.1 and 166.7 s at 8,748 and 17,986 spheres, 2D 3.70 and 10.0 s
-//! at 25,000 and 50,000 discs. `c N^b` through the two points.
+//! 3D 38.1 and 166.7 s at 8,748 and 17,986 spheres, 2D 10.0 and 22.7 s
+//! at 50,000 and 100,000 discs. `c N^b` through the two points.
 
 use super::cost_estimate::clock;
 use grainflow_contact::ConicSolver;
@@ -16,7 +16,7 @@ use grainflow_contact::ConicSolver;
 pub const PROBE_LONGEST_STEP: f64 = 60.0;
 
 const SECONDS_3D: [(f64, f64); 2] = [(8_748.0, 38.1), (17_986.0, 166.7)];
-const SECONDS_2D: [(f64, f64); 2] = [(25_000.0, 3.70), (50_000.0, 10.0)];
+const SECONDS_2D: [(f64, f64); 2] = [(50_000.0, 10.0), (100_000.0, 22.7)];
 
 /// Clarabel on the same 3D program of 8,748 spheres took 59 times the
 /// interior point's time (2,256 s against 38.1 s, `docs/performance.md`).
@@ -55,7 +55,7 @@ pub fn untimed_line(
              more threads or ranks share it",
             clock(step),
             solver.name(),
-            if dimension == 3 { "17,986" } else { "50,000" },
+            if dimension == 3 { "17,986" } else { "100,000" },
             clock(step * steps)
         )
     })
