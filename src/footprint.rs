@@ -3,7 +3,7 @@
 //! scene larger than the machine with the keys that make it large, instead
 //! of dying in an allocation.
 
-use crate::case::{BlockSection, Case};
+use crate::case::{BlockSection, Case, ContactModel};
 use crate::RunError;
 
 /// Bytes of the DEM state per particle: seven vectors (with the external
@@ -140,7 +140,10 @@ impl Footprint {
                 0
             };
         let total_grains: f64 = grains.iter().map(|(_, n)| n).sum();
-        let cocd = case.contact.as_ref().is_some_and(|c| c.model == "cocd");
+        let cocd = case
+            .contact
+            .as_ref()
+            .is_some_and(|c| c.model == ContactModel::Cocd);
         let contact_bytes = if cocd {
             cocd_step_bytes(dim, total_grains)
         } else {

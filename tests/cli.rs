@@ -127,7 +127,11 @@ fn out_of_range_values_name_the_key_and_the_allowed_range() {
             "0 < restitution ≤ 1",
         ),
         ("domain.dimension=4", "domain.dimension", "2 or 3"),
-        ("contact.model=\"rigid\"", "contact.model", "\"soft\""),
+        (
+            "contact.model=\"rigid\"",
+            "contact.model",
+            "`soft`, `cocd`, `nscd`",
+        ),
         ("particles.radius=-1.0", "particles.radius", "positive"),
         (
             "time.dt_over_contact_time=1.0",

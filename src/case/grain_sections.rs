@@ -130,14 +130,48 @@ pub enum BlockSection {
     },
 }
 
+/// How grains touch (`contact.model`). The rest of a case is the same for
+/// the three.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactModel {
+    /// The soft-sphere DEM of Izard et al. 2014: "soft".
+    Soft,
+    /// Hard contact by convex optimization contact dynamics, one conic
+    /// program per step (Martin et al. 2022): "cocd".
+    Cocd,
+    /// Hard contact by non-smooth contact dynamics, Gauss–Seidel over the
+    /// contacts (Martin et al. 2022): "nscd".
+    Nscd,
+}
+
+impl ContactModel {
+    /// The name a case file gives it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ContactModel::Soft => "soft",
+            ContactModel::Cocd => "cocd",
+            ContactModel::Nscd => "nscd",
+        }
+    }
+
+    /// Whether grains are hard (no overlap, no contact time).
+    pub fn is_hard(self) -> bool {
+        self != ContactModel::Soft
+    }
+}
+
+impl std::fmt::Display for ContactModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSection {
-    /// "soft" (the DEM of Izard et al. 2014), or hard contact: "cocd"
-    /// (convex optimization contact dynamics) or "nscd" (non-smooth
-    /// contact dynamics), Martin et al. 2022. The rest of a case is the same
-    /// for the three.
-    pub model: String,
+    /// "soft", "cocd" or "nscd" ([`ContactModel`]).
+    pub model: ContactModel,
     /// Normal restitution e_n (soft: with contact_time; nscd: Newton's
     /// restitution, default 0; cocd is inelastic).
     #[serde(default)]
@@ -197,7 +231,7 @@ pub struct ContactSection {
 impl ContactSection {
     /// Whether the model is hard contact (cocd or nscd).
     pub fn is_hard(&self) -> bool {
-        self.model == "cocd" || self.model == "nscd"
+        self.model.is_hard()
     }
 
     pub fn calibration(&self) -> &str {

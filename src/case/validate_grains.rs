@@ -212,16 +212,9 @@ impl Case {
                 }
             }
         }
-        match c.model.as_str() {
-            "soft" => self.validate_soft_contact(c)?,
-            "cocd" | "nscd" => self.validate_hard_contact(c)?,
-            other => {
-                return Err(invalid(
-                    "contact.model",
-                    other,
-                    "allowed: \"soft\", \"cocd\", \"nscd\"",
-                ))
-            }
+        match c.model {
+            ContactModel::Soft => self.validate_soft_contact(c)?,
+            ContactModel::Cocd | ContactModel::Nscd => self.validate_hard_contact(c)?,
         }
         non_negative("contact.friction", c.friction)?;
         non_negative("contact.rolling_friction", c.rolling_friction)?;
@@ -243,7 +236,7 @@ impl Case {
         let need = format!("allowed: a list of {dim} numbers (one per axis)");
         for (k, pour) in p.pour.iter().enumerate() {
             let key = |name: &str| format!("particles.pour[{k}].{name}");
-            if self.fluid.is_some() || c.model != "soft" {
+            if self.fluid.is_some() || c.model != ContactModel::Soft {
                 return Err(invalid(
                     &key("count"),
                     pour.count,
@@ -402,7 +395,7 @@ impl Case {
         if self.fluid.is_some() {
             return Err(invalid(
                 "contact.model",
-                &c.model,
+                c.model,
                 "hard contact runs in dry scenes; grains in a fluid allowed: \"soft\"",
             ));
         }
@@ -426,7 +419,7 @@ impl Case {
             }
         }
         if let Some(e) = c.restitution {
-            if c.model == "cocd" {
+            if c.model == ContactModel::Cocd {
                 return Err(invalid(
                     "contact.restitution",
                     e,
@@ -467,9 +460,9 @@ impl Case {
                 "allowed: \"reachable\" or \"listed\"",
             ));
         }
-        match (c.model.as_str(), c.conic_solver.as_deref()) {
-            (_, None) | ("cocd", Some("interior_point" | "clarabel")) => {}
-            ("cocd", Some(other)) => {
+        match (c.model, c.conic_solver.as_deref()) {
+            (_, None) | (ContactModel::Cocd, Some("interior_point" | "clarabel")) => {}
+            (ContactModel::Cocd, Some(other)) => {
                 return Err(invalid(
                     "contact.conic_solver",
                     other,

@@ -12,7 +12,7 @@ pub mod grain_pairs;
 pub mod initial_overlaps;
 pub mod pouring;
 
-use crate::case::{BlockSection, Case};
+use crate::case::{BlockSection, Case, ContactModel};
 use grainflow_contact::{ConicSolver, HardContact, Method};
 use grainflow_core::{fits, process_grid, Communicator, Dimension, Domain, Vec3};
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
@@ -400,12 +400,12 @@ pub fn contact_gap(case: &Case) -> f64 {
 /// Hard contact (Martin et al. 2022), for `contact.model` = cocd or nscd.
 pub fn hard_contact(case: &Case) -> Option<HardContact> {
     let c = case.contact_section();
-    let method = match c.model.as_str() {
-        "cocd" => Method::Cocd,
-        "nscd" => Method::Nscd {
+    let method = match c.model {
+        ContactModel::Cocd => Method::Cocd,
+        ContactModel::Nscd => Method::Nscd {
             restitution: c.restitution.unwrap_or(0.0),
         },
-        _ => return None,
+        ContactModel::Soft => return None,
     };
     let (tolerance, iterations) = match method {
         Method::Cocd => (1e-8, 200),
