@@ -353,41 +353,47 @@ fn far_from_the_floor_the_drag_is_faxens() {
 }
 
 /// At δ/R = 0.1 (0.4 of a cell at D/Δx = 8) the film is not resolved:
-/// against the lubrication value 2.187 the free layer gives 1.685
-/// (−23 %), the forced layer 1.982 (−9 %). Rolling at contact, where
+/// against the lubrication value 2.187 the free layer gives 1.657
+/// (−24 %), the forced layer 1.904 (−13 %). Rolling at contact, where
 /// Stokes flow has no finite value, the forced layer gives the grain
-/// 12 % more drag and 18 % more torque than the free one.
+/// 7 % more drag and 9 % more torque than the free one (1.933 against
+/// 1.803, −1.366 against −1.253). The forcing step held at a quarter of
+/// the step forces in four passes a stage (`Exponents::passes`); in one
+/// pass, as before 2026-12-04, the forced layer over-forced the lens
+/// between grain and floor and gave −9 %, 12 % and 18 %.
 #[test]
 fn near_the_floor_the_forced_layer_resists_sliding_and_rolling_more_than_the_free_one() {
     let (drag, _) = reference_loads(Motion::Sliding, 0.1);
     let free = quick(0.1, Motion::Sliding, true);
     let forced = quick(0.1, Motion::Sliding, false);
     assert!(
-        (free.drag / drag - 0.77).abs() < 0.04,
+        (free.drag / drag - 0.76).abs() < 0.03,
         "free {free:?} against {drag}"
     );
     assert!(
-        (forced.drag / drag - 0.91).abs() < 0.04,
+        (forced.drag / drag - 0.87).abs() < 0.03,
         "forced {forced:?} against {drag}"
     );
 
     let free = quick(0.0, Motion::Rolling, true);
     let forced = quick(0.0, Motion::Rolling, false);
-    assert!(forced.drag > 1.08 * free.drag, "{free:?} {forced:?}");
-    assert!(forced.torque < 1.12 * free.torque, "{free:?} {forced:?}");
+    assert!(forced.drag > 1.05 * free.drag, "{free:?} {forced:?}");
+    assert!(forced.torque < 1.05 * free.torque, "{free:?} {forced:?}");
     for loads in [free, forced] {
         assert!(loads.lift.abs() < 0.01, "{loads:?}");
     }
 }
 
 /// Rolling at contact across half a cell (D/Δx = 8, box 4 D, after 6
-/// R²/ν at a face of the grid): the forced layer builds up a lift that
-/// grows as the grain crosses cells, 0.274 of `6π μ R U` here (0.64
-/// after a cell and 0.81 after two in a box of 8 D,
-/// `grains_travelling_at_contact`); the free layer's is 0.014. Held in
-/// place, either is below 0.001.
+/// R²/ν at a face of the grid): neither layer lifts the grain, 0.0115 of
+/// `6π μ R U` free and 0.0140 forced. Forced in one pass at the held
+/// step's exponent of four (before 2026-12-04) the forced layer built up
+/// a lift as the grain crossed cells, 0.274 here and 0.81 after two cells
+/// in a box of 8 D: the over-forcing of the lens between grain and floor
+/// that `Exponents::passes` removes (`overlapping_grains.rs` has it
+/// between two grains).
 #[test]
-fn a_grain_rolling_across_cells_is_lifted_by_the_forced_layer_only() {
+fn a_grain_rolling_across_cells_at_contact_is_not_lifted_by_either_layer() {
     let h = DIAMETER / 8.0;
     let per_cell = h / speed() / (RADIUS * RADIUS / KINEMATIC_VISCOSITY);
     let lift = |free| {
@@ -406,7 +412,7 @@ fn a_grain_rolling_across_cells_is_lifted_by_the_forced_layer_only() {
     };
     let (free, forced) = (lift(true), lift(false));
     assert!(free.abs() < 0.02, "free: {free}");
-    assert!(forced > 0.1, "forced: {forced}");
+    assert!(forced.abs() < 0.02, "forced: {forced}");
 }
 
 /// Loads measured at several places on the grid: their mean, and the
