@@ -307,13 +307,7 @@ impl Dissection<'_> {
             self.level[u] = usize::MAX;
         }
         entries.sort_unstable();
-        let mut colptr = vec![0usize; size + 1];
-        for &(c, _) in &entries {
-            colptr[c + 1] += 1;
-        }
-        for c in 0..size {
-            colptr[c + 1] += colptr[c];
-        }
+        let colptr = crate::csc::column_pointers(size, entries.iter().map(|e| e.0));
         let rowval: Vec<usize> = entries.iter().map(|e| e.1).collect();
         let local = crate::interior_point::minimum_degree_order(&colptr, &rowval, size);
         self.order.extend(local.iter().map(|&k| members[k]));

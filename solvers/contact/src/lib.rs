@@ -34,6 +34,7 @@ pub mod candidates;
 pub mod certificate;
 pub mod cocd;
 pub mod contacts;
+mod csc;
 mod dissection;
 pub mod interior_point;
 mod normal_factor;

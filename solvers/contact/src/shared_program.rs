@@ -310,13 +310,7 @@ impl SharedProgram {
         mass.extend_from_slice(&own.mass[ni..]);
         free.extend_from_slice(&own.free[ni..]);
         entries.sort_unstable_by_key(|&(c, r, _)| (c, r));
-        let mut colptr = vec![0usize; columns + 1];
-        for &(c, _, _) in &entries {
-            colptr[c + 1] += 1;
-        }
-        for c in 0..columns {
-            colptr[c + 1] += colptr[c];
-        }
+        let colptr = crate::csc::column_pointers(columns, entries.iter().map(|e| e.0));
         let rowval = entries.iter().map(|e| e.1).collect();
         let nzval = entries.iter().map(|e| e.2).collect();
         let a_matrix = CscMatrix::new(rows, columns, colptr, rowval, nzval);

@@ -652,7 +652,7 @@ impl Exponents {
             .iter()
             .map(|body| self.of(body.particle))
             .fold(0.0, f64::max);
-        (communicator.max(largest).ceil() as usize).max(1)
+        passes_for(communicator.max(largest))
     }
 
     /// Each exponent divided by `passes`.
@@ -675,6 +675,12 @@ impl Exponents {
             Exponents::PerParticle(each) => each[particle],
         }
     }
+}
+
+/// The passes a stage whose largest forcing exponent is `largest` takes
+/// ([`Exponents::passes`]): `⌈largest⌉`, at least one.
+pub(crate) fn passes_for(largest: f64) -> usize {
+    (largest.ceil() as usize).max(1)
 }
 
 /// The fraction `1 − (1 − α)^exponent` of the way to the rigid velocity

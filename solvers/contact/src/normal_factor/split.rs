@@ -482,13 +482,7 @@ fn restrict(
         }
     }
     entries.sort_unstable();
-    let mut colptr = vec![0usize; size + 1];
-    for &(c, _, _) in &entries {
-        colptr[c + 1] += 1;
-    }
-    for c in 0..size {
-        colptr[c + 1] += colptr[c];
-    }
+    let colptr = crate::csc::column_pointers(size, entries.iter().map(|e| e.0));
     let rowval = entries.iter().map(|e| e.1).collect();
     let source = entries.iter().map(|e| e.2).collect();
     (colptr, rowval, source)

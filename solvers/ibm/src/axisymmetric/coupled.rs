@@ -20,7 +20,7 @@ use crate::coupled::{
     moved_back, restore_coupling, save_coupling, set_stage_loads, smallest_density_ratio,
     CoupledReport, Coupling, GrainLoad, StageMeasures, Timings,
 };
-use crate::forcing::Loads;
+use crate::forcing::{passes_for, Loads};
 
 /// An (r, z) fluid with grains on its axis.
 pub struct AxisymmetricCoupledSystem {
@@ -110,7 +110,7 @@ impl AxisymmetricCoupledSystem {
             // Passes of exponent at most one, each but the last projected
             // here (`Exponents::passes`); one under eq. 7.
             let exponents = self.immersed.exponents(&self.flow, &bodies, dt);
-            let passes = (exponents.iter().fold(0.0, |a: f64, &e| a.max(e)).ceil() as usize).max(1);
+            let passes = passes_for(exponents.iter().copied().fold(0.0, f64::max));
             let exponents: Vec<f64> = exponents.iter().map(|e| e / passes as f64).collect();
             let mut forcing = Loads::zeros(self.dem.particles.len());
             let mut clock = clock;
