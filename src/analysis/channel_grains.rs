@@ -3,7 +3,7 @@
 //! places a front, and the velocity profile u_x(z) with its static/flowing
 //! interface ([`super::ErodibleBed`]).
 
-use super::erodible_bed::{BIN_DIAMETERS, PROBE_DIAMETERS};
+use super::erodible_bed::{BIN_DIAMETERS, FRONT_GRAINS, PROBE_DIAMETERS};
 use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::DemSystem;
 
@@ -61,6 +61,19 @@ impl Grains {
     pub(super) fn mean_volume_per_span(&self) -> f64 {
         let mobile: Vec<usize> = (0..self.centre.len()).filter(|&k| !self.fixed[k]).collect();
         mobile.iter().map(|&k| self.volume_per_span(k)).sum::<f64>() / mobile.len().max(1) as f64
+    }
+
+    /// The raised volume per unit span that places the front:
+    /// [`FRONT_GRAINS`] mean grains per mean diameter `diameter` of span.
+    /// In 2D, five discs; in 3D, the same raised thickness across the
+    /// width (five spheres over a channel 25 diameters wide would be a
+    /// few stragglers ahead of the flow).
+    pub(super) fn front_volume(&self, diameter: f64) -> f64 {
+        let rows = match self.dimension {
+            Dimension::Two => 1.0,
+            Dimension::Three => self.span / diameter,
+        };
+        FRONT_GRAINS * self.mean_volume_per_span() * rows
     }
 
     /// Solid volume of grain k per unit span.
@@ -271,6 +284,23 @@ mod tests {
         let static_ahead = [true, true, true, true, false];
         let front = raised_front(&bins, &heights, &initial, &static_ahead, 2.0);
         assert!((front.unwrap() - 4.0).abs() < 1e-12, "{front:?}");
+    }
+
+    /// In 2D five discs; in 3D five spheres per diameter of span, the
+    /// volume of a layer as thick as five discs' over a diameter.
+    #[test]
+    fn the_front_needs_five_grains_per_diameter_of_span() {
+        let flat = grains(&[[0.5, 0.5], [1.5, 0.5]], &[0.0, 0.0]);
+        let disc = std::f64::consts::PI * 0.25;
+        assert!((flat.front_volume(1.0) - 5.0 * disc).abs() < 1e-12);
+        let channel = Grains {
+            dimension: Dimension::Three,
+            span: 25.0,
+            ..flat
+        };
+        let sphere = 4.0 / 3.0 * std::f64::consts::PI * 0.125;
+        // Per unit span: 5 × 25 spheres over the span of 25.
+        assert!((channel.front_volume(1.0) - 5.0 * sphere).abs() < 1e-12);
     }
 
     #[test]

@@ -18,8 +18,8 @@
 //! h(x) at the release, and the front is the position beyond which the
 //! raised volume of the flowing bins (their grains' mean u_x at
 //! `flowing_speed` or more), ∫ max(h − h_release, 0) dx from the end of
-//! the channel, amounts to [`FRONT_GRAINS`] mean grains (interpolated
-//! within its bin); r_f(t) is the farthest such position so far. Static
+//! the channel, amounts to [`FRONT_GRAINS`] mean grains (in 3D, per mean
+//! diameter of span; interpolated within its bin); r_f(t) is the farthest such position so far. Static
 //! grains of the bed ahead do not raise it, even where the bed dilated
 //! (a layer of 10 diameters released at 22° swelled by more than five
 //! grains' volume a metre ahead of the flow, which made the front jump
@@ -160,19 +160,13 @@ impl ErodibleBed {
         let heights = bins.heights(&grains);
         if after >= self.next_sample {
             let flowing = bins.flowing(&grains, self.settings.flowing_speed);
-            let grain = grains.mean_volume_per_span();
+            let volume = grains.front_volume(release.diameter);
             let reached = self
                 .samples
                 .last()
                 .map_or(self.gate, |s| self.back + s.front);
-            let front = raised_front(
-                &bins,
-                &heights,
-                &release.initial_heights,
-                &flowing,
-                FRONT_GRAINS * grain,
-            )
-            .map_or(reached, |x| x.max(reached));
+            let front = raised_front(&bins, &heights, &release.initial_heights, &flowing, volume)
+                .map_or(reached, |x| x.max(reached));
             let (bed_kinetic, bed_potential) = bed_energies(system, &release.bed_ids);
             self.samples.push(Sample {
                 time: after,
