@@ -2,8 +2,9 @@
 """Chart of scripts/collapse_2d_3d.py (Martin et al. 2022, Fig. 7): for
 each slope, the front r_f/R0 against time (top: each 2D model's ensemble
 as its mean and range, the 3D runs as lines) and the mass profiles h(x)
-at 0.4 and 1 s (bottom: the ensembles' means), 2D dashed and 3D solid as
-in the paper.
+at 0.4 and 1 s over the column's at the release (bottom: the ensembles'
+means), 2D dashed and 3D solid as in the paper. A run at rest before 1 s
+(COCD at 0 degrees) or ending a step short of it has no profile at 1 s.
 
     postprocess/plot_collapse_2d_3d.py docs/validation/collapse_2d_3d.csv \
         docs/validation/collapse_2d_3d.png
@@ -19,6 +20,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 STYLE = {(2, "cocd"): ("tab:blue", "--", "2D COCD"), (2, "soft"): ("tab:red", "--", "2D soft"),
          (3, "soft"): ("black", "-", "3D soft")}
+COLUMN_LENGTH = 0.2
 
 
 def grouped(path, value):
@@ -39,8 +41,20 @@ def main():
     table, out = sys.argv[1], sys.argv[2]
     fronts = grouped(table.replace(".csv", "_fronts.csv"),
                      lambda r: ((None, float(r["time"])), float(r["front_over_length"])))
+    # h over the column's mean h at the release: a 2D column of discs
+    # holds more solid per unit height than a 3D one of spheres (packing
+    # fractions about 0.82 and 0.6), so the two are compared in shape.
+    column = defaultdict(list)
+    with open(table.replace(".csv", "_profiles.csv")) as f:
+        for r in csv.DictReader(f):
+            if float(r["x"]) < COLUMN_LENGTH:
+                column[(int(r["dimension"]), r["model"], float(r["slope"]), r["member"],
+                        r["time_after_release"])].append(float(r["height_at_release"]))
+    initial = {key[:4]: sum(v) / len(v) for key, v in column.items()}
     profiles = grouped(table.replace(".csv", "_profiles.csv"),
-                       lambda r: ((float(r["time_after_release"]), float(r["x"])), float(r["height"])))
+                       lambda r: ((float(r["time_after_release"]), float(r["x"])),
+                                  float(r["height"]) / initial[(int(r["dimension"]), r["model"],
+                                                                float(r["slope"]), r["member"])]))
     slopes = sorted({key[2] for key in fronts})
     fig, axes = plt.subplots(2, len(slopes), figsize=(6 * len(slopes), 8), squeeze=False)
     for column, slope in enumerate(slopes):
@@ -64,14 +78,15 @@ def main():
                 n = min(len(x) for x, _ in members)
                 x = members[0][0][:n]
                 h = [sum(v) / len(v) for v in zip(*(m[1][:n] for m in members))]
-                bottom.plot([v / 0.2 for v in x], [v * 100 for v in h], color=colour, linestyle=line,
+                bottom.plot([v / COLUMN_LENGTH for v in x], h, color=colour, linestyle=line,
                             alpha=1.0 if time > 0.5 else 0.5, label=f"{label}, t = {time:g} s")
         top.set_title(f"slope {slope:g}°")
         top.set_xlabel("t after the release (s)")
         top.set_ylabel("front r_f / R0")
         top.legend(fontsize=8)
         bottom.set_xlabel("x / R0")
-        bottom.set_ylabel("h (cm of solid)")
+        bottom.set_xlim(0, 8 if slope > 0 else 3)
+        bottom.set_ylabel("h / h0 (h0: the column at the release)")
         bottom.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out, dpi=110)
