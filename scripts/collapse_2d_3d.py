@@ -15,8 +15,11 @@ column is the deposit of the erodible-bed study without a layer
 (`cases/data/erodible_bed_2d_no_layer.csv`, rained by COCD at mu = 0),
 released by `cases/erodible_bed_2d.toml`. Each 2D release runs with COCD
 (the paper's model) and with the soft DEM of the 3D runs (the same
-contact law as in 3D); the 3D releases with the soft DEM only (a COCD step
-on 12,000 spheres takes minutes). Writes one row per run with the front
+contact law as in 3D); the 3D releases with the soft DEM (a COCD step on
+12,000 spheres takes minutes). --scene coarse runs the same with d = 16 mm
+(`cases/data/column_2d_coarse.csv`, `channel_collapse_3d_coarse.csv`),
+where --models-3d soft cocd also runs COCD in 3D (about 2 s a step on
+1,491 spheres). Writes one row per run with the front
 at 0.4 and 1 s, and the mass profiles beside it (`_profiles.csv`).
 
 The same command run again resumes: the deposit and the runs that
@@ -32,15 +35,22 @@ import os
 import shutil
 import sys
 
+import shrink_deposit
 from grainflow_run import run_case
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CASES = os.path.join(HERE, "..", "cases")
 FRICTION = 0.3
-# The soft contact of the 3D runs, used by the 2D soft runs too.
-SOFT = ["contact.restitution=0.5", "contact.contact_time=1e-4"]
-SOFT_DT = 5e-6
 PERTURBATION = 1e-7
+# The two grain sizes: the deposits, the 3D channel's length and the soft
+# contact time (the 3D runs' law, used by the 2D soft runs too; t_c grows
+# with d, which keeps the overlaps the same fraction of a grain).
+SCENES = {
+    "fine": {"radius": 4e-3, "deposit_2d": "erodible_bed_2d_no_layer.csv",
+             "deposit_3d": "channel_collapse_3d.csv", "length_3d": 2.5, "contact_time": 1e-4},
+    "coarse": {"radius": 8e-3, "deposit_2d": "column_2d_coarse.csv",
+               "deposit_3d": "channel_collapse_3d_coarse.csv", "length_3d": 1.5, "contact_time": 2e-4},
+}
 FIELDS = [
     "dimension", "model", "slope", "member", "dt", "status", "column_grains", "initial_length",
     "initial_height", "aspect_ratio", "front_0.4", "front_1.0", "runout", "front_max_speed",
@@ -86,19 +96,57 @@ def front_at(rows, time):
     return None if best is None else float(best["front_over_length"])
 
 
-def release(binary, work, dimension, model, slope, member, deposit, end, threads):
-    dt = SOFT_DT if model == "soft" else 5e-4
+def scene_sets(scene, dimension):
+    """The --set of the coarse scene's grain size, lattice and channel
+    (none for the fine scene, the cases' own)."""
+    if scene["radius"] == SCENES["fine"]["radius"]:
+        return []
+    r, length = scene["radius"], scene["length_3d"]
+    spacing = 2.2 * r
+    sets = [f"particles.radius={r}", f"particles.block[0].spacing={spacing}"]
+    if dimension == 2:
+        return sets + [f"particles.block[0].upper=[2.5,{spacing}]"]
+    return sets + [f"domain.upper=[{length},0.2,0.6]", f"particles.block[0].lower=[{1.1 * r},0.0,0.0]",
+                   f"particles.block[0].upper=[{length},0.2,{spacing}]", f"walls[2].point=[{length},0.0,0.0]"]
+
+
+def hard_contact_3d(work, deposit):
+    """The 3D case and deposit for hard contact: the case without its soft
+    keys, the deposit's radii shrunk by 0.5 % (soft contacts at rest
+    overlap, and COCD cannot part a grain wedged into a pocket: docs/
+    validation.md, section 8)."""
+    case = os.path.join(work, "channel_collapse_3d_hard.toml")
+    with open(os.path.join(CASES, "channel_collapse_3d.toml")) as f:
+        lines = [line for line in f if not line.startswith(("restitution", "contact_time"))]
+    with open(case, "w") as f:
+        f.writelines("dt = 1.0e-3\n" if line.startswith("dt_over_contact_time") else line for line in lines)
+    shrunk = os.path.join(work, "deposit_3d_shrunk.csv")
+    with open(shrunk, "w", newline="") as f:
+        csv.writer(f, lineterminator="\n").writerows(shrink_deposit.shrunk(deposit, 0.995))
+    return case, shrunk
+
+
+def release(binary, work, scene, dimension, model, slope, member, deposit, end, cocd_dt, threads):
+    soft_dt = scene["contact_time"] / 20.0
+    dt = soft_dt if model == "soft" else cocd_dt[dimension]
     out = os.path.join(work, f"run_{dimension}d_{model}_{slope:g}deg_{member}")
-    sets = [f"domain.gravity={gravity(dimension, slope, member)}", f"time.end={end}",
-            f'particles.block[1].path="{os.path.abspath(deposit)}"',
-            f"contact.friction={FRICTION}", f'contact.model="{model}"']
     if dimension == 2:
         case = os.path.join(CASES, "erodible_bed_2d.toml")
-        sets += [f"time.dt={dt}", "analysis.profile_times=[0.4,1.0]", "analysis.smoothing=0.05"]
-    else:
+    elif model == "soft":
         case = os.path.join(CASES, "channel_collapse_3d.toml")
+    else:
+        case, deposit = hard_contact_3d(work, deposit)
+    sets = [f"domain.gravity={gravity(dimension, slope, member)}", f"time.end={end}",
+            f'particles.block[1].path="{os.path.abspath(deposit)}"',
+            f"contact.friction={FRICTION}", f'contact.model="{model}"'] + scene_sets(scene, dimension)
+    if dimension == 2:
+        sets += [f"time.dt={dt}", "analysis.profile_times=[0.4,1.0]", "analysis.smoothing=0.05"]
+    elif model != "soft":
+        sets.append(f"time.dt={dt}")
     if model == "soft":
-        sets += SOFT
+        sets += ["contact.restitution=0.5", f"contact.contact_time={scene['contact_time']}"]
+        if dimension == 3:
+            sets.append("time.dt_over_contact_time=0.05")
     if threads:
         sets.append(f"parallel.threads={threads}")
     finished = os.path.join(out, "summary.json")
@@ -138,24 +186,33 @@ def main():
     parser.add_argument("--dimension", type=int, nargs="+", default=[2, 3])
     parser.add_argument("--members", type=int, nargs=2, default=[8, 1], metavar=("2D", "3D"),
                         help="runs per slope and model, gravity perturbed (2D and 3D)")
+    parser.add_argument("--scene", choices=sorted(SCENES), default="fine",
+                        help="fine: d = 8 mm (11,930 spheres); coarse: d = 16 mm (1,491)")
+    parser.add_argument("--models-3d", nargs="+", default=["soft"], help="soft and/or cocd")
+    parser.add_argument("--cocd-dt", type=float, nargs=2, default=[5e-4, 1e-3], metavar=("2D", "3D"))
     parser.add_argument("--rain", action="store_true",
                         help="rain the 3D column anew instead of cases/data/channel_collapse_3d.csv")
     parser.add_argument("--jobs", type=int, default=1)
     args = parser.parse_args()
     os.makedirs(args.work, exist_ok=True)
-    deposits = {2: os.path.join(CASES, "data", "erodible_bed_2d_no_layer.csv"),
+    scene = SCENES[args.scene]
+    if args.rain and args.scene != "fine":
+        sys.exit("--rain makes the fine scene's deposit only")
+    deposits = {2: os.path.join(CASES, "data", scene["deposit_2d"]),
                 3: fill_3d(args.binary, args.work) if args.rain else
-                os.path.join(CASES, "data", "channel_collapse_3d.csv")}
+                os.path.join(CASES, "data", scene["deposit_3d"])}
+    cocd_dt = {2: args.cocd_dt[0], 3: args.cocd_dt[1]}
     threads = 1 if args.jobs > 1 else None
     members_2d, members_3d = args.members
-    jobs = [(3, "soft", s, k) for k in range(members_3d) for s in args.slope if 3 in args.dimension]
+    jobs = [(3, m, s, k) for k in range(members_3d) for s in args.slope for m in args.models_3d
+            if 3 in args.dimension]
     jobs += [(2, m, s, k) for s in args.slope for m in ("cocd", "soft") for k in range(members_2d)
              if 2 in args.dimension]
 
     def run(job):
         dimension, model, slope, member = job
-        row, profiles, series = release(args.binary, args.work, dimension, model, slope, member,
-                                        deposits[dimension], args.end, threads)
+        row, profiles, series = release(args.binary, args.work, scene, dimension, model, slope, member,
+                                        deposits[dimension], args.end, cocd_dt, threads)
         print(", ".join(f"{k}={row.get(k)}" for k in ("dimension", "model", "slope", "member", "front_0.4",
                                                      "front_1.0", "wall_seconds")), flush=True)
         return row, profiles, series
@@ -180,11 +237,12 @@ def main():
         return sum(fronts) / len(fronts) if fronts else None
 
     for slope in args.slope:
-        three = mean_front(3, "soft", slope)
-        for model in ("soft", "cocd"):
-            two = mean_front(2, model, slope)
-            if two and three:
-                print(f"{slope:g} deg: 2D {model} front at 1 s / 3D soft = {two / three:.3f}")
+        for model_3d in args.models_3d:
+            three = mean_front(3, model_3d, slope)
+            for model in ("soft", "cocd"):
+                two = mean_front(2, model, slope)
+                if two and three:
+                    print(f"{slope:g} deg: 2D {model} front at 1 s / 3D {model_3d} = {two / three:.3f}")
 
 
 if __name__ == "__main__":
