@@ -337,15 +337,15 @@ fn quick(gap: f64, motion: Motion, free: bool) -> Loads {
 }
 
 /// A diameter off the floor the layer is out of the grain's reach and
-/// the drag is Faxén's: 1.398 against 1.386 (+0.9 %; 1.550 in a box of
-/// 4 D, the images). The lift and the loads off the plane of the motion
-/// vanish.
+/// the drag is Faxén's: 1.3825 against 1.386 (−0.3 %, 1 % allowed; 1.523
+/// in a box of 4 D, the images). The lift and the loads off the plane of
+/// the motion vanish.
 #[test]
 fn far_from_the_floor_the_drag_is_faxens() {
     let (drag, _, _, _) = reference(1.0);
     let loads = quick(1.0, Motion::Sliding, true);
     assert!(
-        (loads.drag / drag - 1.0).abs() < 0.03,
+        (loads.drag / drag - 1.0).abs() < 0.01,
         "{loads:?} against {drag}"
     );
     assert!(loads.lift.abs() < 0.002, "{loads:?}");
