@@ -19,7 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 STYLE = {(2, "cocd"): ("tab:blue", "--", "2D COCD"), (2, "soft"): ("tab:red", "--", "2D soft"),
-         (3, "soft"): ("black", "-", "3D soft")}
+         (3, "soft"): ("black", "-", "3D soft"), (3, "cocd"): ("tab:blue", "-", "3D COCD")}
 COLUMN_LENGTH = 0.2
 
 

@@ -32,6 +32,7 @@
 
 use super::channel_grains::{raised_front, static_flowing, velocity_layers, Bins, Grains};
 use super::front_phases::{front_phases, FrontPhases};
+use super::CLOCK_ROUND_OFF;
 use crate::scene::deposit;
 use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::DemSystem;
@@ -143,7 +144,10 @@ impl ErodibleBed {
             && (self.release.is_none()
                 || after >= self.next_sample
                 || after >= self.next_profile
-                || self.mass_profile_times.last().is_some_and(|&t| after >= t))
+                || self
+                    .mass_profile_times
+                    .last()
+                    .is_some_and(|&t| after + CLOCK_ROUND_OFF >= t))
     }
 
     pub(super) fn after_step(&mut self, system: &DemSystem) {
@@ -177,7 +181,7 @@ impl ErodibleBed {
             self.next_sample = after + self.settings.sample_interval;
         }
         while let Some(&t) = self.mass_profile_times.last() {
-            if after < t {
+            if after + CLOCK_ROUND_OFF < t {
                 break;
             }
             self.mass_profile_times.pop();

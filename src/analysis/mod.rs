@@ -20,6 +20,11 @@ use serde_json::{json, Map, Value};
 use std::io::Write;
 use std::path::Path;
 
+/// How far short of a profile's time (s) the run's clock may fall and
+/// still take it: a time summed from 10⁵ steps of 10 µs reads
+/// 0.99999999… at what is 1 s, and a profile at the end time was lost.
+pub(crate) const CLOCK_ROUND_OFF: f64 = 1e-9;
+
 #[derive(serde::Serialize, serde::Deserialize)]
 pub enum Analysis {
     None,
