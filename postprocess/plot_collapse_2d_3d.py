@@ -4,7 +4,7 @@ each slope, the front r_f/R0 against time (top: each 2D model's ensemble
 as its mean and range, the 3D runs as lines) and the mass profiles h(x)
 at 0.4 and 1 s over the column's at the release (bottom: the ensembles'
 means), 2D dashed and 3D solid as in the paper. A run at rest before 1 s
-(COCD at 0 degrees) or ending a step short of it has no profile at 1 s.
+(some of COCD's at 0 degrees) has no profile at 1 s.
 
     postprocess/plot_collapse_2d_3d.py docs/validation/collapse_2d_3d.csv \
         docs/validation/collapse_2d_3d.png
