@@ -1,7 +1,7 @@
 //! The collapse of a granular column released by removing its gates:
 //! its initial aspect ratio, its runout at rest and its height profiles.
 
-use super::CLOCK_ROUND_OFF;
+use super::reached;
 use crate::scene::deposit;
 use grainflow_core::Vec3;
 use grainflow_dem::DemSystem;
@@ -119,7 +119,7 @@ impl ColumnCollapse {
         let profile_due = self
             .profile_times
             .last()
-            .is_some_and(|&t| time + CLOCK_ROUND_OFF >= self.release_time + t);
+            .is_some_and(|&t| reached(time, self.release_time + t));
         (released && self.initial_height.is_none()) || profile_due
     }
 
@@ -128,7 +128,7 @@ impl ColumnCollapse {
             self.initial_height = Some(self.column_top(system));
         }
         while let Some(&t) = self.profile_times.last() {
-            if system.time + CLOCK_ROUND_OFF < self.release_time + t {
+            if !reached(system.time, self.release_time + t) {
                 break;
             }
             self.profile_times.pop();

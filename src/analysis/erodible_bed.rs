@@ -19,9 +19,9 @@
 //! raised volume of the flowing bins (their grains' mean u_x at
 //! `flowing_speed` or more), ∫ max(h − h_release, 0) dx from the end of
 //! the channel, amounts to [`FRONT_GRAINS`] mean grains (in 3D, per mean
-//! diameter of span; interpolated within its bin); r_f(t) is the farthest such position so far. Static
-//! grains of the bed ahead do not raise it, even where the bed dilated
-//! (a layer of 10 diameters released at 22° swelled by more than five
+//! diameter of span; interpolated within its bin); r_f(t) is the farthest
+//! such position so far. Static grains of the bed ahead do not raise it,
+//! even where the bed dilated (a layer of 10 diameters released at 22° swelled by more than five
 //! grains' volume a metre ahead of the flow, which made the front jump
 //! there when static bins counted); a few grains rolling ahead of the flow
 //! do not make the front; and it moves continuously as the flow carries
@@ -32,7 +32,7 @@
 
 use super::channel_grains::{raised_front, static_flowing, velocity_layers, Bins, Grains};
 use super::front_phases::{front_phases, FrontPhases};
-use super::CLOCK_ROUND_OFF;
+use super::reached;
 use crate::scene::deposit;
 use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::DemSystem;
@@ -147,7 +147,7 @@ impl ErodibleBed {
                 || self
                     .mass_profile_times
                     .last()
-                    .is_some_and(|&t| after + CLOCK_ROUND_OFF >= t))
+                    .is_some_and(|&t| reached(after, t)))
     }
 
     pub(super) fn after_step(&mut self, system: &DemSystem) {
@@ -181,7 +181,7 @@ impl ErodibleBed {
             self.next_sample = after + self.settings.sample_interval;
         }
         while let Some(&t) = self.mass_profile_times.last() {
-            if after + CLOCK_ROUND_OFF < t {
+            if !reached(after, t) {
                 break;
             }
             self.mass_profile_times.pop();

@@ -20,10 +20,15 @@ use serde_json::{json, Map, Value};
 use std::io::Write;
 use std::path::Path;
 
-/// How far short of a profile's time (s) the run's clock may fall and
-/// still take it: a time summed from 10⁵ steps of 10 µs reads
-/// 0.99999999… at what is 1 s, and a profile at the end time was lost.
-pub(crate) const CLOCK_ROUND_OFF: f64 = 1e-9;
+/// How far short of a time (s) the run's clock may fall and still have
+/// reached it: a time summed from 10⁵ steps of 10 µs reads 0.99999999…
+/// at what is 1 s, and a profile at the end time was lost.
+const CLOCK_ROUND_OFF: f64 = 1e-9;
+
+/// Whether the run's `clock` has reached `time`, to its round-off.
+pub(crate) fn reached(clock: f64, time: f64) -> bool {
+    clock + CLOCK_ROUND_OFF >= time
+}
 
 #[derive(serde::Serialize, serde::Deserialize)]
 pub enum Analysis {
