@@ -21,8 +21,9 @@
 //! the channel, amounts to [`FRONT_GRAINS`] mean grains (in 3D, per mean
 //! diameter of span; interpolated within its bin); r_f(t) is the farthest
 //! such position so far. Static grains of the bed ahead do not raise it,
-//! even where the bed dilated (a layer of 10 diameters released at 22° swelled by more than five
-//! grains' volume a metre ahead of the flow, which made the front jump
+//! even where the bed dilated (a layer of 10 diameters released at 22°
+//! swelled by more than five grains' volume a metre ahead of the flow,
+//! which made the front jump
 //! there when static bins counted); a few grains rolling ahead of the flow
 //! do not make the front; and it moves continuously as the flow carries
 //! mass forwards. (The leading edge of the largest linked set of moving
