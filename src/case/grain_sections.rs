@@ -290,11 +290,9 @@ pub struct CouplingSection {
     /// the same at any step; `grainflow_ibm::layer_forcing`).
     #[serde(default)]
     pub layer_forcing: LayerForcingName,
-    /// The first layer of fluid cells along the domain's walls: "free"
-    /// (default: the moving grains do not force it; it holds the film of
-    /// eq. 19, which the flow does not resolve; glued grains still do) or
-    /// "forced" (the paper's forcing, which reaches the walls and seals
-    /// them under a grain at contact).
+    /// The first layer of fluid cells along the domain's walls: "forced"
+    /// (default: the paper's forcing, which reaches the walls) or "free"
+    /// (the moving grains do not force it; glued grains still do).
     #[serde(default)]
     pub wall_layer: WallLayerName,
 }
@@ -312,11 +310,14 @@ pub enum FormulationName {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum WallLayerName {
-    /// The moving grains leave the first cells along a wall to the fluid.
+    /// The paper's forcing, which reaches the walls (closer to Stokes
+    /// flow for a grain sliding or rolling along a wall, and every bounce
+    /// of the sweep at D/Δx = 8 in the experiments' band;
+    /// docs/validation.md, §7).
     #[default]
-    Free,
-    /// The paper's forcing, which reaches the walls.
     Forced,
+    /// The moving grains leave the first cells along a wall to the fluid.
+    Free,
 }
 
 /// `coupling.layer_forcing` as the case names it.
@@ -356,7 +357,7 @@ impl Default for CouplingSection {
             contact_gap: default_contact_gap(),
             forcing_step: None,
             layer_forcing: LayerForcingName::EveryStage,
-            wall_layer: WallLayerName::Free,
+            wall_layer: WallLayerName::Forced,
         }
     }
 }

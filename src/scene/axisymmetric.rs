@@ -120,8 +120,8 @@ pub fn build(
     )
     .map_err(|e| e.to_string())?;
     system.immersed.layer = section.layer_forcing();
-    if section.wall_layer == WallLayerName::Forced {
-        system.immersed.free_end_layers = EndLayers { ends: [false; 2] };
+    if section.wall_layer == WallLayerName::Free {
+        system.immersed.free_end_layers = EndLayers::at_walls(&system.flow.walls);
     }
     Ok((system, contact_time))
 }

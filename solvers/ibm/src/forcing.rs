@@ -26,16 +26,16 @@
 //! momentum inside each particle, `∫ α_p u dV` and `∫ r × α_p u dV`, is
 //! measured on the same faces for the coupling that accounts for it.
 //!
-//! At a wall of the flow domain the moving grains do not force the first
-//! layer of cells ([`WallLayer`], unless a case asks for the paper's
-//! forcing there; glued grains, the wall's roughness, still do): that
-//! cell holds the film between a grain and the wall, which
-//! the flow cannot resolve and eq. 19 models. Forced, the layer of a grain
-//! at contact moves every face of the cells beneath it with the grain, so
-//! no fluid can enter them as the grain lifts off, and the projection
-//! answers with a suction: it took 0.1 of the rebound of a sphere at
-//! St ≈ 320 (`docs/validation.md`, section 7). Left free, those cells
-//! hold a slot of fluid that the flow resolves.
+//! The forcing reaches the walls of the flow domain, as the paper's does,
+//! unless a case leaves the first layer of cells there to the fluid
+//! ([`WallLayer`], `coupling.wall_layer = "free"`; glued grains, the
+//! wall's roughness, force it either way): that cell holds the film
+//! between a grain and the wall, which the flow cannot resolve and eq. 19
+//! models. Measured on this version, the forced layer bounces a sphere
+//! within the experiments' band at every Stokes number (its suction takes
+//! 0.02 of the rebound at St ≈ 311) and is the closer to Stokes flow for a
+//! grain sliding or rolling along the wall (`docs/validation.md`,
+//! section 7).
 //!
 //! Every particle whose support reaches this rank's cells acts on them:
 //! its owned particles and the ghosts the DEM keeps within

@@ -57,6 +57,9 @@ pub struct EndLayers {
 }
 
 impl EndLayers {
+    /// No layer: the paper's forcing, which reaches the walls.
+    pub const NONE: EndLayers = EndLayers { ends: [false; 2] };
+
     /// A layer at every wall end of `walls`.
     pub fn at_walls(walls: &RzWalls) -> Self {
         let wall = !walls.periodic();

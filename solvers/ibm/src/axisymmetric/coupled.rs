@@ -59,7 +59,7 @@ impl AxisymmetricCoupledSystem {
                 gravity.x, gravity.y, gravity.z
             )));
         }
-        let immersed = AxisymmetricImmersed::new(&flow.grid, EndLayers::at_walls(&flow.walls));
+        let immersed = AxisymmetricImmersed::new(&flow.grid, EndLayers::NONE);
         let mut dem = dem;
         let virtual_mass = carry_virtual_mass(&mut dem, coupling, fluid_density);
         Ok(AxisymmetricCoupledSystem {

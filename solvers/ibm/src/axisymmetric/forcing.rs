@@ -43,7 +43,8 @@ pub struct AxisymmetricImmersed {
 }
 
 impl AxisymmetricImmersed {
-    /// The paper's forcing on `grid`, layers along the walls left free.
+    /// The paper's forcing on `grid`, with `free_end_layers` left to the
+    /// fluid.
     pub fn new(grid: &RzGrid, free_end_layers: EndLayers) -> Self {
         let zeros = || [grid.zeros(), grid.zeros()];
         AxisymmetricImmersed {
