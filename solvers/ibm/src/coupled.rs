@@ -226,6 +226,9 @@ impl CoupledSystem {
                 Some(raised) => (raised, Exponents::Uniform(1.0)),
                 None => (&bodies, exponents),
             };
+            // Eq. 7 in one pass reads the faces for its loads after the
+            // projection, with the inner momentum (`deferred_loads.rs`).
+            let deferred = passes == 1 && forced.forcing_sums_made();
             // Each pass but the last is projected here, the last below.
             let mut forcing = Loads::zeros(self.dem.particles.len());
             let mut clock = clock;
@@ -235,22 +238,32 @@ impl CoupledSystem {
                     max_divergence = max_divergence.max(self.flow.project(stage, dt));
                     clock = self.lap(clock, Part::Flow);
                 }
-                forcing.add(&self.immersed.apply(
-                    &self.flow.grid,
-                    &mut self.flow.velocity,
-                    forced,
-                    stage_dt,
-                    &exponents,
-                ));
+                let (grid, velocity) = (&self.flow.grid, &mut self.flow.velocity);
+                if deferred {
+                    self.immersed.force_keeping_prediction(grid, velocity, forced);
+                } else {
+                    let loads = self.immersed.apply(grid, velocity, forced, stage_dt, &exponents);
+                    forcing.add(&loads);
+                }
             }
-            let forcing = forcing.summed_on_owners(&self.dem);
             let clock = self.lap(clock, Part::Forcing);
             max_divergence = max_divergence.max(self.flow.project(stage, dt));
             let clock = self.lap(clock, Part::Flow);
-            let after = self
-                .immersed
-                .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies)
-                .summed_on_owners(&self.dem);
+            let after = if deferred {
+                let (loads, after) = self.immersed.loads_and_inner_momentum(
+                    &self.flow.grid,
+                    &self.flow.velocity,
+                    &bodies,
+                    stage_dt,
+                );
+                forcing.add(&loads);
+                after
+            } else {
+                self.immersed
+                    .inner_momentum(&self.flow.grid, &self.flow.velocity, &bodies)
+            };
+            let forcing = forcing.summed_on_owners(&self.dem);
+            let after = after.summed_on_owners(&self.dem);
             // Along a periodic axis the fluid carries gravity as a body
             // force b, and the forcing hands each grain the body force on
             // the fluid its grid volume holds.

@@ -118,9 +118,11 @@ pub(crate) fn bodies_by_plane(
 
 /// `V += (Σ β_p U_p − Σ β_p V) / max(1, Σ β_p)` (eq. 7 with the weights
 /// of overlapping bodies) on the faces of `block`, and the two sums set
-/// back to zero there: one pass over the three fields, the planes of the
-/// slowest axis shared among threads (each face computed alone).
-pub(crate) fn force_block(
+/// back to zero there, or with `KEEP_PREDICTION` the first set to the
+/// velocity before the forcing (`deferred_loads.rs`): one pass over the
+/// three fields, the planes of the slowest axis shared among threads (each
+/// face computed alone).
+pub(crate) fn force_block<const KEEP_PREDICTION: bool>(
     grid: &Grid,
     block: &Block,
     velocity: &mut [f64],
@@ -141,8 +143,9 @@ pub(crate) fn force_block(
                     .zip(&mut total[faces.clone()])
                     .zip(&mut target[faces]);
                 for ((v, total), target) in rows {
-                    *v += (*target - *total * *v) / total.max(1.0);
-                    *total = 0.0;
+                    let predicted = *v;
+                    *v += (*target - *total * predicted) / total.max(1.0);
+                    *total = if KEEP_PREDICTION { predicted } else { 0.0 };
                     *target = 0.0;
                 }
             }

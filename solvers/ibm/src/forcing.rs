@@ -437,7 +437,7 @@ impl ImmersedBoundaries {
         // 3. The forcing, V += Σ w_p (U_p − V), and the scratch cleared.
         for component in 0..dim {
             if let Some(block) = touched[component] {
-                force_block(
+                force_block::<false>(
                     grid,
                     &block,
                     &mut velocity[component],
@@ -481,6 +481,12 @@ impl ImmersedBoundaries {
         let mut out = Vec::with_capacity(grid.cells.iter().product());
         grid.for_each(&cells, |index, _| out.push(field[index].min(1.0)));
         out
+    }
+
+    /// Marks the scratch sums as holding a stage's forcing (or its kept
+    /// prediction) until it is applied (or read).
+    pub(crate) fn set_forcing_sums_pending(&mut self, pending: bool) {
+        self.forcing_sums_pending = pending;
     }
 
     /// The local particles whose support reaches the cells of `grid`, with
@@ -566,7 +572,7 @@ impl ImmersedBoundaries {
     }
 
     /// Adds the per-body results into per-particle loads, in body order.
-    fn gather(&self, bodies: &Bodies, per_body: &[(Vec3, Vec3)]) -> Loads {
+    pub(crate) fn gather(&self, bodies: &Bodies, per_body: &[(Vec3, Vec3)]) -> Loads {
         let mut loads = Loads::zeros(bodies.count);
         for (body, (force, torque)) in bodies.list.iter().zip(per_body) {
             loads.force[body.particle] += force;
@@ -594,6 +600,12 @@ pub enum Exponents {
 }
 
 impl Bodies {
+    /// Whether the forcing's sums of eq. 7 over these bodies are made
+    /// (eq. 7 at every stage, [`ImmersedBoundaries::bodies_with_inner_momentum`]).
+    pub fn forcing_sums_made(&self) -> bool {
+        self.forcing_sums_made
+    }
+
     /// The bodies with each fraction `α` replaced by `β = 1 − (1 −
     /// α)^e`, `e` the body's exponent in `exponents`: forced with eq. 7's
     /// weights (exponent one), they are forced as `exponents` forces the

@@ -20,6 +20,7 @@
 
 pub mod axisymmetric;
 pub mod coupled;
+mod deferred_loads;
 mod face_sums;
 mod faces;
 pub mod forcing;
