@@ -240,9 +240,12 @@ impl CoupledSystem {
                 }
                 let (grid, velocity) = (&self.flow.grid, &mut self.flow.velocity);
                 if deferred {
-                    self.immersed.force_keeping_prediction(grid, velocity, forced);
+                    self.immersed
+                        .force_keeping_prediction(grid, velocity, forced);
                 } else {
-                    let loads = self.immersed.apply(grid, velocity, forced, stage_dt, &exponents);
+                    let loads = self
+                        .immersed
+                        .apply(grid, velocity, forced, stage_dt, &exponents);
                     forcing.add(&loads);
                 }
             }

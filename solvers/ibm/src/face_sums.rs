@@ -8,7 +8,8 @@
 use grainflow_fluid::{Block, Grid};
 use rayon::prelude::*;
 
-use crate::forcing::{forced_fraction, Bodies, Exponents, ImmersedBoundaries};
+use crate::exponents::{forced_fraction, Exponents};
+use crate::forcing::{Bodies, ImmersedBoundaries};
 
 impl ImmersedBoundaries {
     /// Adds `Σ_p β_p` and `Σ_p β_p U_p` of `bodies`, `β = 1 − (1 − α)^exponent`

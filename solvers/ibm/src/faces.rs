@@ -90,10 +90,27 @@ pub(crate) struct FaceRows {
     pub step: f64,
 }
 
+/// The offsets of a body's faces from its centre, face by face, from
+/// which [`FaceRows::new`] makes all their fractions in one vector loop:
+/// kept by each thread from body to body, so that a body allocates only
+/// what it keeps.
+#[derive(Default)]
+pub(crate) struct FaceScratch {
+    /// `x` of each face.
+    x: Vec<f64>,
+    /// `y² + z²` and `|y| + |z|` of its row.
+    across: Vec<f64>,
+    across_l1: Vec<f64>,
+    /// The first and last face index of each row of a plane, unclipped.
+    bounds: Vec<(f64, f64)>,
+}
+
 impl FaceRows {
     /// The faces of `component` in `block` within the support of a body at
     /// `centre` of `radius` (eq. 8 with `Δ = width`), their fractions zero
-    /// on the faces of `free_layers`.
+    /// on the faces of `free_layers`; `scratch` holds the faces' offsets
+    /// while their fractions are made.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         width: f64,
         grid: &Grid,
@@ -102,6 +119,7 @@ impl FaceRows {
         centre: Vec3,
         radius: f64,
         free_layers: &[WallLayer],
+        scratch: &mut FaceScratch,
     ) -> FaceRows {
         let dim = grid.dim();
         let reach = support(radius, width);
@@ -139,40 +157,50 @@ impl FaceRows {
         plane_starts.push((0, 0));
         // Each face's offset: x, and y² + z² and |y| + |z| of its row, for
         // the fractions made all at once below.
-        let capacity = extent.iter().product();
-        let (mut x, mut across, mut across_l1) = (
-            Vec::with_capacity(capacity),
-            Vec::with_capacity(capacity),
-            Vec::with_capacity(capacity),
-        );
+        let FaceScratch {
+            x,
+            across,
+            across_l1,
+            bounds,
+        } = scratch;
+        x.clear();
+        across.clear();
+        across_l1.clear();
         let short = |n: usize| u16::try_from(n).expect("a support spans fewer than 65,536 faces");
+        let (reach_squared, step) = (reach * reach, grid.spacing[0]);
+        let x_range = stencil.start[0]..stencil.end[0];
+        let lines_along_y = &lines[lines_y..lines_z];
         for k in 0..extent[2] {
             let z = lines[lines_z + k];
-            for j in 0..extent[1] {
-                let y = lines[lines_y + j];
-                // The faces of the row within the support; beyond it the
-                // fraction is zero (eq. 8 cut at `TAIL`), so none is lost.
+            // The faces of each row of the plane within the support, all
+            // rows at once (vector instructions); beyond the support the
+            // fraction is zero (eq. 8 cut at `TAIL`), so none is lost.
+            bounds.clear();
+            bounds.extend(lines_along_y.iter().map(|&y| {
                 let across_squared = y * y + z * z;
-                let faces = if across_squared > reach * reach {
-                    stencil.start[0]..stencil.start[0]
-                } else {
-                    let half = (reach * reach - across_squared).sqrt();
-                    along_x.range(centre.x, half, stencil.start[0]..stencil.end[0])
-                };
-                if !faces.is_empty() {
-                    let i = faces.start - stencil.start[0];
-                    let len = faces.len();
-                    let first_x = lines[i];
-                    x.extend((0..len).map(|i| first_x + i as f64 * grid.spacing[0]));
-                    let start = across.len();
-                    across.resize(start + len, across_squared);
-                    across_l1.resize(start + len, y.abs() + z.abs());
-                    rows.push(StoredRow {
-                        len: short(len),
-                        i: short(i),
-                        j: short(j),
-                        k: short(k),
-                    });
+                let half = (reach_squared - across_squared).max(0.0).sqrt();
+                along_x.bounds(centre.x, half)
+            }));
+            for j in 0..extent[1] {
+                let y = lines_along_y[j];
+                let across_squared = y * y + z * z;
+                if across_squared <= reach_squared {
+                    let faces = along_x.clip(bounds[j], x_range.clone());
+                    if !faces.is_empty() {
+                        let i = faces.start - stencil.start[0];
+                        let len = faces.len();
+                        let first_x = lines[i];
+                        x.extend((0..len).map(|i| first_x + i as f64 * step));
+                        let start = across.len();
+                        across.resize(start + len, across_squared);
+                        across_l1.resize(start + len, y.abs() + z.abs());
+                        rows.push(StoredRow {
+                            len: short(len),
+                            i: short(i),
+                            j: short(j),
+                            k: short(k),
+                        });
+                    }
                 }
                 if slow == 1 {
                     plane_starts.push((rows.len(), x.len()));
@@ -183,7 +211,7 @@ impl FaceRows {
             }
         }
         let mut alpha = vec![0.0; x.len()];
-        face_fractions(&x, &across, &across_l1, radius, width, &mut alpha);
+        face_fractions(x, across, across_l1, radius, width, &mut alpha);
         let mut faces = FaceRows {
             origin: grid.index(stencil.start[0], stencil.start[1], stencil.start[2]),
             strides: [grid.stride(1), grid.stride(2)],
@@ -194,7 +222,7 @@ impl FaceRows {
             plane_starts,
             rows,
             alpha,
-            step: grid.spacing[0],
+            step,
         };
         if !layers.is_empty() {
             let mut start = 0;
@@ -392,9 +420,24 @@ impl FaceIndex {
     /// `within`. (A face at the support's edge by round-off has a zero
     /// fraction, so the rounding here loses none.)
     fn range(&self, centre: f64, reach: f64, within: Range<usize>) -> Range<usize> {
+        self.clip(self.bounds(centre, reach), within)
+    }
+
+    /// The first and last index within `reach` of `centre`, as floats
+    /// (the first at least zero).
+    #[inline(always)]
+    fn bounds(&self, centre: f64, reach: f64) -> (f64, f64) {
         let index_of = |x: f64| (x - self.lower) * self.inverse_spacing + self.shift;
-        let first = index_of(centre - reach).ceil().max(0.0) as usize;
-        let last = index_of(centre + reach).floor();
+        (
+            index_of(centre - reach).ceil().max(0.0),
+            index_of(centre + reach).floor(),
+        )
+    }
+
+    /// The indices from [`FaceIndex::bounds`] clipped to `within`.
+    #[inline(always)]
+    fn clip(&self, (first, last): (f64, f64), within: Range<usize>) -> Range<usize> {
+        let first = first as usize;
         let start = first.max(within.start);
         let end = if last < 0.0 {
             start

@@ -45,13 +45,15 @@
 //! ghosts' shares are added to their owners by the DEM
 //! (`DemSystem::sum_onto_owners`).
 
-use grainflow_core::{Communicator, Dimension, Vec3};
+use grainflow_core::{Dimension, Vec3};
 use grainflow_dem::Particles;
 use grainflow_fluid::{Block, Grid, Location};
 use rayon::prelude::*;
 
+use crate::exponents::forced_fraction;
+pub use crate::exponents::Exponents;
 use crate::face_sums::{force_block, touched_block};
-use crate::faces::{FaceRows, Row};
+use crate::faces::{FaceRows, FaceScratch, Row};
 use crate::layer_forcing::{slip_weight, LayerForcing, SLIP_SUMS};
 pub use crate::loads::{vectors_on_owners, Loads};
 use crate::overlaps::pressed_bodies;
@@ -307,8 +309,8 @@ impl ImmersedBoundaries {
             .list
             .par_iter_mut()
             .zip(&pressed)
-            .map(|(body, &pressed)| {
-                body.faces = self.body_faces(particles, grid, unknowns, body);
+            .map_init(FaceScratch::default, |scratch, (body, &pressed)| {
+                body.faces = self.body_faces(particles, grid, unknowns, body, scratch);
                 (!pressed).then(|| body.inner_momentum(velocity, volume))
             })
             .collect();
@@ -503,7 +505,9 @@ impl ImmersedBoundaries {
         bodies
             .list
             .par_iter_mut()
-            .for_each(|body| body.faces = self.body_faces(particles, grid, unknowns, body));
+            .for_each_init(FaceScratch::default, |scratch, body| {
+                body.faces = self.body_faces(particles, grid, unknowns, body, scratch)
+            });
         let pressed = pressed_bodies(&bodies, self.width);
         self.share_overlaps(grid, &mut bodies, &pressed);
         bodies
@@ -517,6 +521,7 @@ impl ImmersedBoundaries {
         grid: &Grid,
         unknowns: &[Block],
         body: &Body,
+        scratch: &mut FaceScratch,
     ) -> Vec<FaceRows> {
         // Glued grains are the wall's roughness: they keep forcing it.
         let layers: &[WallLayer] = if particles.inverse_mass[body.particle] > 0.0 {
@@ -534,6 +539,7 @@ impl ImmersedBoundaries {
                     body.centre,
                     body.radius,
                     layers,
+                    scratch,
                 )
             })
             .collect()
@@ -590,15 +596,6 @@ impl ImmersedBoundaries {
     }
 }
 
-/// The exponent `e` of each grain's forcing `1 − (1 − α)^e` in a stage.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Exponents {
-    /// The same for every grain (eq. 7: 1).
-    Uniform(f64),
-    /// One per local particle, owned then ghosts.
-    PerParticle(Vec<f64>),
-}
-
 impl Bodies {
     /// Whether the forcing's sums of eq. 7 over these bodies are made
     /// (eq. 7 at every stage, [`ImmersedBoundaries::bodies_with_inner_momentum`]).
@@ -632,76 +629,5 @@ impl Bodies {
             list,
             forcing_sums_made: false,
         }
-    }
-}
-
-impl Exponents {
-    /// The number of passes of forcing and projection a stage of `bodies`
-    /// takes so that no grain is forced with an exponent above one in a
-    /// pass: the largest exponent on every rank, rounded up (collective).
-    ///
-    /// Each pass moves a face at most its fraction of the way to the rigid
-    /// velocity, as eq. 7 does, and the projection follows it; passes of
-    /// `e/n` compose to the same relaxation of a grain's layer,
-    /// `1 − (1 − α)^e`. Forced at once with an exponent `e > 1`:
-    ///
-    /// - a face deep in the lens between two grains keeps only `(1 − α)^e`
-    ///   of the prediction and its pressure gradient; where the two move
-    ///   differently their rigid velocities do not add up to a flow
-    ///   without divergence, and the pressure the projection needs there
-    ///   grows as `(1 − α)^{−e}`, in the lens where their fractions add up
-    ///   to one or more without bound (`tests/overlapping_grains.rs`; the
-    ///   immersed avalanche's bed went unstable under the renewal forcing);
-    /// - a grain alone in a steady viscous flow creeps and then blows up:
-    ///   a fixed sphere in Stokes flow at `r Δt = 4` (`tests/stokes_array.rs`)
-    ///   held its drag for 2,000 steps, then its superficial velocity drifted
-    ///   and the lateral velocity grew sixteenfold per 500 steps until the
-    ///   CFL number passed √3 at step 4,000; in four passes it is steady
-    ///   to ten digits over 5,500 steps.
-    pub fn passes(&self, bodies: &Bodies, communicator: &Communicator) -> usize {
-        let largest = bodies
-            .list
-            .iter()
-            .map(|body| self.of(body.particle))
-            .fold(0.0, f64::max);
-        passes_for(communicator.max(largest))
-    }
-
-    /// Each exponent divided by `passes`.
-    pub fn per_pass(self, passes: usize) -> Exponents {
-        let n = passes as f64;
-        match self {
-            _ if passes == 1 => self,
-            Exponents::Uniform(exponent) => Exponents::Uniform(exponent / n),
-            Exponents::PerParticle(each) => {
-                Exponents::PerParticle(each.into_iter().map(|e| e / n).collect())
-            }
-        }
-    }
-
-    /// The exponent of local particle `particle`.
-    #[inline]
-    pub(crate) fn of(&self, particle: usize) -> f64 {
-        match self {
-            Exponents::Uniform(exponent) => *exponent,
-            Exponents::PerParticle(each) => each[particle],
-        }
-    }
-}
-
-/// The passes a stage whose largest forcing exponent is `largest` takes
-/// ([`Exponents::passes`]): `⌈largest⌉`, at least one.
-pub(crate) fn passes_for(largest: f64) -> usize {
-    (largest.ceil() as usize).max(1)
-}
-
-/// The fraction `1 − (1 − α)^exponent` of the way to the rigid velocity
-/// that a stage moves a face of solid fraction `α` (eq. 7 at exponent 1).
-#[inline]
-pub(crate) fn forced_fraction(alpha: f64, exponent: f64) -> f64 {
-    if exponent == 1.0 || alpha >= 1.0 {
-        alpha.min(1.0)
-    } else {
-        -(exponent * (-alpha).ln_1p()).exp_m1()
     }
 }

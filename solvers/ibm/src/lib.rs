@@ -21,6 +21,7 @@
 pub mod axisymmetric;
 pub mod coupled;
 mod deferred_loads;
+mod exponents;
 mod face_sums;
 mod faces;
 pub mod forcing;

@@ -20,7 +20,8 @@ use crate::coupled::{
     moved_back, restore_coupling, save_coupling, set_stage_loads, smallest_density_ratio,
     CoupledReport, Coupling, GrainLoad, StageMeasures, Timings,
 };
-use crate::forcing::{passes_for, Loads};
+use crate::exponents::passes_for;
+use crate::forcing::Loads;
 
 /// An (r, z) fluid with grains on its axis.
 pub struct AxisymmetricCoupledSystem {

@@ -19,7 +19,8 @@ use grainflow_dem::Particles;
 use grainflow_fluid::axisymmetric::{AxisymmetricFlow, RzGrid};
 
 use super::bodies::{ring_width, AxialBodies, AxialBody, EndLayers};
-use crate::forcing::{forced_fraction, Loads};
+use crate::exponents::forced_fraction;
+use crate::forcing::Loads;
 use crate::layer_forcing::{
     renewal_exponent, slip_from_sums, slip_weight, LayerForcing, SLIP_SUMS,
 };
