@@ -7,7 +7,7 @@
 //! inside it, `I⁺ = Σ α_p u dV`. Both are sums over the same rows of the
 //! same fractions (with eq. 7 at every stage, the loads' weights `w_p` are
 //! the bodies' shares `α_p`), so the forcing keeps `V*` in its scratch sum
-//! `Σ β` once it has read it ([`force_block`] with `keep_prediction`), and
+//! `Σ β` once it has read it (`force_block` with `KEEP_PREDICTION`), and
 //! one pass after the projection makes both, row by row. Each sum is made
 //! in the order the two passes made it, so the bits are the same.
 //!
@@ -19,7 +19,7 @@ use grainflow_core::Vec3;
 use grainflow_fluid::{Block, Grid};
 use rayon::prelude::*;
 
-use crate::face_sums::{force_block, touched_block};
+use crate::face_sums::touched_block;
 use crate::forcing::{Bodies, Body, ImmersedBoundaries, Loads};
 
 impl ImmersedBoundaries {
@@ -39,17 +39,7 @@ impl ImmersedBoundaries {
             bodies.forcing_sums_made(),
             "the loads are deferred only for eq. 7 with its sums made"
         );
-        for component in 0..grid.dim() {
-            if let Some(block) = touched_block(bodies, component) {
-                force_block::<true>(
-                    grid,
-                    &block,
-                    &mut velocity[component],
-                    &mut self.total_fraction[component],
-                    &mut self.solid_velocity[component],
-                );
-            }
-        }
+        self.force_touched::<true>(grid, velocity, bodies);
         self.set_forcing_sums_pending(true);
     }
 

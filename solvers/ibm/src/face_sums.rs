@@ -76,6 +76,29 @@ impl ImmersedBoundaries {
     }
 }
 
+impl ImmersedBoundaries {
+    /// [`force_block`] on the block each component's faces of `bodies`
+    /// span.
+    pub(crate) fn force_touched<const KEEP_PREDICTION: bool>(
+        &mut self,
+        grid: &Grid,
+        velocity: &mut [Vec<f64>],
+        bodies: &Bodies,
+    ) {
+        for component in 0..grid.dim() {
+            if let Some(block) = touched_block(bodies, component) {
+                force_block::<KEEP_PREDICTION>(
+                    grid,
+                    &block,
+                    &mut velocity[component],
+                    &mut self.total_fraction[component],
+                    &mut self.solid_velocity[component],
+                );
+            }
+        }
+    }
+}
+
 /// The smallest block that holds the faces of `component` of every body.
 pub(crate) fn touched_block(bodies: &Bodies, component: usize) -> Option<Block> {
     let mut touched: Option<Block> = None;

@@ -52,7 +52,6 @@ use rayon::prelude::*;
 
 use crate::exponents::forced_fraction;
 pub use crate::exponents::Exponents;
-use crate::face_sums::{force_block, touched_block};
 use crate::faces::{FaceRows, FaceScratch, Row};
 use crate::layer_forcing::{slip_weight, LayerForcing, SLIP_SUMS};
 pub use crate::loads::{vectors_on_owners, Loads};
@@ -381,7 +380,6 @@ impl ImmersedBoundaries {
         stage_dt: f64,
         exponents: &Exponents,
     ) -> Loads {
-        let dim = grid.dim();
         let volume = grid.cell_volume();
 
         // 1. Σ β_p and Σ β_p U_p on the faces, unless the bodies were
@@ -389,9 +387,6 @@ impl ImmersedBoundaries {
         if !bodies.forcing_sums_made {
             self.add_forcing_sums(grid, bodies, exponents);
         }
-        let touched: Vec<Option<Block>> = (0..dim)
-            .map(|component| touched_block(bodies, component))
-            .collect();
 
         // 2. Loads, from the velocity before the forcing: the particle
         // receives −f, the opposite of what it gives, `w_p (U_p − V)` on
@@ -437,17 +432,7 @@ impl ImmersedBoundaries {
             .collect();
 
         // 3. The forcing, V += Σ w_p (U_p − V), and the scratch cleared.
-        for component in 0..dim {
-            if let Some(block) = touched[component] {
-                force_block::<false>(
-                    grid,
-                    &block,
-                    &mut velocity[component],
-                    &mut self.total_fraction[component],
-                    &mut self.solid_velocity[component],
-                );
-            }
-        }
+        self.force_touched::<false>(grid, velocity, bodies);
         self.forcing_sums_pending = false;
         self.gather(bodies, &per_body)
     }
