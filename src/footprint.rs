@@ -164,14 +164,34 @@ impl Footprint {
     /// memory than `available` bytes (this machine's, [`machine_memory`]),
     /// naming the keys that make it large.
     pub fn check_fits(&self, ranks: usize, available: Option<f64>) -> Result<(), RunError> {
+        self.check_fits_holding(ranks, available, None)
+    }
+
+    /// [`Footprint::check_fits`] with `held = (bytes, what)` more on every
+    /// rank, not shared among them (what a COCD program's separator makes
+    /// each rank hold: [`crate::sharing::Separator::held_per_rank_bytes`]),
+    /// `what` naming it in the refusal.
+    pub fn check_fits_holding(
+        &self,
+        ranks: usize,
+        available: Option<f64>,
+        held: Option<(f64, &str)>,
+    ) -> Result<(), RunError> {
         let Some(available) = available else {
             return Ok(());
         };
-        let share = self.bytes / ranks as f64;
+        let held_bytes = held.map_or(0.0, |(bytes, _)| bytes);
+        let share = self.bytes / ranks as f64 + held_bytes;
         if share <= available {
             return Ok(());
         }
         let mut causes = Vec::new();
+        if let Some((bytes, what)) = held {
+            causes.push(format!(
+                "{what}: about {} on every rank",
+                human_bytes(bytes)
+            ));
+        }
         if self.cells > 0.0 {
             causes.push(format!("fluid.cells = {:.3e} cells", self.cells));
         }
@@ -186,9 +206,17 @@ impl Footprint {
         for (key, count) in largest.iter().filter(|(_, n)| *n > 0.0).take(2) {
             causes.push(format!("{key}: {count:.3e} grains"));
         }
+        // More ranks shrink the shares but not what each rank holds whole
+        // (a separator grows with the ranks): where the share alone would
+        // fit, fewer ranks are the way.
+        let advice = if held_bytes > 0.0 && self.bytes / ranks as f64 <= available {
+            "reduce them, or run on fewer ranks with more threads each"
+        } else {
+            "reduce them, or share the scene among more ranks (mpirun)"
+        };
         Err(RunError::Case(format!(
             "the scene needs about {} per rank on {ranks} rank{} ({}), more than this \
-             machine's {}: reduce them, or share the scene among more ranks (mpirun)",
+             machine's {}: {advice}",
             human_bytes(share),
             if ranks == 1 { "" } else { "s" },
             causes.join(", "),
@@ -269,6 +297,33 @@ mod tests {
         assert!(footprint.check_fits(100_000, Some(24e9)).is_ok());
         // Where the machine's memory is unknown nothing is refused.
         assert!(footprint.check_fits(1, None).is_ok());
+    }
+
+    /// What every rank holds whole (a COCD separator's Σ) is added to each
+    /// rank's share, not divided among the ranks: a scene of 8 GB whose
+    /// quarter fits a 3 GB machine no longer fits on 4 ranks beside 2 GB
+    /// held on each, and the refusal names what is held and advises fewer
+    /// ranks (more would grow the separator).
+    #[test]
+    fn a_separator_held_on_every_rank_is_counted_beside_each_share() {
+        let footprint = Footprint {
+            grains: vec![("particles.block[0].count".into(), 1e7)],
+            cells: 0.0,
+            contact_bytes: 7e9,
+            bytes: 8e9,
+        };
+        let what = "contact.model = \"cocd\": the dense Schur complement of its separator";
+        assert!(footprint.check_fits(4, Some(3e9)).is_ok());
+        assert!(footprint
+            .check_fits_holding(4, Some(3e9), Some((0.9e9, what)))
+            .is_ok());
+        let error = footprint
+            .check_fits_holding(4, Some(3e9), Some((2e9, what)))
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("3.7 GiB"), "{error}");
+        assert!(error.contains("Schur complement"), "{error}");
+        assert!(error.contains("fewer ranks"), "{error}");
     }
 
     /// A 3D packing of 250,000 spheres at rest fits a 24 GB machine with

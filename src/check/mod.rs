@@ -47,35 +47,29 @@ pub fn report_on(case: &Case, ranks: usize) -> Result<String, RunError> {
             _ => sharing::report(case, None, grid.as_ref(), ranks),
         };
         text += &sharing.map_err(RunError::Case)?;
-        text += &cocd_separator(case, ranks).map_err(RunError::Case)?;
+        text += &cocd_separator(case, ranks)?;
     }
     Ok(text)
 }
 
 /// For a COCD scene on several ranks, the separator its program has at
 /// the start ([`sharing::Separator`]): the unknowns the ranks factorise
-/// together at every iteration. Empty for other scenes.
-fn cocd_separator(case: &Case, ranks: usize) -> Result<String, String> {
-    let Some(hard) = case
-        .has_grains()
-        .then(|| scene::hard_contact(case))
-        .flatten()
-        .filter(|hard| hard.method == grainflow_contact::Method::Cocd)
-    else {
+/// together at every iteration, and the memory each rank then needs.
+/// Refuses one whose Σ does not fit beside each rank's share. Empty for
+/// other scenes.
+fn cocd_separator(case: &Case, ranks: usize) -> Result<String, RunError> {
+    let Some((separator, grid)) = sharing::check_separator_fits(case, ranks)? else {
         return Ok(String::new());
     };
-    let mut system = scene::build(case)?;
-    hard.prepare(&mut system);
-    let centres = &system.particles.position[..system.particles.n_owned];
-    let range = system.range_for(system.particles.max_radius());
-    let grid = scene::process_grid_of(case, &system.domain, ranks, range, centres)?;
-    let separator = sharing::Separator::of(&system, hard.threshold, grid);
+    let share = Footprint::of(case).bytes / ranks as f64;
     Ok(format!(
-        "  COCD on {ranks} ranks (process grid {} x {} x {}): {}\n",
+        "  COCD on {ranks} ranks (process grid {} x {} x {}): {}; memory per rank about {} \
+         (its share of the scene and Σ)\n",
         grid[0],
         grid[1],
         grid[2],
-        separator.describe()
+        separator.describe(),
+        human_bytes(share + separator.held_per_rank_bytes()),
     ))
 }
 

@@ -16,6 +16,53 @@ use grainflow_dem::DemSystem;
 use grainflow_fluid::{Grid, Partition};
 use std::fmt::Write;
 
+/// The separator a COCD scene's program has at the start on `ranks` ranks
+/// ([`Separator`]), with the process grid that shares it; None for other
+/// scenes. Builds the scene on this process alone.
+pub fn cocd_separator(
+    case: &Case,
+    ranks: usize,
+) -> Result<Option<(Separator, [usize; 3])>, String> {
+    let Some(hard) = case
+        .has_grains()
+        .then(|| scene::hard_contact(case))
+        .flatten()
+        .filter(|hard| hard.method == grainflow_contact::Method::Cocd)
+    else {
+        return Ok(None);
+    };
+    let mut system = scene::build(case)?;
+    hard.prepare(&mut system);
+    let centres = &system.particles.position[..system.particles.n_owned];
+    let range = system.range_for(system.particles.max_radius());
+    let grid = scene::process_grid_of(case, &system.domain, ranks, range, centres)?;
+    Ok(Some((Separator::of(&system, hard.threshold, grid), grid)))
+}
+
+/// Refuses a COCD scene on `ranks` ranks (more than one) whose share of the
+/// scene and the separator's Σ that every rank holds whole
+/// ([`Separator::held_per_rank_bytes`]) need more memory than this
+/// machine's, naming the separator; returns the separator and its process
+/// grid (None for other scenes).
+pub fn check_separator_fits(
+    case: &Case,
+    ranks: usize,
+) -> Result<Option<(Separator, [usize; 3])>, crate::RunError> {
+    let separator = cocd_separator(case, ranks).map_err(crate::RunError::Case)?;
+    if let Some((separator, _)) = &separator {
+        let held = separator.held_per_rank_bytes();
+        crate::footprint::Footprint::of(case).check_fits_holding(
+            ranks,
+            crate::footprint::machine_memory(),
+            Some((
+                held,
+                "contact.model = \"cocd\": the dense Schur complement of its separator",
+            )),
+        )?;
+    }
+    Ok(separator)
+}
+
 /// Fewer grains per rank than this and a run warns.
 pub const GRAINS_PER_RANK_WARNING: usize = 10_000;
 /// Fewer cells per rank than this and a run warns.

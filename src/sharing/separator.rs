@@ -92,9 +92,19 @@ impl Separator {
         }
     }
 
-    /// Bytes of the dense Schur complement (held whole on a rank).
+    /// Bytes of the dense Schur complement Σ.
     pub fn schur_bytes(&self) -> f64 {
         8.0 * (self.separator as f64).powi(2)
+    }
+
+    /// Bytes every rank holds for Σ while the ranks sum and factorise it
+    /// (`grainflow_contact::normal_factor`, the shared factor): Σ itself
+    /// (ns² numbers), its packed lower triangle and the copy the sum over
+    /// the ranks sends (ns²/2 numbers each), and the rank's own part of it
+    /// from its interior, at most the whole separator (ns²): 3 ns² numbers.
+    /// Beside the rank's share of the scene, not divided among the ranks.
+    pub fn held_per_rank_bytes(&self) -> f64 {
+        3.0 * self.schur_bytes()
     }
 
     /// Multiply–adds of one dense Cholesky factorisation of Σ.
@@ -108,13 +118,14 @@ impl Separator {
         format!(
             "the contact program's separator: {} of {} unknowns ({share:.1} %), the grains of \
              {} of {} candidate pairs that cross a rank boundary; its dense Schur complement \
-             {} and {:.1e} multiply-adds per interior-point iteration; ranks' interiors {} to \
-             {} unknowns",
+             {} (about {} held on every rank while it is summed and factorised) and {:.1e} \
+             multiply-adds per interior-point iteration; ranks' interiors {} to {} unknowns",
             self.separator,
             self.unknowns,
             self.crossing_pairs,
             self.pairs,
             crate::footprint::human_bytes(self.schur_bytes()),
+            crate::footprint::human_bytes(self.held_per_rank_bytes()),
             self.schur_flops(),
             self.interiors.iter().min().copied().unwrap_or(0),
             self.interiors.iter().max().copied().unwrap_or(0),

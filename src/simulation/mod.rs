@@ -102,6 +102,9 @@ pub fn run_with(
 ) -> Result<Summary, RunError> {
     crate::footprint::Footprint::of(case)
         .check_fits(communicator.size(), crate::footprint::machine_memory())?;
+    if communicator.size() > 1 {
+        crate::sharing::check_separator_fits(case, communicator.size())?;
+    }
     if rayon::current_thread_index().is_some() {
         return run_here(case, out, communicator, options);
     }

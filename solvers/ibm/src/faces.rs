@@ -210,8 +210,7 @@ impl FaceRows {
                 plane_starts.push((rows.len(), x.len()));
             }
         }
-        let mut alpha = vec![0.0; x.len()];
-        face_fractions(x, across, across_l1, radius, width, &mut alpha);
+        let alpha = face_fractions(x, across, across_l1, radius, width);
         let mut faces = FaceRows {
             origin: grid.index(stencil.start[0], stencil.start[1], stencil.start[2]),
             strides: [grid.stride(1), grid.stride(2)],

@@ -100,19 +100,21 @@ impl ImmersedBoundaries {
 pub(crate) fn pressed_bodies(bodies: &Bodies, width: f64) -> Vec<bool> {
     let list = &bodies.list;
     let mut pressed = vec![false; list.len()];
+    let reach: Vec<f64> = list.iter().map(|b| support(b.radius, width)).collect();
+    let low: Vec<f64> = list
+        .iter()
+        .zip(&reach)
+        .map(|(b, r)| b.centre.x - r)
+        .collect();
     let mut order: Vec<usize> = (0..list.len()).collect();
-    order.sort_by(|&a, &b| {
-        let low = |k: usize| list[k].centre.x - support(list[k].radius, width);
-        low(a).total_cmp(&low(b))
-    });
+    order.sort_by(|&a, &b| low[a].total_cmp(&low[b]));
     for (at, &p) in order.iter().enumerate() {
-        let (centre, reach_p) = (list[p].centre, support(list[p].radius, width));
+        let (centre, reach_p) = (list[p].centre, reach[p]);
         for &q in &order[at + 1..] {
-            let reach_q = support(list[q].radius, width);
-            if list[q].centre.x - reach_q >= centre.x + reach_p {
+            if low[q] >= centre.x + reach_p {
                 break;
             }
-            let reach = reach_p + reach_q;
+            let reach = reach_p + reach[q];
             if (list[q].centre - centre).norm_squared() < reach * reach {
                 pressed[p] = true;
                 pressed[q] = true;
