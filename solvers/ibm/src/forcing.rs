@@ -86,6 +86,20 @@ pub(crate) struct Body {
 }
 
 impl Body {
+    /// A still body at `centre` of `radius`, without faces (for tests of
+    /// what reads only where bodies stand).
+    #[cfg(test)]
+    pub(crate) fn standing(particle: usize, centre: Vec3, radius: f64) -> Body {
+        Body {
+            particle,
+            centre,
+            velocity: Vec3::zeros(),
+            angular_velocity: Vec3::zeros(),
+            radius,
+            faces: Vec::new(),
+        }
+    }
+
     /// The body without its faces.
     fn clone_without_faces(&self) -> Body {
         Body {
@@ -582,6 +596,16 @@ impl ImmersedBoundaries {
 }
 
 impl Bodies {
+    /// Bodies of `list`, one per particle, for tests.
+    #[cfg(test)]
+    pub(crate) fn of_list(list: Vec<Body>) -> Bodies {
+        Bodies {
+            count: list.len(),
+            list,
+            forcing_sums_made: false,
+        }
+    }
+
     /// Whether the forcing's sums of eq. 7 over these bodies are made
     /// (eq. 7 at every stage, [`ImmersedBoundaries::bodies_with_inner_momentum`]).
     pub fn forcing_sums_made(&self) -> bool {
