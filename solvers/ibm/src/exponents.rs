@@ -5,6 +5,7 @@
 //! takes to keep each pass's exponent at most one.
 
 use grainflow_core::Communicator;
+use rayon::prelude::*;
 
 use crate::forcing::Bodies;
 
@@ -85,5 +86,34 @@ pub(crate) fn forced_fraction(alpha: f64, exponent: f64) -> f64 {
         alpha.min(1.0)
     } else {
         -(exponent * (-alpha).ln_1p()).exp_m1()
+    }
+}
+
+impl Bodies {
+    /// The bodies with each fraction `α` replaced by `β = 1 − (1 −
+    /// α)^e`, `e` the body's exponent in `exponents`: forced with eq. 7's
+    /// weights (exponent one), they are forced as `exponents` forces the
+    /// bodies themselves, with the exponential made once for every pass of
+    /// a stage rather than twice in each.
+    pub fn raised(&self, exponents: &Exponents) -> Bodies {
+        let list = self
+            .list
+            .par_iter()
+            .map(|body| {
+                let exponent = exponents.of(body.particle);
+                let mut raised = body.clone_without_faces();
+                raised.faces = body
+                    .faces
+                    .iter()
+                    .map(|faces| faces.mapped(|alpha| forced_fraction(alpha, exponent)))
+                    .collect();
+                raised
+            })
+            .collect();
+        Bodies {
+            count: self.count,
+            list,
+            forcing_sums_made: false,
+        }
     }
 }

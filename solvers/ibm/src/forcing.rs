@@ -101,7 +101,7 @@ impl Body {
     }
 
     /// The body without its faces.
-    fn clone_without_faces(&self) -> Body {
+    pub(crate) fn clone_without_faces(&self) -> Body {
         Body {
             particle: self.particle,
             centre: self.centre,
@@ -212,12 +212,12 @@ impl Body {
 /// still.
 pub struct Bodies {
     /// Local particles (the loads have one entry each).
-    count: usize,
+    pub(crate) count: usize,
     pub(crate) list: Vec<Body>,
     /// Whether the forcing's sums of eq. 7 over these bodies are made
     /// already (`bodies_with_inner_momentum`), from the fractions before
     /// their shares.
-    forcing_sums_made: bool,
+    pub(crate) forcing_sums_made: bool,
 }
 
 /// The immersed spheres' action on the flow of one subdomain.
@@ -610,33 +610,5 @@ impl Bodies {
     /// (eq. 7 at every stage, [`ImmersedBoundaries::bodies_with_inner_momentum`]).
     pub fn forcing_sums_made(&self) -> bool {
         self.forcing_sums_made
-    }
-
-    /// The bodies with each fraction `α` replaced by `β = 1 − (1 −
-    /// α)^e`, `e` the body's exponent in `exponents`: forced with eq. 7's
-    /// weights (exponent one), they are forced as `exponents` forces the
-    /// bodies themselves, with the exponential made once for every pass of
-    /// a stage rather than twice in each.
-    pub fn raised(&self, exponents: &Exponents) -> Bodies {
-        let list = self
-            .list
-            .par_iter()
-            .map(|body| {
-                let exponent = exponents.of(body.particle);
-                Body {
-                    faces: body
-                        .faces
-                        .iter()
-                        .map(|faces| faces.mapped(|alpha| forced_fraction(alpha, exponent)))
-                        .collect(),
-                    ..body.clone_without_faces()
-                }
-            })
-            .collect();
-        Bodies {
-            count: self.count,
-            list,
-            forcing_sums_made: false,
-        }
     }
 }

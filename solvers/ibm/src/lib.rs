@@ -30,6 +30,7 @@ mod loads;
 mod overlaps;
 pub mod settling;
 pub mod solid_fraction;
+mod stage_loads;
 mod wall_layer;
 
 pub use coupled::{

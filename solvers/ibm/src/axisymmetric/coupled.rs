@@ -16,12 +16,14 @@ use grainflow_fluid::{stage_fraction, FluidError, STAGES};
 use super::bodies::{check_grains_on_axis, EndLayers};
 use super::forcing::AxisymmetricImmersed;
 use crate::coupled::{
-    carry_virtual_mass, dem_substeps, hydrodynamic_loads, inner_momentum_rate, kept_inner_momentum,
-    moved_back, restore_coupling, save_coupling, set_stage_loads, smallest_density_ratio,
-    CoupledReport, Coupling, GrainLoad, StageMeasures, Timings,
+    carry_virtual_mass, dem_substeps, kept_inner_momentum, moved_back, restore_coupling,
+    save_coupling, smallest_density_ratio, CoupledReport, Coupling, Timings,
 };
 use crate::exponents::passes_for;
 use crate::forcing::Loads;
+use crate::stage_loads::{
+    hydrodynamic_loads, inner_momentum_rate, set_stage_loads, GrainLoad, StageMeasures,
+};
 
 /// An (r, z) fluid with grains on its axis.
 pub struct AxisymmetricCoupledSystem {
