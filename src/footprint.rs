@@ -160,6 +160,12 @@ impl Footprint {
         }
     }
 
+    /// Bytes each of `ranks` ranks needs: its share of the scene, and
+    /// `held` bytes every rank holds whole (a COCD separator's Σ).
+    pub fn per_rank_bytes(&self, ranks: usize, held: f64) -> f64 {
+        self.bytes / ranks as f64 + held
+    }
+
     /// Refuses a scene whose share on each of `ranks` ranks needs more
     /// memory than `available` bytes (this machine's, [`machine_memory`]),
     /// naming the keys that make it large.
@@ -181,7 +187,7 @@ impl Footprint {
             return Ok(());
         };
         let held_bytes = held.map_or(0.0, |(bytes, _)| bytes);
-        let share = self.bytes / ranks as f64 + held_bytes;
+        let share = self.per_rank_bytes(ranks, held_bytes);
         if share <= available {
             return Ok(());
         }

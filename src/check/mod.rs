@@ -61,7 +61,7 @@ fn cocd_separator(case: &Case, ranks: usize) -> Result<String, RunError> {
     let Some((separator, grid)) = sharing::check_separator_fits(case, ranks)? else {
         return Ok(String::new());
     };
-    let share = Footprint::of(case).bytes / ranks as f64;
+    let per_rank = Footprint::of(case).per_rank_bytes(ranks, separator.held_per_rank_bytes());
     Ok(format!(
         "  COCD on {ranks} ranks (process grid {} x {} x {}): {}; memory per rank about {} \
          (its share of the scene and Σ)\n",
@@ -69,7 +69,7 @@ fn cocd_separator(case: &Case, ranks: usize) -> Result<String, RunError> {
         grid[1],
         grid[2],
         separator.describe(),
-        human_bytes(share + separator.held_per_rank_bytes()),
+        human_bytes(per_rank),
     ))
 }
 
