@@ -635,6 +635,12 @@ fn scenes_not_shared_among_ranks_are_refused_before_writing() {
             vec!["parallel.process_grid=[3,1,1]"],
             "parallel.process_grid = [3, 1, 1] holds 3 ranks, but the run has 2",
         ),
+        // COCD: the separator is measured on the root alone, which reports.
+        (
+            cases.join("column_collapse_cocd_2d.toml"),
+            vec!["parallel.process_grid=[3,1]"],
+            "parallel.process_grid = [3, 1] holds 3 ranks, but the run has 2",
+        ),
     ] {
         let out = dir.path().join("out");
         let (code, stderr) = run(&case, &out, 2, &overrides, Duration::from_secs(60));

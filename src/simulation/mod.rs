@@ -103,7 +103,7 @@ pub fn run_with(
     crate::footprint::Footprint::of(case)
         .check_fits(communicator.size(), crate::footprint::machine_memory())?;
     if communicator.size() > 1 {
-        crate::sharing::check_separator_fits(case, communicator.size())?;
+        check_separator_on_root(case, &communicator)?;
     }
     if rayon::current_thread_index().is_some() {
         return run_here(case, out, communicator, options);
@@ -113,6 +113,24 @@ pub fn run_with(
         .build()
         .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
     pool.install(|| run_here(case, out, communicator, options))
+}
+
+/// [`crate::sharing::check_separator_fits`] on the root alone, which builds
+/// the whole scene for it: on a node of many ranks, one copy of the scene
+/// instead of one per rank. Every rank learns the verdict (collective); the
+/// root holds the message, which it alone prints.
+fn check_separator_on_root(case: &Case, communicator: &Communicator) -> Result<(), RunError> {
+    let verdict = if communicator.is_root() {
+        crate::sharing::check_separator_fits(case, communicator.size()).map(|_| ())
+    } else {
+        Ok(())
+    };
+    if communicator.any(verdict.is_err()) {
+        return Err(verdict.err().unwrap_or_else(|| {
+            RunError::Case("the root rank refused the scene's separator".into())
+        }));
+    }
+    Ok(())
 }
 
 /// Refuses, before anything is written, what does not run on several ranks

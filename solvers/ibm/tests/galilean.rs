@@ -147,7 +147,10 @@ fn the_lift_left_at_d_over_dx_8_is_the_advection_of_the_layer_not_a_lag_in_time(
     // A lag of the load in time would shrink with the step: it grows
     // instead, by less each halving (converging as Δt → 0).
     assert!(long < short && short < shorter, "{long} {short} {shorter}");
-    assert!(shorter - short < 0.5 * (short - long), "{long} {short} {shorter}");
+    assert!(
+        shorter - short < 0.5 * (short - long),
+        "{long} {short} {shorter}"
+    );
     // The faster the layer follows the grain, the smaller the lift: at
     // least 10 % less for twice the rate (measured 17 %).
     assert!(stronger < 0.9 * short, "{stronger} {short}");
