@@ -108,6 +108,9 @@ def release(binary, work, deposit, radius, length, thickness, slope, model, dt, 
         f"particles.block[0].spacing={spacing}",
         f'particles.block[1].path="{os.path.abspath(deposit)}"',
         f"walls[2].point=[{length},0.0]",
+        # The case's velocity probes (0.5, 1 and 1.5 m on its 2.5 m
+        # channel), at the same fractions of a channel of another length.
+        f"analysis.probes=[{0.2 * length:g},{0.4 * length:g},{0.6 * length:g}]",
         f'contact.model="{model}"',
         f"time.dt={dt}",
         f"time.end={end}",
