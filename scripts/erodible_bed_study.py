@@ -16,6 +16,10 @@ reaches at μ = 0 (measured at d = 8 mm: 410 discs make a column 12.8 cm
 high, 500 a layer 24.7 mm thick over 1.3 m). A deposit is rained once per
 thickness and reused by every slope, model and time step.
 
+--members N releases each deposit N times on each slope, |g| raised by
+k x 1e-8 relative for member k (k = 0 the case's): the same release on
+another of its chaotic paths, for the spread of single runs.
+
 The same command run again resumes: deposits already in --work are kept,
 and so are runs that finished (their summary.json). --jobs 2 runs two
 releases side by side, each on one thread: on two cores a sweep's
@@ -40,7 +44,7 @@ COLUMN_LENGTH = 0.2
 COLUMN_HEIGHT = 0.14
 
 FIELDS = [
-    "thickness_diameters", "slope", "model", "dt", "status", "erodible_thickness",
+    "thickness_diameters", "slope", "model", "dt", "member", "status", "erodible_thickness",
     "aspect_ratio", "column_grains", "bed_grains", "runout", "final_front",
     "front_max_speed", "front_max_speed_time", "deceleration_end_time", "slow_phase",
     "slow_phase_speed", "front_stop_time", "bed_max_kinetic_to_potential", "steps",
@@ -94,12 +98,16 @@ def fill(binary, work, radius, length, thickness, prep_friction):
     return deposit
 
 
-def release(binary, work, deposit, radius, length, thickness, slope, model, dt, end, extra):
+def release(binary, work, deposit, radius, length, thickness, slope, model, dt, end, extra,
+            member=0):
     d = 2.0 * radius
     spacing = 1.1 * d
     theta = math.radians(slope)
-    g = 9.81
-    out = os.path.join(work, f"run_{thickness / d:g}d_{slope:g}deg_{model}_{dt:g}")
+    # Member k of an ensemble: |g| perturbed in its eighth digit, so that
+    # the same release follows another of its chaotic paths.
+    g = 9.81 * (1.0 + 1e-8 * member)
+    out = os.path.join(work, f"run_{thickness / d:g}d_{slope:g}deg_{model}_{dt:g}"
+                       + (f"_m{member}" if member else ""))
     sets = [
         f"domain.upper=[{length},0.6]",
         f"domain.gravity=[{g * math.sin(theta)},{-g * math.cos(theta)}]",
@@ -121,7 +129,8 @@ def release(binary, work, deposit, radius, length, thickness, slope, model, dt, 
             summary, refusal = json.load(f), None
     else:
         summary, refusal = run_case(binary, os.path.join(CASES, "erodible_bed_2d.toml"), out, sets)
-    row = {"thickness_diameters": thickness / d, "slope": slope, "model": model, "dt": dt}
+    row = {"thickness_diameters": thickness / d, "slope": slope, "model": model, "dt": dt,
+           "member": member}
     if summary is None:
         row["status"] = "refused"
         row["stop_reason"] = refusal
@@ -134,7 +143,8 @@ def release(binary, work, deposit, radius, length, thickness, slope, model, dt, 
     fronts = []
     with open(os.path.join(out, "front.csv")) as f:
         for r in csv.DictReader(f):
-            r.update({"thickness_diameters": thickness / d, "slope": slope, "model": model, "dt": dt})
+            r.update({"thickness_diameters": thickness / d, "slope": slope, "model": model, "dt": dt,
+                      "member": member})
             fronts.append(r)
     return row, fronts
 
@@ -169,6 +179,8 @@ def main():
     parser.add_argument("--prep-friction", type=float, default=0.0)
     parser.add_argument("--set", action="append", default=[], help="extra --set for the runs")
     parser.add_argument("--jobs", type=int, default=1, help="releases side by side, one thread each")
+    parser.add_argument("--members", type=int, default=1,
+                        help="releases of each deposit and slope, |g| perturbed in its eighth digit")
     args = parser.parse_args()
     os.makedirs(args.work, exist_ok=True)
     radius = 0.5 * args.diameter
@@ -177,15 +189,16 @@ def main():
                 for h in args.thickness}
 
     def run(job):
-        h, slope, model = job
+        h, slope, model, member = job
         row, front = release(args.binary, args.work, deposits[h], radius, args.length,
-                             h * args.diameter, slope, model, args.dt, args.end, sets)
+                             h * args.diameter, slope, model, args.dt, args.end, sets, member)
         print(", ".join(f"{k}={row.get(k)}" for k in ("thickness_diameters", "slope", "model",
                                                      "runout", "slow_phase", "wall_seconds")),
               flush=True)
         return row, front
 
-    jobs = [(h, slope, model) for h in args.thickness for slope in args.slope for model in args.model]
+    jobs = [(h, slope, model, member) for h in args.thickness for slope in args.slope
+            for model in args.model for member in range(args.members)]
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         results = list(pool.map(run, jobs))
     rows = [row for row, _ in results]
