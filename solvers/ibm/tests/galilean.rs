@@ -133,7 +133,7 @@ fn lateral_velocity_held(held: f64, dt: f64) -> f64 {
 /// grid (2.3 % of the fixed-volume lift at D/Δx = 16, test above) and with
 /// the forcing's strength. Seconds.
 #[test]
-fn the_lift_left_at_d_over_dx_8_is_the_advection_of_the_layer_not_a_lag_in_time() {
+fn the_lift_left_at_d_over_dx_8_grows_as_the_step_is_cut_and_falls_with_a_tighter_layer() {
     let (long, short, shorter) = (
         lateral_velocity_held(5e-3, 5e-3),
         lateral_velocity_held(5e-3, 2.5e-3),
