@@ -192,7 +192,7 @@ def main():
         h, slope, model, member = job
         row, front = release(args.binary, args.work, deposits[h], radius, args.length,
                              h * args.diameter, slope, model, args.dt, args.end, sets, member)
-        print(", ".join(f"{k}={row.get(k)}" for k in ("thickness_diameters", "slope", "model",
+        print(", ".join(f"{k}={row.get(k)}" for k in ("thickness_diameters", "slope", "model", "member",
                                                      "runout", "slow_phase", "wall_seconds")),
               flush=True)
         return row, front

@@ -42,12 +42,13 @@ fn spinning_sphere_on(cells: usize, drift: f64, spin: f64, coupling: Coupling) -
 
 /// The grain's velocity across the drift after 20 steps of 5 ms.
 fn lateral_velocity(drift: f64, spin: f64, coupling: Coupling) -> f64 {
-    lateral_velocity_of(spinning_sphere(drift, spin, coupling))
+    lateral_velocity_of(spinning_sphere(drift, spin, coupling), 5e-3)
 }
 
-fn lateral_velocity_of(mut system: CoupledSystem) -> f64 {
-    for _ in 0..20 {
-        system.step(5e-3).unwrap();
+/// The grain's velocity across the drift after 0.1 s in steps of `dt`.
+fn lateral_velocity_of(mut system: CoupledSystem, dt: f64) -> f64 {
+    for _ in 0..(0.1 / dt).round() as usize {
+        system.step(dt).unwrap();
     }
     system.dem.particles.velocity[0].y
 }
@@ -90,18 +91,11 @@ fn a_spinning_grain_drifting_with_its_fluid_feels_no_frame_dependent_lift() {
 #[test]
 fn the_frame_dependent_lift_left_by_the_default_load_shrinks_with_the_grid() {
     const FIXED_VOLUME_LIFT: f64 = 3.9e-3;
-    let coarse = lateral_velocity_of(spinning_sphere_on(
-        32,
-        0.05,
-        10.0,
-        Coupling::InnerFluidMomentum,
-    ));
-    let fine = lateral_velocity_of(spinning_sphere_on(
-        64,
-        0.05,
-        10.0,
-        Coupling::InnerFluidMomentum,
-    ));
+    let drifting = |cells| {
+        let system = spinning_sphere_on(cells, 0.05, 10.0, Coupling::InnerFluidMomentum);
+        lateral_velocity_of(system, 5e-3)
+    };
+    let (coarse, fine) = (drifting(32), drifting(64));
     println!("v_y drifting: {coarse:+.3e} at D/Δx = 8, {fine:+.3e} at 16");
     assert!(fine.abs() < 0.05 * FIXED_VOLUME_LIFT, "{fine}");
     assert!(fine.abs() < 0.5 * coarse.abs(), "{coarse} {fine}");
@@ -113,11 +107,7 @@ fn the_frame_dependent_lift_left_by_the_default_load_shrinks_with_the_grid() {
 fn lateral_velocity_held(held: f64, dt: f64) -> f64 {
     let mut system = spinning_sphere_on(32, 0.05, 10.0, Coupling::InnerFluidMomentum);
     system.immersed.layer = LayerForcing::Held { step: held };
-    let steps = (0.1 / dt).round() as usize;
-    for _ in 0..steps {
-        system.step(dt).unwrap();
-    }
-    system.dem.particles.velocity[0].y
+    lateral_velocity_of(system, dt)
 }
 
 /// What is left of the frame-dependent lift at D/Δx = 8 is not a lag of
