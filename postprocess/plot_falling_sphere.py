@@ -2,7 +2,9 @@
 """Charts of the falling-sphere sweep (scripts/falling_sphere_sweep.py):
 settling velocity against time for each run beside eq. 20 (initial slope)
 and the Schiller-Naumann terminal velocity (eq. 21); the speed-accuracy
-chart: terminal-Reynolds error against wall time, one point per resolution;
+chart: the terminal Reynolds number against the steady drag computed on a
+body-fitted grid (scripts/sphere_drag_reference.py) against wall time, one
+point per resolution, 3D and (r, z), eq. 7 and the renewal forcing;
 and the step dependence at D/dx = 8: the error against the step under eq. 7
 and with the forcing step held (coupling.forcing_step).
 The velocity histories are read from TRACKS (run, t, z, vz).
@@ -48,6 +50,8 @@ terminal = float(first["schiller_naumann_reynolds"]) / float(first["terminal_rey
     * float(first["terminal_velocity"]) / speed_unit
 slope = (4.0 - 1.0) / (4.0 + 0.5)  # eq. 20 in units of g
 history.axhline(terminal, color="k", ls=":", lw=1, label="Schiller–Naumann (eq. 21)")
+history.axhline(terminal * 19.715 / float(first["schiller_naumann_reynolds"]), color="k", lw=1,
+                label="steady drag, body-fitted grid")
 history.plot([0, 1.5], [0, slope * 1.5], "k--", lw=1, label="added mass (eq. 20)")
 history.set_xlabel("t (g/D)^½")
 history.set_ylabel("settling velocity / (g D)^½")
@@ -55,41 +59,66 @@ history.set_title("ρp/ρ = 4, Ar = 800")
 history.legend(fontsize=7)
 
 reference_runs = [r for r in rows if float(r["box_width_over_d"]) == 8.0]
-# The speed-accuracy chart takes the runs with today's load (over the
-# volume moving with the grain) when they are there.
-current = os.path.join(os.path.dirname(source), "falling_sphere_moving_volume.csv")
-chart_runs = reference_runs
-if os.path.exists(current):
-    chart_runs = [r for r in csv.DictReader(open(current))
-                  if r["status"] == "ok" and float(r["box_width_over_d"]) == 8.0]
-by_resolution = {}
-for r in chart_runs:
-    key = int(r["cells_per_diameter"])
-    # One point per resolution: the run at the paper's CFL (dt scaled with
-    # dx); the last such row wins.
-    if abs(float(r["dt_sqrt_g_over_d"]) * key / 20.0 - 0.04) < 1e-6:
-        by_resolution[key] = r
-points = sorted(by_resolution.items())
-seconds = [float(r["wall_seconds"]) for _, r in points]
-error = [abs(float(r["terminal_reynolds_error"])) * 100 for _, r in points]
-chart.loglog(seconds, error, "o-", label="3D, box 8 D (Cartesian)")
-for (n, _), s, e in zip(points, seconds, error):
-    chart.annotate(f"D/Δx = {n}", (s, e), textcoords="offset points", xytext=(5, 5))
-# The (r, z) runs of the paper's own domain
-# (scripts/falling_sphere_axisymmetric_sweep.py), when there are some.
-axisymmetric = os.path.join(os.path.dirname(source), "falling_sphere_axisymmetric.csv")
-if os.path.exists(axisymmetric):
-    rz = list(csv.DictReader(open(axisymmetric)))
-    rz_seconds = [float(r["wall_seconds"]) for r in rz]
-    rz_error = [abs(float(r["terminal_reynolds_error"])) * 100 for r in rz]
-    chart.loglog(rz_seconds, rz_error, "s-", label="(r, z), the paper's 20 D × 40 D")
-    for r, s_, e in zip(rz, rz_seconds, rz_error):
-        chart.annotate(f"D/Δx = {r['cells_per_diameter']}", (s_, e), textcoords="offset points",
-                       xytext=(5, -12))
-chart.legend(fontsize=8)
-chart.set_xlabel("wall time of the run [s] (2 threads)")
-chart.set_ylabel("|terminal Re error| against Schiller–Naumann [%]")
-chart.set_title("speed against accuracy (paper's CFL)")
+# The speed-accuracy chart: the terminal Reynolds number against the steady
+# drag computed on a body-fitted grid (scripts/sphere_drag_reference.py,
+# 19.715 at Ar = 800; docs/validation.md, section 7), the 3D runs corrected
+# for their 8 D box by the (r, z) sphere in its cross-section (x 1.0141),
+# each forcing at the paper's grain CFL number (dt scaled with dx).
+BODY_FITTED = 19.715
+BOX = 1.0141
+folder = os.path.dirname(source)
+
+
+def paper_cfl(per, dt):
+    return abs(dt * per / 20.0 - 0.04) < 1e-6
+
+
+def series(rows, per_key, dt_key, scale, wanted):
+    chosen = {}
+    for r in rows:
+        per, dt = int(r[per_key]), float(r[dt_key])
+        if r.get("status", "ok") == "ok" and paper_cfl(per, dt) and wanted(r):
+            chosen[per] = r
+    points = sorted(chosen.items())
+    return ([float(r["wall_seconds"]) for _, r in points],
+            [100.0 * (scale * float(r["terminal_reynolds"]) / BODY_FITTED - 1.0)
+             for _, r in points],
+            [per for per, _ in points])
+
+
+def read(name):
+    path = os.path.join(folder, name)
+    return list(csv.DictReader(open(path))) if os.path.exists(path) else []
+
+
+box8 = lambda r: float(r["box_width_over_d"]) == 8.0
+rz_rows = read("forcing_step_axisymmetric.csv") + [
+    dict(r, forcing_number="") for r in read("falling_sphere_axisymmetric.csv")]
+curves = [
+    (series(read("falling_sphere_moving_volume.csv"), "cells_per_diameter", "dt_sqrt_g_over_d",
+            BOX, box8), "o-", "3D, 8 D box, eq. 7 (default)"),
+    (series(read("falling_sphere_renewal.csv"), "cells_per_diameter", "dt_sqrt_g_over_d",
+            BOX, box8), "o--", "3D, 8 D box, renewal"),
+    (series(rz_rows, "cells_per_diameter", "dt_sqrt_g_over_d", 1.0,
+            lambda r: r["forcing_number"] == ""), "s-", "(r, z), paper's 20 D × 40 D, eq. 7"),
+    (series(rz_rows, "cells_per_diameter", "dt_sqrt_g_over_d", 1.0,
+            lambda r: r["forcing_number"] == "renewal"), "s--",
+     "(r, z), paper's 20 D × 40 D, renewal"),
+]
+for (seconds, error, pers), style, label in curves:
+    if not seconds:
+        continue
+    chart.semilogx(seconds, error, style, label=label)
+    for n, s_, e in zip(pers, seconds, error):
+        chart.annotate(f"{n}", (s_, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
+sn = 100.0 * (float(first["schiller_naumann_reynolds"]) / BODY_FITTED - 1.0)
+chart.axhspan(-1.0, 1.0, color="0.9", zorder=0, label="±1 % of the body-fitted drag")
+chart.axhline(0.0, color="k", lw=0.5)
+chart.axhline(sn, color="k", ls=":", lw=1, label=f"Schiller–Naumann ({sn:+.1f} %)")
+chart.legend(fontsize=7)
+chart.set_xlabel("wall time of the run [s] ((r, z): 1–2 threads; 3D: 2)")
+chart.set_ylabel("terminal Re against the body-fitted drag [%]")
+chart.set_title("speed against accuracy (paper's grain CFL; labels D/Δx)")
 
 coarse = [r for r in reference_runs if r["cells_per_diameter"] == "8" and not r.get("cfl")]
 for held, marker, name in [(False, "o-", "eq. 7 at every stage"),

@@ -79,6 +79,11 @@ pub fn comparisons(case: &Case, summary: &Value) -> Vec<Comparison> {
         "Schiller-Naumann",
     );
     compare(
+        "terminal_reynolds",
+        number("drag_curve_reynolds"),
+        "the standard drag curve (Clift, Grace & Weber)",
+    );
+    compare(
         "initial_acceleration",
         number("initial_acceleration_reference"),
         "buoyant weight over the mass with its added mass",
