@@ -248,12 +248,17 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
     ]);
     assert!(!chosen.contains("warning: "), "{chosen}");
     // COCD on two ranks, with the separator the ranks factorise together:
-    // 400 discs, three unknowns each, split across x.
+    // 400 discs, three unknowns each, cut across the box's height (the
+    // shorter cut) at the discs' median height, 200 on each rank (boxes
+    // of equal lengths would cut it along its height: 197 and 203, 57
+    // unknowns in the separator against 54).
     let boxed = text(&["check", &case("static_box.toml"), "--ranks", "2"]);
     assert!(
         boxed.contains(
-            "COCD on 2 ranks (process grid 2 x 1 x 1): the contact program's separator: "
-        ) && boxed.contains(" of 1200 unknowns"),
+            "COCD on 2 ranks (process grid 1 x 2 x 1): the contact program's separator: 54 \
+             of 1200 unknowns"
+        ) && boxed.contains("boxes cut at the grains' quantiles along the split axes: y = ")
+            && boxed.contains("grains per rank at the start: 200 to 200"),
         "{boxed}"
     );
     // An axisymmetric scene runs on one rank.

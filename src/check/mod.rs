@@ -65,9 +65,9 @@ fn cocd_separator(case: &Case, ranks: usize) -> Result<String, RunError> {
     Ok(format!(
         "  COCD on {ranks} ranks (process grid {} x {} x {}): {}; memory per rank about {} \
          (its share of the scene and Σ)\n",
-        grid[0],
-        grid[1],
-        grid[2],
+        grid.ranks[0],
+        grid.ranks[1],
+        grid.ranks[2],
         separator.describe(),
         human_bytes(per_rank),
     ))

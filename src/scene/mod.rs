@@ -14,7 +14,10 @@ pub mod pouring;
 
 use crate::case::{BlockSection, Case, ContactModel};
 use grainflow_contact::{ConicSolver, HardContact, Method};
-use grainflow_core::{fits, process_grid, Communicator, Dimension, Domain, Vec3};
+use grainflow_core::{
+    balanced_cuts, balanced_process_grid, fits, process_grid, Communicator, Dimension, Domain,
+    ProcessGrid, Vec3,
+};
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
 use grainflow_dem::particles::NewParticle;
 use grainflow_dem::Lubrication;
@@ -459,8 +462,8 @@ pub fn build_with(
     let max_radius = placed.iter().map(|p| p.radius).fold(0.0, f64::max);
     system.ghost_reach = ghost_reach(max_radius);
     let range = system.range_for(max_radius).max(system.ghost_reach);
-    let ranks = match ranks {
-        Some(ranks) if fits(&system.domain, ranks, range) => ranks,
+    let grid = match ranks {
+        Some(ranks) if fits(&system.domain, ranks, range) => ProcessGrid::even(ranks),
         Some(ranks) => {
             return Err(format!(
                 "the process grid {ranks:?} of the flow makes boxes narrower than the grains' \
@@ -473,29 +476,43 @@ pub fn build_with(
             process_grid_of(case, &system.domain, communicator.size(), range, &centres)?
         }
     };
-    system.decompose(communicator, ranks);
+    system.decompose_in(communicator, &grid);
     system.add_particles_in_groups(&placed, &groups);
     Ok(system)
 }
 
-/// The process grid of a case on `size` ranks: `parallel.process_grid` if
-/// given (and more than one rank runs), else the one that shares the grains at `positions` best with the
-/// least area of cuts. Every box must be at
-/// least one interaction range wide along a split axis.
+/// The process grid of a dry case on `size` ranks: `parallel.process_grid`
+/// if given (and more than one rank runs), else the one that shares the
+/// grains at `positions` best with the least area of cuts. Every box must
+/// be at least one interaction range wide along a split axis.
+///
+/// Under COCD the boxes end at the grains' quantiles along each split axis
+/// that is not periodic ([`balanced_process_grid`]): the ranks factorise
+/// the grains along the cuts together, and a shorter cut that shares the
+/// grains evenly makes that separator smaller (a 2D packing of 50,000
+/// discs at rest in the lower half of its domain: 426 unknowns across its
+/// height against 831 along it; docs/cluster.md). Other scenes keep boxes
+/// of equal lengths reaching the domain's faces, which hold a spreading
+/// flow longer (a collapse's two halves stay with their ranks).
 pub fn process_grid_of(
     case: &Case,
     domain: &Domain,
     size: usize,
     range: f64,
     positions: &[Vec3],
-) -> Result<[usize; 3], String> {
+) -> Result<ProcessGrid, String> {
+    let balanced = hard_contact(case).is_some_and(|hard| hard.method == Method::Cocd);
     let Some(ranks) = case
         .parallel
         .as_ref()
         .and_then(|p| p.ranks())
         .filter(|_| size > 1)
     else {
-        return process_grid(domain, size, range, positions);
+        return if balanced {
+            balanced_process_grid(domain, size, range, positions)
+        } else {
+            process_grid(domain, size, range, positions).map(ProcessGrid::even)
+        };
     };
     let given = case.parallel.as_ref().and_then(|p| p.process_grid.as_ref());
     if ranks.iter().product::<usize>() != size {
@@ -506,14 +523,22 @@ pub fn process_grid_of(
             ranks.iter().product::<usize>()
         ));
     }
-    if !fits(domain, ranks, range) {
+    let grid = ProcessGrid {
+        ranks,
+        cuts: if balanced {
+            balanced_cuts(domain, ranks, range, positions)
+        } else {
+            Default::default()
+        },
+    };
+    if !grid.fits(domain, range) {
         return Err(format!(
             "parallel.process_grid = {:?} makes boxes narrower than the interaction range \
              {range:.3e} m along a split axis; allowed: fewer ranks along the short axes",
             given.expect("set")
         ));
     }
-    Ok(ranks)
+    Ok(grid)
 }
 
 fn check_inside(domain: &Domain, placed: &[NewParticle]) -> Result<(), String> {

@@ -11,7 +11,7 @@ pub use separator::Separator;
 
 use crate::case::Case;
 use crate::{scene, scene::fluid as fluid_scene};
-use grainflow_core::{fits, grains_per_box, Vec3};
+use grainflow_core::{fits, ProcessGrid, Vec3};
 use grainflow_dem::DemSystem;
 use grainflow_fluid::{Grid, Partition};
 use std::fmt::Write;
@@ -22,7 +22,7 @@ use std::fmt::Write;
 pub fn cocd_separator(
     case: &Case,
     ranks: usize,
-) -> Result<Option<(Separator, [usize; 3])>, String> {
+) -> Result<Option<(Separator, ProcessGrid)>, String> {
     let Some(hard) = case
         .has_grains()
         .then(|| scene::hard_contact(case))
@@ -36,7 +36,7 @@ pub fn cocd_separator(
     let centres = &system.particles.position[..system.particles.n_owned];
     let range = system.range_for(system.particles.max_radius());
     let grid = scene::process_grid_of(case, &system.domain, ranks, range, centres)?;
-    Ok(Some((Separator::of(&system, hard.threshold, grid), grid)))
+    Ok(Some((Separator::of(&system, hard.threshold, &grid), grid)))
 }
 
 /// Refuses a COCD scene on `ranks` ranks (more than one) whose share of the
@@ -47,7 +47,7 @@ pub fn cocd_separator(
 pub fn check_separator_fits(
     case: &Case,
     ranks: usize,
-) -> Result<Option<(Separator, [usize; 3])>, crate::RunError> {
+) -> Result<Option<(Separator, ProcessGrid)>, crate::RunError> {
     let separator = cocd_separator(case, ranks).map_err(crate::RunError::Case)?;
     if let Some((separator, _)) = &separator {
         let held = separator.held_per_rank_bytes();
@@ -104,8 +104,8 @@ pub fn report(
 ) -> Result<String, String> {
     let mut out = String::new();
     let _ = writeln!(out, "on {ranks} MPI ranks:");
-    let process_grid = match grid {
-        Some(grid) => fluid_scene::process_grid_of(case, grid, ranks)?,
+    let boxes = match grid {
+        Some(grid) => ProcessGrid::even(fluid_scene::process_grid_of(case, grid, ranks)?),
         None => {
             let system = system.expect("a scene with grains or a fluid");
             let centres: Vec<Vec3> = positions(system);
@@ -113,6 +113,7 @@ pub fn report(
             scene::process_grid_of(case, &system.domain, ranks, range, &centres)?
         }
     };
+    let process_grid = boxes.ranks;
     if process_grid.iter().product::<usize>() != ranks {
         return Err(format!(
             "parallel.process_grid = {process_grid:?} does not hold {ranks} ranks"
@@ -123,6 +124,13 @@ pub fn report(
         "  process grid {} x {} x {}",
         process_grid[0], process_grid[1], process_grid[2]
     );
+    let cuts = boxes.describe_cuts();
+    if !cuts.is_empty() {
+        let _ = writeln!(
+            out,
+            "  boxes cut at the grains' quantiles along the split axes: {cuts} m"
+        );
+    }
     let mut mean_cells = None;
     if let Some(grid) = grid {
         let partition = Partition::new(grid, process_grid, 0).map_err(|e| format!("fluid: {e}"))?;
@@ -154,7 +162,7 @@ pub fn report(
                 ));
             }
         }
-        let counts = grains_per_box(&system.domain, process_grid, &centres);
+        let counts = boxes.grains_per_box(&system.domain, &centres);
         let mean = centres.len() as f64 / ranks as f64;
         let _ = writeln!(
             out,

@@ -16,7 +16,7 @@
 //! size, not the ranks' interiors, sets what several ranks can gain.
 
 use grainflow_contact::{contacts, Partner};
-use grainflow_core::Subdomain;
+use grainflow_core::ProcessGrid;
 use grainflow_dem::DemSystem;
 
 /// The program's unknowns as shared among ranks.
@@ -37,14 +37,14 @@ impl Separator {
     /// The separator of the program over the candidate pairs of `system`
     /// (one rank, every grain owned) within the gap `threshold`, its grains
     /// shared by a process grid of `ranks` as a run shares them.
-    pub fn of(system: &DemSystem, threshold: f64, ranks: [usize; 3]) -> Self {
+    pub fn of(system: &DemSystem, threshold: f64, boxes: &ProcessGrid) -> Self {
         let p = &system.particles;
         let n = p.n_owned;
         let per_grain = match system.dimension().count() {
             2 => 3,
             _ => 6,
         };
-        let grid = Subdomain::of_rank(&system.domain, ranks, 0);
+        let grid = boxes.subdomain(&system.domain, 0);
         let owner: Vec<usize> = (0..n)
             .map(|k| {
                 let mut x = p.position[k];
@@ -180,7 +180,7 @@ mod tests {
     /// rank's side, 4 spheres of 6 unknowns.
     #[test]
     fn the_separator_of_a_layer_split_in_two_is_the_column_on_the_upper_side() {
-        let separator = Separator::of(&layer(&[]), 1e-4, [2, 1, 1]);
+        let separator = Separator::of(&layer(&[]), 1e-4, &ProcessGrid::even([2, 1, 1]));
         assert_eq!(
             separator,
             Separator {
@@ -192,14 +192,14 @@ mod tests {
             }
         );
         // Unsplit, nothing crosses.
-        let whole = Separator::of(&layer(&[]), 1e-4, [1, 1, 1]);
+        let whole = Separator::of(&layer(&[]), 1e-4, &ProcessGrid::even([1, 1, 1]));
         assert_eq!((whole.separator, whole.interiors), (0, vec![96]));
     }
 
     /// A fixed grain has no unknowns, and its pairs couple nothing.
     #[test]
     fn a_fixed_grain_on_the_boundary_leaves_the_separator() {
-        let separator = Separator::of(&layer(&[(2, 0)]), 1e-4, [2, 1, 1]);
+        let separator = Separator::of(&layer(&[(2, 0)]), 1e-4, &ProcessGrid::even([2, 1, 1]));
         assert_eq!(separator.unknowns, 90);
         assert_eq!(separator.separator, 18);
         assert_eq!(separator.crossing_pairs, 3);

@@ -116,9 +116,21 @@ impl DryModel {
         let ranks = communicator.size();
         if ranks > 1 {
             let s = &system.subdomain;
+            let grid = grainflow_core::ProcessGrid {
+                ranks: s.ranks,
+                cuts: s.cuts.clone(),
+            };
+            let cuts = grid.describe_cuts();
             description.push(format!(
-                "{ranks} MPI ranks in a process grid of {} x {} x {}",
-                s.ranks[0], s.ranks[1], s.ranks[2]
+                "{ranks} MPI ranks in a process grid of {} x {} x {}{}",
+                s.ranks[0],
+                s.ranks[1],
+                s.ranks[2],
+                if cuts.is_empty() {
+                    String::new()
+                } else {
+                    format!(", boxes cut at the grains' quantiles: {cuts}")
+                }
             ));
             warnings.extend(sharing::load_warning(
                 ranks,

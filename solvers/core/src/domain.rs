@@ -46,11 +46,17 @@ impl Domain {
     }
 }
 
+/// Where the boxes of a process grid end inside the domain along each
+/// axis: `ranks[axis] − 1` increasing positions, or none where the axis is
+/// cut into equal lengths.
+pub type BoxCuts = [Vec<f64>; 3];
+
 /// The part of the domain a rank owns, in a Cartesian process grid of
-/// `ranks[0] × ranks[1] × ranks[2]` equal boxes: particles whose centre
-/// lies in `[lower, upper)` are owned here (the ranks at the ends of an
-/// axis also own what lies beyond the domain's faces); copies of others
-/// within the interaction range are ghosts.
+/// `ranks[0] × ranks[1] × ranks[2]` boxes (of equal lengths along an axis
+/// without cuts, else ending at the cuts): particles whose centre lies in
+/// `[lower, upper)` are owned here (the ranks at the ends of an axis also
+/// own what lies beyond the domain's faces); copies of others within the
+/// interaction range are ghosts.
 #[derive(Clone, Debug)]
 pub struct Subdomain {
     pub lower: Vec3,
@@ -59,6 +65,8 @@ pub struct Subdomain {
     pub ranks: [usize; 3],
     /// This rank's position in the process grid.
     pub coords: [usize; 3],
+    /// Where the boxes end along each axis (none: equal lengths).
+    pub cuts: BoxCuts,
 }
 
 /// The lower or upper neighbour along an axis.
@@ -76,21 +84,40 @@ impl Subdomain {
             upper: domain.upper,
             ranks: [1, 1, 1],
             coords: [0, 0, 0],
+            cuts: BoxCuts::default(),
         }
     }
 
-    /// The box of `rank` in a process grid of `ranks` (x fastest:
-    /// rank = (c_z n_y + c_y) n_x + c_x).
+    /// The box of `rank` in a process grid of `ranks` boxes of equal
+    /// lengths (x fastest: rank = (c_z n_y + c_y) n_x + c_x).
     pub fn of_rank(domain: &Domain, ranks: [usize; 3], rank: usize) -> Self {
+        Self::of_rank_cut(domain, ranks, &BoxCuts::default(), rank)
+    }
+
+    /// The box of `rank` in a process grid of `ranks` whose boxes end at
+    /// `cuts` (equal lengths along an axis without cuts).
+    pub fn of_rank_cut(domain: &Domain, ranks: [usize; 3], cuts: &BoxCuts, rank: usize) -> Self {
         let coords = grid_coords(ranks, rank);
         let extent = domain.extent();
         let mut lower = domain.lower;
         let mut upper = domain.upper;
         for axis in 0..3 {
-            let width = extent[axis] / ranks[axis] as f64;
-            lower[axis] = domain.lower[axis] + width * coords[axis] as f64;
-            if coords[axis] + 1 < ranks[axis] {
-                upper[axis] = domain.lower[axis] + width * (coords[axis] + 1) as f64;
+            let (n, c) = (ranks[axis], coords[axis]);
+            let at = &cuts[axis];
+            if at.is_empty() {
+                let width = extent[axis] / n as f64;
+                lower[axis] = domain.lower[axis] + width * c as f64;
+                if c + 1 < n {
+                    upper[axis] = domain.lower[axis] + width * (c + 1) as f64;
+                }
+            } else {
+                assert_eq!(at.len() + 1, n, "one cut between each two boxes");
+                if c > 0 {
+                    lower[axis] = at[c - 1];
+                }
+                if c + 1 < n {
+                    upper[axis] = at[c];
+                }
             }
         }
         Subdomain {
@@ -98,6 +125,7 @@ impl Subdomain {
             upper,
             ranks,
             coords,
+            cuts: cuts.clone(),
         }
     }
 
@@ -119,9 +147,12 @@ impl Subdomain {
         let mut coords = [0; 3];
         for axis in 0..3 {
             let n = self.ranks[axis];
-            if n > 1 {
+            if n > 1 && self.cuts[axis].is_empty() {
                 let c = ((x[axis] - domain.lower[axis]) / extent[axis] * n as f64).floor();
                 coords[axis] = (c.max(0.0) as usize).min(n - 1);
+            } else if n > 1 {
+                // The boxes below x: a position on a cut is the upper box's.
+                coords[axis] = self.cuts[axis].partition_point(|&cut| cut <= x[axis]);
             }
         }
         coords
@@ -188,91 +219,6 @@ pub fn grid_neighbour(
     Some(grid_rank(ranks, coords))
 }
 
-/// The process grid for `size` ranks: among the factorisations
-/// n_x n_y n_z = size (n_z = 1 in 2D) whose boxes are at least `min_width`
-/// wide along every split axis, those whose busiest box holds the fewest of
-/// the grains at `positions` (within 2 %: the work is shared), and among
-/// them the one with the least area of cuts between boxes (the ghost
-/// volume, hence the communication, scales with it). Ties go to the first
-/// in (n_x, n_y, n_z) order.
-pub fn process_grid(
-    domain: &Domain,
-    size: usize,
-    min_width: f64,
-    positions: &[Vec3],
-) -> Result<[usize; 3], String> {
-    let dims = domain.dimension.count();
-    let extent = domain.extent();
-    let mut feasible: Vec<(usize, f64, [usize; 3])> = Vec::new();
-    for nx in (1..=size).filter(|&n| size.is_multiple_of(n)) {
-        for ny in (1..=size / nx).filter(|&n| (size / nx).is_multiple_of(n)) {
-            let nz = size / nx / ny;
-            let ranks = [nx, ny, nz];
-            if dims == 2 && nz > 1 {
-                continue;
-            }
-            if !fits(domain, ranks, min_width) {
-                continue;
-            }
-            let mut area = 0.0;
-            for (axis, &n) in ranks.iter().enumerate().take(dims) {
-                let cuts = match (n, domain.periodic[axis]) {
-                    (1, _) => 0,
-                    (n, true) => n,
-                    (n, false) => n - 1,
-                };
-                let face: f64 = (0..dims)
-                    .filter(|&b| b != axis)
-                    .map(|b| extent[b])
-                    .product();
-                area += cuts as f64 * face;
-            }
-            feasible.push((busiest_box(domain, ranks, positions), area, ranks));
-        }
-    }
-    let least_load = feasible.iter().map(|f| f.0).min().unwrap_or(0);
-    let balanced = |load: usize| load as f64 <= 1.02 * least_load as f64;
-    let mut best: Option<(f64, [usize; 3])> = None;
-    for &(load, area, ranks) in &feasible {
-        if balanced(load) && best.is_none_or(|(a, _)| area < a) {
-            best = Some((area, ranks));
-        }
-    }
-    best.map(|(_, ranks)| ranks).ok_or_else(|| {
-        format!(
-            "{size} ranks cannot split the domain into boxes at least one interaction range \
-             ({min_width:.3e} m) wide along every split axis; allowed: fewer ranks"
-        )
-    })
-}
-
-/// The number of `positions` in the fullest box of a process grid.
-fn busiest_box(domain: &Domain, ranks: [usize; 3], positions: &[Vec3]) -> usize {
-    grains_per_box(domain, ranks, positions)
-        .into_iter()
-        .max()
-        .unwrap_or(0)
-}
-
-/// How many of `positions` each box of a process grid owns, by rank.
-pub fn grains_per_box(domain: &Domain, ranks: [usize; 3], positions: &[Vec3]) -> Vec<usize> {
-    let grid = Subdomain::of_rank(domain, ranks, 0);
-    let mut counts = vec![0usize; grid.rank_count()];
-    for x in positions {
-        let mut x = *x;
-        domain.wrap(&mut x);
-        counts[grid.owner(domain, &x)] += 1;
-    }
-    counts
-}
-
-/// Whether boxes of a process grid are at least `min_width` wide along
-/// every split axis (a ghost then comes from the next box only).
-pub fn fits(domain: &Domain, ranks: [usize; 3], min_width: f64) -> bool {
-    let extent = domain.extent();
-    (0..3).all(|axis| ranks[axis] == 1 || extent[axis] / ranks[axis] as f64 >= min_width)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -285,37 +231,6 @@ mod tests {
             periodic: [false, periodic_y, false],
             gravity: Vec3::zeros(),
         }
-    }
-
-    /// The least area of cuts: a long flat box is cut across its length;
-    /// a periodic axis counts one more cut than a walled one.
-    #[test]
-    fn the_process_grid_cuts_the_least_area() {
-        let domain = column(true);
-        assert_eq!(process_grid(&domain, 1, 0.01, &[]).unwrap(), [1, 1, 1]);
-        // Cuts across x: 0.12 m² each; across z: 0.48 m²; across y: 4 m².
-        assert_eq!(process_grid(&domain, 2, 0.01, &[]).unwrap(), [2, 1, 1]);
-        assert_eq!(process_grid(&domain, 4, 0.01, &[]).unwrap(), [4, 1, 1]);
-        assert_eq!(process_grid(&domain, 6, 0.01, &[]).unwrap(), [6, 1, 1]);
-        // Boxes narrower than the range are not allowed: with a range of
-        // 0.7 m, x takes at most 5 ranks, z and y one.
-        assert_eq!(process_grid(&domain, 4, 0.7, &[]).unwrap(), [4, 1, 1]);
-        let refused = process_grid(&domain, 6, 0.7, &[]).unwrap_err();
-        assert!(refused.contains("6 ranks"), "{refused}");
-        // A tall box is cut across its height.
-        let tall = Domain {
-            upper: Vec3::new(-1.9, 0.12, 1.0),
-            ..domain.clone()
-        };
-        assert_eq!(process_grid(&tall, 2, 0.01, &[]).unwrap(), [1, 1, 2]);
-        // Grains in the lower third of the tall box: a cut across the
-        // height would leave a rank idle, so x is cut instead.
-        let low: Vec<Vec3> = (0..100)
-            .map(|k| Vec3::new(-2.0 + 0.001 * k as f64, 0.06, 0.003 * k as f64))
-            .collect();
-        assert_eq!(process_grid(&tall, 2, 0.01, &low).unwrap(), [2, 1, 1]);
-        assert!(!fits(&domain, [1, 2, 1], 0.07));
-        assert!(fits(&domain, [1, 2, 1], 0.06));
     }
 
     /// Every position has one owner, whose box holds it; neighbours wrap

@@ -8,13 +8,16 @@
 
 pub mod communicator;
 pub mod domain;
+pub mod process_grid;
 pub mod shared;
 pub mod state;
 
 pub use communicator::Communicator;
 pub use domain::{
-    fits, grains_per_box, grid_coords, grid_neighbour, grid_rank, process_grid, Dimension, Domain,
-    Side, Subdomain,
+    grid_coords, grid_neighbour, grid_rank, BoxCuts, Dimension, Domain, Side, Subdomain,
+};
+pub use process_grid::{
+    balanced_cuts, balanced_process_grid, fits, grains_per_box, process_grid, ProcessGrid,
 };
 pub use shared::SharedArray;
 pub use state::{State, StateError};

@@ -25,7 +25,7 @@ use crate::neighbours::{CellGrid, NeighbourList, PreviousList, LUBRICATED, TOUCH
 use crate::particles::{permuted, NewParticle, Particles, PACKED_STATE};
 use crate::thread_share::{LazyTeam, RunClaims, ThreadShare};
 use crate::walls::PlaneWall;
-use grainflow_core::{Communicator, Dimension, Domain, Subdomain, Vec3};
+use grainflow_core::{Communicator, Dimension, Domain, ProcessGrid, Subdomain, Vec3};
 use rayon::prelude::*;
 use std::sync::{Mutex, OnceLock};
 use std::time::Instant;
@@ -195,18 +195,20 @@ impl DemSystem {
     }
 
     /// Shares the scene among the ranks of `communicator` in a process grid
-    /// of `ranks` boxes (before any particle is added).
+    /// of `ranks` boxes of equal lengths (before any particle is added).
     pub fn decompose(&mut self, communicator: Communicator, ranks: [usize; 3]) {
+        self.decompose_in(communicator, &ProcessGrid::even(ranks));
+    }
+
+    /// Shares the scene among the ranks of `communicator` in the boxes of
+    /// `grid` (before any particle is added).
+    pub fn decompose_in(&mut self, communicator: Communicator, grid: &ProcessGrid) {
         assert!(
             self.particles.is_empty(),
             "decompose before adding particles"
         );
-        assert_eq!(
-            ranks.iter().product::<usize>(),
-            communicator.size(),
-            "one box per rank"
-        );
-        self.subdomain = Subdomain::of_rank(&self.domain, ranks, communicator.rank());
+        assert_eq!(grid.rank_count(), communicator.size(), "one box per rank");
+        self.subdomain = grid.subdomain(&self.domain, communicator.rank());
         self.communicator = communicator;
     }
 
