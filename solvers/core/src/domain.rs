@@ -219,11 +219,13 @@ pub fn grid_neighbour(
     Some(grid_rank(ranks, coords))
 }
 
+/// Scenes and checks the tests of the decomposition share.
 #[cfg(test)]
-mod tests {
+pub(crate) mod test_support {
     use super::*;
 
-    fn column(periodic_y: bool) -> Domain {
+    /// A 4 × 0.12 × 1 m box, periodic along y if asked.
+    pub(crate) fn column(periodic_y: bool) -> Domain {
         Domain {
             dimension: Dimension::Three,
             lower: Vec3::new(-2.0, 0.0, 0.0),
@@ -232,6 +234,29 @@ mod tests {
             gravity: Vec3::zeros(),
         }
     }
+
+    /// Each position at x = `xs` (y and z spread) has one owner among the
+    /// 4 × 2 × 1 `boxes`, whose box holds it along x.
+    pub(crate) fn assert_one_owner_each(domain: &Domain, boxes: &[Subdomain], xs: &[f64]) {
+        for (k, x) in xs.iter().enumerate() {
+            let position = Vec3::new(*x, 0.013 * k as f64, 0.5);
+            let owners: Vec<usize> = (0..boxes.len())
+                .filter(|&r| boxes[r].owns(domain, &position))
+                .collect();
+            assert_eq!(owners.len(), 1, "{position:?}");
+            let b = &boxes[owners[0]];
+            assert_eq!(b.owner(domain, &position), owners[0]);
+            let inside_x = (b.coords[0] == 0 || position.x >= b.lower.x)
+                && (b.coords[0] == 3 || position.x < b.upper.x);
+            assert!(inside_x, "{position:?} in {b:?}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_support::{assert_one_owner_each, column};
+    use super::*;
 
     /// Every position has one owner, whose box holds it; neighbours wrap
     /// across periodic ends only.
@@ -242,21 +267,8 @@ mod tests {
         let boxes: Vec<Subdomain> = (0..8)
             .map(|r| Subdomain::of_rank(&domain, ranks, r))
             .collect();
-        for (k, x) in [-2.0, -1.0, -0.3, 0.0, 0.999, 1.0, 1.9999, 2.0, 2.5]
-            .iter()
-            .enumerate()
-        {
-            let position = Vec3::new(*x, 0.013 * k as f64, 0.5);
-            let owners: Vec<usize> = (0..8)
-                .filter(|&r| boxes[r].owns(&domain, &position))
-                .collect();
-            assert_eq!(owners.len(), 1, "{position:?}");
-            let b = &boxes[owners[0]];
-            assert_eq!(b.owner(&domain, &position), owners[0]);
-            let inside_x = (b.coords[0] == 0 || position.x >= b.lower.x)
-                && (b.coords[0] == 3 || position.x < b.upper.x);
-            assert!(inside_x, "{position:?} in {b:?}");
-        }
+        let xs = [-2.0, -1.0, -0.3, 0.0, 0.999, 1.0, 1.9999, 2.0, 2.5];
+        assert_one_owner_each(&domain, &boxes, &xs);
         let corner = &boxes[0];
         assert_eq!(corner.neighbour(&domain, 0, Side::Lower), None);
         assert_eq!(corner.neighbour(&domain, 0, Side::Upper), Some(1));

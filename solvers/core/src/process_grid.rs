@@ -265,17 +265,8 @@ pub fn fits(domain: &Domain, ranks: [usize; 3], min_width: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::domain::test_support::{assert_one_owner_each, column};
     use crate::Dimension;
-
-    fn column(periodic_y: bool) -> Domain {
-        Domain {
-            dimension: Dimension::Three,
-            lower: Vec3::new(-2.0, 0.0, 0.0),
-            upper: Vec3::new(2.0, 0.12, 1.0),
-            periodic: [false, periodic_y, false],
-            gravity: Vec3::zeros(),
-        }
-    }
 
     /// The least area of cuts: a long flat box is cut across its length;
     /// a periodic axis counts one more cut than a walled one.
@@ -388,20 +379,8 @@ mod tests {
         assert_eq!(boxes[1].lower.x, -1.5);
         assert_eq!(boxes[1].upper.x, -1.4);
         assert_eq!(boxes[3].upper.x, 2.0);
-        for (k, x) in [-2.5, -2.0, -1.5, -1.45, -1.4, 0.0, 0.7, 1.9, 2.5]
-            .iter()
-            .enumerate()
-        {
-            let position = Vec3::new(*x, 0.013 * k as f64, 0.5);
-            let owners: Vec<usize> = (0..8)
-                .filter(|&r| boxes[r].owns(&domain, &position))
-                .collect();
-            assert_eq!(owners.len(), 1, "{position:?}");
-            let b = &boxes[owners[0]];
-            let inside = (b.coords[0] == 0 || position.x >= b.lower.x)
-                && (b.coords[0] == 3 || position.x < b.upper.x);
-            assert!(inside, "{position:?} in {b:?}");
-        }
+        let xs = [-2.5, -2.0, -1.5, -1.45, -1.4, 0.0, 0.7, 1.9, 2.5];
+        assert_one_owner_each(&domain, &boxes, &xs);
         assert!(grid.fits(&domain, 0.05));
         assert!(!grid.fits(&domain, 0.2));
         assert_eq!(grid.describe_cuts(), "x = -1.5000e0, -1.4000e0, 7.0000e-1");
