@@ -490,7 +490,7 @@ pub fn build_with(
 /// that is not periodic ([`balanced_process_grid`]): the ranks factorise
 /// the grains along the cuts together, and a shorter cut that shares the
 /// grains evenly makes that separator smaller (a 2D packing of 50,000
-/// discs at rest in the lower half of its domain: 426 unknowns across its
+/// discs at rest in the lower half of its domain: 408 unknowns across its
 /// height against 831 along it; docs/cluster.md). Other scenes keep boxes
 /// of equal lengths reaching the domain's faces, which hold a spreading
 /// flow longer (a collapse's two halves stay with their ranks).

@@ -116,11 +116,7 @@ impl DryModel {
         let ranks = communicator.size();
         if ranks > 1 {
             let s = &system.subdomain;
-            let grid = grainflow_core::ProcessGrid {
-                ranks: s.ranks,
-                cuts: s.cuts.clone(),
-            };
-            let cuts = grid.describe_cuts();
+            let cuts = grainflow_core::describe_cuts(&s.cuts);
             description.push(format!(
                 "{ranks} MPI ranks in a process grid of {} x {} x {}{}",
                 s.ranks[0],

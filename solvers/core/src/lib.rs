@@ -17,7 +17,8 @@ pub use domain::{
     grid_coords, grid_neighbour, grid_rank, BoxCuts, Dimension, Domain, Side, Subdomain,
 };
 pub use process_grid::{
-    balanced_cuts, balanced_process_grid, fits, grains_per_box, process_grid, ProcessGrid,
+    balanced_cuts, balanced_process_grid, describe_cuts, fits, grains_per_box, process_grid,
+    ProcessGrid,
 };
 pub use shared::SharedArray;
 pub use state::{State, StateError};

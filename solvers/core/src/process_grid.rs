@@ -13,7 +13,7 @@
 //! its height into equal halves, leaves the upper rank idle, so the equal
 //! grid cuts it along its height instead, through every layer of grains:
 //! a longer cut, more ghosts and, for hard contact, a separator twice as
-//! large (the 2D packing of 50,000 discs: 831 unknowns against 426).
+//! large (the 2D packing of 50,000 discs: 831 unknowns against 408).
 //! [`balanced_process_grid`] places the cuts at the grains' quantiles along
 //! each split axis instead, so that every cut shares the grains evenly,
 //! and then the least area of cuts decides alone. The flow's grid, whose
@@ -73,27 +73,37 @@ impl ProcessGrid {
             if at.is_empty() {
                 return domain.extent()[axis] / n as f64 >= min_width;
             }
-            let ends: Vec<f64> = std::iter::once(domain.lower[axis])
-                .chain(at.iter().copied())
-                .chain(std::iter::once(domain.upper[axis]))
-                .collect();
-            ends.windows(2).all(|w| w[1] - w[0] >= min_width)
+            boxes_at_least(domain.lower[axis], at, domain.upper[axis], min_width)
         })
     }
 
-    /// Where each axis's boxes end, for a log line (empty for equal
-    /// lengths).
+    /// Where each axis's boxes end, for a log line ([`describe_cuts`]).
     pub fn describe_cuts(&self) -> String {
-        let names = ["x", "y", "z"];
-        (0..3)
-            .filter(|&axis| !self.cuts[axis].is_empty())
-            .map(|axis| {
-                let at: Vec<String> = self.cuts[axis].iter().map(|c| format!("{c:.4e}")).collect();
-                format!("{} = {}", names[axis], at.join(", "))
-            })
-            .collect::<Vec<_>>()
-            .join("; ")
+        describe_cuts(&self.cuts)
     }
+}
+
+/// Where each axis's boxes end, `x = …; y = …` (empty for equal lengths).
+pub fn describe_cuts(cuts: &BoxCuts) -> String {
+    let names = ["x", "y", "z"];
+    (0..3)
+        .filter(|&axis| !cuts[axis].is_empty())
+        .map(|axis| {
+            let at: Vec<String> = cuts[axis].iter().map(|c| format!("{c:.4e}")).collect();
+            format!("{} = {}", names[axis], at.join(", "))
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// Whether the boxes from `lower` to `upper`, ending at `cuts`, are each
+/// at least `min_width` long.
+fn boxes_at_least(lower: f64, cuts: &[f64], upper: f64, min_width: f64) -> bool {
+    let ends: Vec<f64> = std::iter::once(lower)
+        .chain(cuts.iter().copied())
+        .chain(std::iter::once(upper))
+        .collect();
+    ends.windows(2).all(|w| w[1] - w[0] >= min_width)
 }
 
 /// The process grid for `size` ranks in boxes of equal lengths: among the
@@ -114,7 +124,7 @@ pub fn process_grid(
         min_width,
         positions,
         domain.extent(),
-        |ranks| Some(ProcessGrid::even(ranks)),
+        ProcessGrid::even,
     )
     .map(|grid| grid.ranks)
 }
@@ -142,10 +152,10 @@ pub fn balanced_process_grid(
         }
     }
     choose(domain, size, min_width, positions, extent, |ranks| {
-        Some(ProcessGrid {
+        ProcessGrid {
             ranks,
             cuts: balanced_cuts(domain, ranks, min_width, positions),
-        })
+        }
     })
 }
 
@@ -179,11 +189,7 @@ pub fn balanced_cuts(
                 0.5 * (along[split - 1] + along[split])
             })
             .collect();
-        let ends: Vec<f64> = std::iter::once(domain.lower[axis])
-            .chain(at.iter().copied())
-            .chain(std::iter::once(domain.upper[axis]))
-            .collect();
-        if ends.windows(2).all(|w| w[1] - w[0] >= min_width) {
+        if boxes_at_least(domain.lower[axis], &at, domain.upper[axis], min_width) {
             cuts[axis] = at;
         }
     }
@@ -199,7 +205,7 @@ fn choose(
     min_width: f64,
     positions: &[Vec3],
     extent: Vec3,
-    grid_of: impl Fn([usize; 3]) -> Option<ProcessGrid>,
+    grid_of: impl Fn([usize; 3]) -> ProcessGrid,
 ) -> Result<ProcessGrid, String> {
     let dims = domain.dimension.count();
     let mut feasible: Vec<(usize, f64, ProcessGrid)> = Vec::new();
@@ -210,9 +216,10 @@ fn choose(
             if dims == 2 && nz > 1 {
                 continue;
             }
-            let Some(grid) = grid_of(ranks).filter(|g| g.fits(domain, min_width)) else {
+            let grid = grid_of(ranks);
+            if !grid.fits(domain, min_width) {
                 continue;
-            };
+            }
             let mut area = 0.0;
             for (axis, &n) in ranks.iter().enumerate().take(dims) {
                 let cuts = match (n, domain.periodic[axis]) {

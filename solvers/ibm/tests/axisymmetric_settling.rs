@@ -131,6 +131,22 @@ fn a_slow_sphere_in_a_cylinder_settles_at_the_haberman_sayre_velocity() {
     );
 }
 
+/// The paper's sphere run at its step, Δt (g/D)^½ = 0.04, to
+/// t (g/D)^½ = 28: its Reynolds number then and its relative change over
+/// the last 4 (D/g)^½.
+fn terminal_reynolds_at_the_papers_step(mut system: AxisymmetricCoupledSystem) -> (f64, f64) {
+    let viscosity = (3.0f64 / 800.0).sqrt();
+    let mut reynolds = Vec::new();
+    for step in 1..=700 {
+        system.step(0.04).unwrap();
+        if step % 25 == 0 {
+            reynolds.push(-system.dem.particles.velocity[0].z / viscosity);
+        }
+    }
+    let terminal = reynolds[reynolds.len() - 1];
+    (terminal, terminal / reynolds[reynolds.len() - 5] - 1.0)
+}
+
 /// Section 3.1 in the paper's own set-up (20 D × 40 D, ρp/ρ = 4, Ar = 800,
 /// Δt (g/D)^½ = 0.04, free slip) at D/Δx = 20, with no wall correction:
 /// the terminal Reynolds number lies within 1 % of the band between the
@@ -140,22 +156,11 @@ fn a_slow_sphere_in_a_cylinder_settles_at_the_haberman_sayre_velocity() {
 /// curve). About 50 s on two cores.
 #[test]
 fn the_papers_falling_sphere_in_r_z_settles_within_the_drag_correlations() {
-    let viscosity = (3.0f64 / 800.0).sqrt();
     let (low, high) = (
         clift_grace_weber_reynolds(800.0).unwrap(),
         schiller_naumann_reynolds(800.0),
     );
-    let mut system = paper_falling_sphere(20);
-    let dt = 0.04;
-    let mut reynolds = Vec::new();
-    for step in 1..=700 {
-        system.step(dt).unwrap();
-        if step % 25 == 0 {
-            reynolds.push(-system.dem.particles.velocity[0].z / viscosity);
-        }
-    }
-    let terminal = reynolds[reynolds.len() - 1];
-    let drift = terminal / reynolds[reynolds.len() - 5] - 1.0;
+    let (terminal, drift) = terminal_reynolds_at_the_papers_step(paper_falling_sphere(20));
     println!(
         "(r, z) falling sphere at D/Δx = 20: Re {terminal:.3} ({:+.2} % against \
          Schiller–Naumann, {:+.2} % against the drag curve), drift over the last 4 (D/g)^½ \
@@ -181,18 +186,9 @@ fn the_papers_falling_sphere_in_r_z_settles_within_the_drag_correlations() {
 /// 40 s on one core.
 #[test]
 fn the_renewal_forcing_settles_the_papers_sphere_within_one_percent_of_the_body_fitted_drag() {
-    let viscosity = (3.0f64 / 800.0).sqrt();
     let mut system = paper_falling_sphere(20);
     system.immersed.layer = LayerForcing::Renewal;
-    let mut reynolds = Vec::new();
-    for step in 1..=700 {
-        system.step(0.04).unwrap();
-        if step % 25 == 0 {
-            reynolds.push(-system.dem.particles.velocity[0].z / viscosity);
-        }
-    }
-    let terminal = reynolds[reynolds.len() - 1];
-    let drift = terminal / reynolds[reynolds.len() - 5] - 1.0;
+    let (terminal, drift) = terminal_reynolds_at_the_papers_step(system);
     let error = terminal / BODY_FITTED_REYNOLDS_AR_800 - 1.0;
     println!(
         "(r, z) falling sphere at D/Δx = 20, renewal: Re {terminal:.3} ({:+.2} % against the \
