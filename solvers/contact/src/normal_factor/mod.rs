@@ -12,21 +12,19 @@
 //! level of a breadth-first search from a peripheral unknown, cut at half
 //! the unknowns): K = [K₁₁ 0 K₁S; 0 K₂₂ K₂S; K_S1 K_S2 K_SS]. Each side
 //! i = 1, 2 factorises its own matrix M_i = [K_ii K_iS; K_Si K_SS] (a
-//! principal submatrix, hence SPD) with S ordered last,
-//! L(M_i) = [L_ii 0; L_Si Λ_i], on its own thread. The last block gives
-//! T_i = Λ_i Λ_iᵀ = K_SS − K_Si K_ii⁻¹ K_iS, so the Schur complement of
-//! the whole matrix is
+//! principal submatrix, hence SPD) with S ordered last, up to S
+//! ([`interior`]): L(M_i) = [L_ii 0; L_Si ·], and S's columns are left
+//! holding T_i = K_SS − L_Si L_Siᵀ = K_SS − K_Si K_ii⁻¹ K_iS, on its own
+//! thread. The Schur complement of the whole matrix is
 //!
 //!   Σ = K_SS − K_S1 K₁₁⁻¹ K₁S − K_S2 K₂₂⁻¹ K₂S = T₁ + T₂ − K_SS,
 //!
 //! dense and of the separator's size, factorised by a dense Cholesky. A
 //! solve K x = r then reads
 //!
-//! 1. per side, w_i = L(M_i)⁻¹ [r_i; 0], whose last block gives
-//!    K_Si K_ii⁻¹ r_i = −Λ_i w_S;
+//! 1. per side, w_i = L_ii⁻¹ r_i, and K_Si K_ii⁻¹ r_i = L_Si w_i;
 //! 2. x_S = Σ⁻¹ (r_S − Σ_i K_Si K_ii⁻¹ r_i);
-//! 3. per side, x_i = top of L(M_i)⁻ᵀ [w_i; Λ_iᵀ x_S]
-//!    (= K_ii⁻¹ (r_i − K_iS x_S)).
+//! 3. per side, x_i = L_ii⁻ᵀ (w_i − L_Siᵀ x_S) (= K_ii⁻¹ (r_i − K_iS x_S)).
 //!
 //! Each side is sequential, and the two sides' arithmetic does not depend
 //! on which thread runs it: results are the same on any number of
@@ -41,7 +39,6 @@ use clarabel::algebra::CscMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::amd;
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
     SymbolicCholeskyRaw, SymmetricOrdering,
@@ -50,6 +47,7 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Accum, Conj, Mat, MatMut, Par, Side};
 
+mod interior;
 mod shared;
 mod split;
 #[cfg(test)]

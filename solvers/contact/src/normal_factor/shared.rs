@@ -8,8 +8,8 @@
 //!   K = [K_11 0 … K_1S; 0 K_22 … K_2S; … ; K_S1 K_S2 … K_SS].
 //!
 //! Each rank assembles its part over its interior and the columns of S its
-//! rows reach (its "touched" separator, S_r), and factorises it with S_r
-//! last (the half of a two-way split, [`super::split`]). On S_r's diagonal
+//! rows reach (its "touched" separator, S_r), and factorises its interior with S_r
+//! last, up to S_r ([`super::interior`]). On S_r's diagonal
 //! it puts the whole matrix's diagonal, D_S (P and every rank's rows,
 //! summed over the ranks at each factorisation): its matrix
 //! M_r = [K_rr K_rS; K_Sr K_SS^r + E_r], E_r = D_S − diag(K_SS^r), is then
@@ -17,7 +17,7 @@
 //! by contacts much stiffer than the masses lost its positive pivots to
 //! round-off near the solution (a packing of 1,600 spheres slumping on 2
 //! ranks at ε = 1e-9: 3 of 10 steps left to Clarabel, none with D_S, none
-//! on one rank). The last block gives
+//! on one rank). S_r's columns are left holding
 //! T_r = K_SS^r + E_r − K_Sr K_rr⁻¹ K_rS, and the Schur complement of the
 //! whole matrix is
 //!

@@ -1,10 +1,12 @@
 //! The factor split in two halves and a dense separator (see the parent
 //! module for the algebra).
 
+use super::interior::InteriorFactor;
 use super::*;
 
 /// One half of a split: M_i = [K_ii K_iS; K_Si K_SS] in its own ordering
-/// (its interior by AMD, then the separator).
+/// (its interior by AMD or nested dissection, then the separator),
+/// factorised up to the separator.
 pub(crate) struct Half {
     /// Unknown of K of each column of M_i.
     pub(super) unknown: Vec<usize>,
@@ -14,13 +16,8 @@ pub(crate) struct Half {
     /// copies.
     matrix: CscMatrix<f64>,
     source: Vec<usize>,
-    symbolic: SymbolicCholesky<usize>,
-    values: Vec<f64>,
-    work: MemBuffer,
-    /// Threads of its numeric factorisation.
-    par: Par,
-    /// Λ_i (lower triangular) and T_i = Λ_i Λ_iᵀ.
-    lambda: Mat<f64>,
+    factor: InteriorFactor,
+    /// T_i = K_SS − K_Si K_ii⁻¹ K_iS (lower triangle).
     pub(super) schur_part: Mat<f64>,
     /// w_i of the last forward solve.
     forward_solution: Vec<f64>,
@@ -114,7 +111,7 @@ impl SplitFactor {
 
     pub(super) fn solve(&mut self, rhs: &mut [f64]) {
         let ns = self.separator.len();
-        // 1. Forward solves, giving Λ_i w_S = −K_Si K_ii⁻¹ r_i.
+        // 1. Forward solves, giving −L_Si w_i = −K_Si K_ii⁻¹ r_i.
         let [first, second] = &mut self.halves;
         let r: &[f64] = rhs;
         let (lambda_w1, lambda_w2) = rayon::join(|| first.forward(r), || second.forward(r));
@@ -206,34 +203,20 @@ impl Half {
         let SymbolicCholeskyRaw::Supernodal(supernodal) = symbolic.raw() else {
             return Err("the split factor needs a supernodal factorisation".into());
         };
-        let scratch = StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-            supernodal.solve_in_place_scratch::<f64>(1, Par::Seq),
-        ]);
+        let factor = InteriorFactor::new(supernodal, &local_matrix, ni, par);
         let ns = separator.len();
         Ok(Half {
             unknown,
             interior: ni,
             matrix: local_matrix,
             source,
-            values: vec![0.0; symbolic.len_val()],
-            symbolic,
-            work: MemBuffer::new(scratch),
-            par,
-            lambda: Mat::zeros(ns, ns),
+            factor,
             schur_part: Mat::zeros(ns, ns),
             forward_solution: vec![0.0; size],
         })
     }
 
-    fn supernodal(&self) -> SupernodalLltRef<'_, usize, f64> {
-        let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
-            unreachable!("forced supernodal")
-        };
-        SupernodalLltRef::new(supernodal, &self.values)
-    }
-
-    /// Factorises M_i, then reads Λ_i and forms T_i = Λ_i Λ_iᵀ.
+    /// Factorises M_i's interior and forms T_i.
     pub(super) fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
         self.factorise_shifted(matrix, &[])
     }
@@ -248,112 +231,29 @@ impl Half {
         for (value, &k) in self.matrix.nzval.iter_mut().zip(&self.source) {
             *value = matrix.nzval[k];
         }
-        for (t, added) in shift.iter().enumerate() {
-            // The diagonal closes its column of the upper triangle.
-            let diagonal = self.matrix.colptr[self.interior + t + 1] - 1;
-            self.matrix.nzval[diagonal] += added;
-        }
-        factorise_numeric(
-            &self.symbolic,
-            &mut self.values,
-            &mut self.work,
-            &self.matrix,
-            self.par,
-        )?;
-        let first = self.interior;
-        let mut lambda = std::mem::replace(&mut self.lambda, Mat::new());
-        lambda.as_mut().fill(0.0);
-        let factor = self.supernodal();
-        let symbolic = factor.symbolic();
-        for s in 0..symbolic.n_supernodes() {
-            let node = factor.supernode(s);
-            let (start, columns) = (node.start(), node.val().ncols());
-            if start + columns <= first {
-                continue;
-            }
-            let rows: Vec<usize> = (start..start + columns)
-                .chain(node.pattern().iter().copied())
-                .collect();
-            for c in 0..columns {
-                let column = start + c;
-                if column < first {
-                    continue;
-                }
-                for (r, &row) in rows.iter().enumerate().skip(c) {
-                    lambda[(row - first, column - first)] = node.val()[(r, c)];
-                }
-            }
-        }
-        self.lambda = lambda;
-        faer::linalg::matmul::triangular::matmul(
-            self.schur_part.as_mut(),
-            faer::linalg::matmul::triangular::BlockStructure::TriangularLower,
-            Accum::Replace,
-            self.lambda.as_ref(),
-            faer::linalg::matmul::triangular::BlockStructure::TriangularLower,
-            self.lambda.transpose(),
-            faer::linalg::matmul::triangular::BlockStructure::TriangularUpper,
-            1.0,
-            Par::Seq,
-        );
-        Ok(())
+        self.factor
+            .factorise(&self.matrix, shift, &mut self.schur_part)
     }
 
-    /// w_i = L(M_i)⁻¹ [r_i; 0]; returns −(K_Si K_ii⁻¹ r_i) = Λ_i w_S.
+    /// w_i = L_ii⁻¹ r_i; returns −(K_Si K_ii⁻¹ r_i) = −L_Si w_i.
     pub(super) fn forward(&mut self, rhs: &[f64]) -> Vec<f64> {
-        let size = self.unknown.len();
-        let mut w = std::mem::take(&mut self.forward_solution);
+        let w = &mut self.forward_solution;
         for (k, &u) in self.unknown.iter().enumerate() {
             w[k] = if k < self.interior { rhs[u] } else { 0.0 };
         }
-        let mut work = std::mem::replace(&mut self.work, MemBuffer::new(StackReq::empty()));
-        self.supernodal().l_solve_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut w, size, 1),
-            Par::Seq,
-            MemStack::new(&mut work),
-        );
-        self.work = work;
-        let ns = size - self.interior;
-        let w_s = faer::MatRef::from_column_major_slice(&w[self.interior..], ns, 1);
-        let mut product = Mat::<f64>::zeros(ns, 1);
-        faer::linalg::matmul::matmul(
-            product.as_mut(),
-            Accum::Replace,
-            self.lambda.as_ref(),
-            w_s,
-            1.0,
-            Par::Seq,
-        );
-        self.forward_solution = w;
-        (0..ns).map(|k| product[(k, 0)]).collect()
+        self.factor.forward(w);
+        w[self.interior..].to_vec()
     }
 
     /// The interior's x_i from the last forward solve and x_S.
     pub(super) fn backward(&mut self, x_s: faer::MatRef<'_, f64>) -> Vec<f64> {
-        let size = self.unknown.len();
-        let ns = size - self.interior;
-        let mut w = std::mem::take(&mut self.forward_solution);
-        let mut top = faer::MatMut::from_column_major_slice_mut(&mut w[self.interior..], ns, 1);
-        faer::linalg::matmul::matmul(
-            top.as_mut(),
-            Accum::Replace,
-            self.lambda.transpose(),
-            x_s,
-            1.0,
-            Par::Seq,
-        );
-        let mut work = std::mem::replace(&mut self.work, MemBuffer::new(StackReq::empty()));
-        self.supernodal().l_transpose_solve_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut w, size, 1),
-            Par::Seq,
-            MemStack::new(&mut work),
-        );
-        self.work = work;
-        let x = w[..self.interior].to_vec();
-        self.forward_solution = w;
-        x
+        let interior = self.interior;
+        let w = &mut self.forward_solution;
+        for (k, value) in w[interior..].iter_mut().enumerate() {
+            *value = x_s[(k, 0)];
+        }
+        self.factor.backward(w);
+        w[..interior].to_vec()
     }
 }
 

@@ -1,5 +1,6 @@
 use super::split::{bisect, SEPARATOR};
 use super::*;
+use faer::linalg::solvers::Solve;
 use std::collections::BTreeMap;
 
 /// The upper CSC of D + Σ θ_r a_r a_rᵀ: three unknowns on each node of
@@ -251,4 +252,105 @@ fn the_whole_supernodal_factor_is_the_same_on_any_number_of_threads() {
     let one = solved_on(1, &matrix, &b, usize::MAX);
     assert!(backward_error(&matrix, &one, &b) < 1e-14);
     assert!(same_bits(&one, &solved_on(2, &matrix, &b, usize::MAX)));
+}
+
+/// The dense lower triangle of K's principal block on `rows` × `columns`.
+fn dense_block(matrix: &CscMatrix<f64>, rows: &[usize], columns: &[usize]) -> Mat<f64> {
+    let mut full = Mat::<f64>::zeros(matrix.n, matrix.n);
+    for c in 0..matrix.n {
+        for k in matrix.colptr[c]..matrix.colptr[c + 1] {
+            let r = matrix.rowval[k];
+            full[(r, c)] = matrix.nzval[k];
+            full[(c, r)] = matrix.nzval[k];
+        }
+    }
+    Mat::from_fn(rows.len(), columns.len(), |i, j| {
+        full[(rows[i], columns[j])]
+    })
+}
+
+/// A half factorised up to its separator gives the separator's Schur
+/// complement T = K_SS + shift − K_Si K_ii⁻¹ K_iS and, through its forward
+/// and backward solves, K⁻¹ b: against dense algebra, on a dense matrix
+/// (one supernode, cut at the separator's first column), on a 3D lattice
+/// cut by a plane of nodes, and on a column of nodes cut by three planes, whose
+/// T couples neighbouring planes only, through the interior between them (the
+/// separator in several supernodes, the first reaching the second).
+/// Measured: T within 8.5e-18, 1.4e-15, 2.2e-15 relative; backward errors
+/// 2.4e-16 and below. (Gathering from the separator's first supernode as well
+/// put T off by 5 % in the last case.)
+#[test]
+fn a_half_factorised_up_to_its_separator_gives_the_dense_schur_complement() {
+    let dense = {
+        let n = 12;
+        let value = |i: usize, j: usize| ((i * 31 + j * 17) % 23) as f64 / 23.0 - 0.5;
+        let (mut colptr, mut rowval, mut nzval) = (vec![0], Vec::new(), Vec::new());
+        for c in 0..n {
+            for r in 0..=c {
+                let product: f64 = (0..n).map(|k| value(r, k) * value(c, k)).sum();
+                rowval.push(r);
+                nzval.push(product + if r == c { n as f64 } else { 0.0 });
+            }
+            colptr.push(rowval.len());
+        }
+        (
+            CscMatrix::new(n, n, colptr, rowval, nzval),
+            (7..12).collect::<Vec<_>>(),
+        )
+    };
+    let plane = |size: [usize; 3], planes: &[usize]| {
+        let matrix = lattice_normal_matrix(size, &[[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]]);
+        let layer = size[0] * size[1];
+        let separator = (0..matrix.n)
+            .filter(|&u| planes.contains(&((u / 3) / layer)))
+            .collect::<Vec<_>>();
+        (matrix, separator)
+    };
+    for (matrix, separator) in [
+        dense,
+        plane([14, 14, 14], &[7]),
+        plane([5, 5, 25], &[10, 12, 14]),
+    ] {
+        let n = matrix.n;
+        let interior: Vec<usize> = (0..n).filter(|u| !separator.contains(u)).collect();
+        let ns = separator.len();
+        let mut half = split::Half::new(&matrix, &interior, &separator, None, Par::Seq).unwrap();
+        let k_ii = dense_block(&matrix, &interior, &interior);
+        let k_is = dense_block(&matrix, &interior, &separator);
+        let k_ss = dense_block(&matrix, &separator, &separator);
+        let llt = k_ii.llt(Side::Lower).unwrap();
+        let t = &k_ss - k_is.transpose() * llt.solve(&k_is);
+        // With a shift on the separator's diagonal, as the ranks' parts have.
+        let shift: Vec<f64> = (0..ns).map(|k| 0.5 + k as f64 / 7.0).collect();
+        half.factorise_shifted(&matrix, &shift).unwrap();
+        let scale = (0..ns).map(|i| t[(i, i)].abs()).fold(0.0, f64::max);
+        let mut largest = 0.0f64;
+        for j in 0..ns {
+            for i in j..ns {
+                let expected = t[(i, j)] + if i == j { shift[i] } else { 0.0 };
+                largest = largest.max((half.schur_part[(i, j)] - expected).abs());
+            }
+        }
+        println!("n = {n}: T within {:e}", largest / scale);
+        assert!(largest < 1e-12 * scale, "T off by {largest:e} of {scale:e}");
+        // K⁻¹ b through the half: forward, T⁻¹ on the separator, backward.
+        half.factorise(&matrix).unwrap();
+        let b: Vec<f64> = (0..n)
+            .map(|k| ((k * 7919) % 1000) as f64 / 500.0 - 1.0)
+            .collect();
+        let right = half.forward(&b);
+        let rhs = Mat::from_fn(ns, 1, |k, _| b[separator[k]] + right[k]);
+        let x_s = t.llt(Side::Lower).unwrap().solve(&rhs);
+        let x_i = half.backward(x_s.as_ref());
+        let mut x = vec![0.0; n];
+        for (k, &u) in half.unknown.iter().take(interior.len()).enumerate() {
+            x[u] = x_i[k];
+        }
+        for (k, &u) in separator.iter().enumerate() {
+            x[u] = x_s[(k, 0)];
+        }
+        let error = backward_error(&matrix, &x, &b);
+        println!("n = {n}: backward error {error:e}");
+        assert!(error < 1e-14, "backward error {error:e}");
+    }
 }

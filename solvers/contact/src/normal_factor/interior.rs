@@ -1,0 +1,385 @@
+//! A half's factor stopped at the separator.
+//!
+//! A half M = [K_ii K_iS; K_Si K_SS] (interior first, separator last) needs
+//! only the interior's columns of its Cholesky factor,
+//!
+//!   L(M) = [L_ii 0; L_Si ·],   K_ii = L_ii L_iiᵀ,   L_Si = K_Si L_ii⁻ᵀ,
+//!
+//! and the separator's Schur complement T = K_SS − L_Si L_Siᵀ that the
+//! separator's columns hold once every interior column has updated them.
+//! Factorising the separator's block as well, then multiplying its factor
+//! back, cost two dense ns³/3 products per half and iteration for nothing:
+//! Σ, the sum of the halves' T, is factorised once.
+//!
+//! This is a left-looking supernodal Cholesky over the supernodes of faer's
+//! symbolic factor of M: each supernode gathers the updates of the
+//! supernodes below it in the elimination tree, then factorises its
+//! diagonal block and its panel. The separator's supernodes gather and stop.
+//! A supernode that holds both interior and separator columns is cut in two
+//! at the first separator column.
+
+use super::*;
+use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
+use faer::MatRef;
+use std::ops::Range;
+
+/// A block of columns of L with the same rows below their diagonal block.
+struct Node {
+    columns: Range<usize>,
+    /// Where the block starts in the values, and the distance between its
+    /// columns (column-major, rows in the order of `rows`).
+    offset: usize,
+    stride: usize,
+    /// Its rows in `InteriorFactor::rows`: its own columns, then the rows
+    /// below (ascending).
+    rows: Range<usize>,
+}
+
+impl Node {
+    fn width(&self) -> usize {
+        self.columns.len()
+    }
+
+    fn height(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// The values the block spans.
+    fn span(&self) -> Range<usize> {
+        self.offset..self.offset + (self.width() - 1) * self.stride + self.height()
+    }
+}
+
+/// The interior columns of L(M) and the separator's Schur complement.
+pub(super) struct InteriorFactor {
+    /// Interior columns (the separator's follow).
+    interior: usize,
+    nodes: Vec<Node>,
+    /// The nodes' rows, one after the other.
+    rows: Vec<usize>,
+    /// The nodes whose rows below reach each node, in order.
+    descendants: Vec<Vec<usize>>,
+    /// Where each entry of M's upper triangle (CSC) goes in `values`.
+    destination: Vec<usize>,
+    /// Where the diagonal of each separator column stands in `values`.
+    separator_diagonal: Vec<usize>,
+    values: Vec<f64>,
+    /// Scratch: local row of each row of M in the node being updated, the
+    /// product of a descendant's rows, the dense Cholesky's work.
+    local_row: Vec<usize>,
+    product: Vec<f64>,
+    work: MemBuffer,
+    par: Par,
+}
+
+impl InteriorFactor {
+    /// The factor of `matrix` (M's upper triangle, CSC, its first
+    /// `interior` columns the interior) on the supernodes of `symbolic`,
+    /// factorised on `par`.
+    pub(super) fn new(
+        symbolic: &SymbolicSupernodalCholesky<usize>,
+        matrix: &CscMatrix<f64>,
+        interior: usize,
+        par: Par,
+    ) -> Self {
+        let size = matrix.n;
+        let (begin, row_pointers, value_pointers, pattern) = (
+            symbolic.supernode_begin(),
+            symbolic.col_ptr_for_row_idx(),
+            symbolic.col_ptr_for_val(),
+            symbolic.row_idx(),
+        );
+        let (mut nodes, mut rows) = (Vec::new(), Vec::new());
+        for s in 0..symbolic.n_supernodes() {
+            let columns = begin[s]..symbolic.supernode_end()[s];
+            let below = &pattern[row_pointers[s]..row_pointers[s + 1]];
+            let height = columns.len() + below.len();
+            let offset = value_pointers[s];
+            // A supernode across the separator's first column is cut
+            // there: the interior part has the separator part's columns
+            // among its rows; the separator part's block starts on its own
+            // diagonal.
+            let pieces = if columns.start < interior && interior < columns.end {
+                let cut = interior - columns.start;
+                vec![
+                    (columns.start..interior, offset),
+                    (interior..columns.end, offset + cut * height + cut),
+                ]
+            } else {
+                vec![(columns.clone(), offset)]
+            };
+            for (own, offset) in pieces {
+                let start = rows.len();
+                rows.extend(own.start..columns.end);
+                rows.extend_from_slice(below);
+                nodes.push(Node {
+                    columns: own,
+                    offset,
+                    stride: height,
+                    rows: start..rows.len(),
+                });
+            }
+        }
+        let mut node_of_column = vec![0; size];
+        for (n, node) in nodes.iter().enumerate() {
+            node_of_column[node.columns.clone()].fill(n);
+        }
+        // Only the interior's nodes update others: the separator's are
+        // gathered, not factorised.
+        let mut descendants = vec![Vec::new(); nodes.len()];
+        for (d, node) in nodes
+            .iter()
+            .enumerate()
+            .take_while(|(_, n)| n.columns.start < interior)
+        {
+            let mut last = usize::MAX;
+            for &row in &rows[node.rows.start + node.width()..node.rows.end] {
+                let target = node_of_column[row];
+                if target != last {
+                    descendants[target].push(d);
+                    last = target;
+                }
+            }
+        }
+        // Entry (row r ≤ column c) of the upper triangle is L's (c, r).
+        let at = |row: usize, column: usize| -> usize {
+            let node = &nodes[node_of_column[column]];
+            let own = &rows[node.rows.clone()];
+            let local = own
+                .binary_search(&row)
+                .expect("the symbolic factor holds every entry of the matrix");
+            node.offset + (column - node.columns.start) * node.stride + local
+        };
+        let mut destination = Vec::with_capacity(matrix.nzval.len());
+        for column in 0..size {
+            for k in matrix.colptr[column]..matrix.colptr[column + 1] {
+                destination.push(at(column, matrix.rowval[k]));
+            }
+        }
+        let separator_diagonal = (interior..size).map(|c| at(c, c)).collect();
+        let widest = nodes.iter().map(Node::width).max().unwrap_or(0);
+        let work = MemBuffer::new(
+            faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
+                widest,
+                par,
+                Default::default(),
+            ),
+        );
+        InteriorFactor {
+            interior,
+            nodes,
+            rows,
+            descendants,
+            destination,
+            separator_diagonal,
+            values: vec![0.0; symbolic.len_val()],
+            local_row: vec![0; size],
+            product: Vec::new(),
+            work,
+            par,
+        }
+    }
+
+    /// Factorises the interior of `matrix` (the pattern given to `new`),
+    /// `shift` added to the separator's diagonal, and writes the lower
+    /// triangle of T into `schur` (ns × ns).
+    pub(super) fn factorise(
+        &mut self,
+        matrix: &CscMatrix<f64>,
+        shift: &[f64],
+        schur: &mut Mat<f64>,
+    ) -> Result<(), String> {
+        self.values.fill(0.0);
+        for (&to, &value) in self.destination.iter().zip(&matrix.nzval) {
+            self.values[to] += value;
+        }
+        for (&to, &added) in self.separator_diagonal.iter().zip(shift) {
+            self.values[to] += added;
+        }
+        for t in 0..self.nodes.len() {
+            self.gather_updates(t);
+            let node = &self.nodes[t];
+            if node.columns.start >= self.interior {
+                continue;
+            }
+            let (width, height) = (node.width(), node.height());
+            let mut block = MatMut::from_column_major_slice_with_stride_mut(
+                &mut self.values[node.span()],
+                height,
+                width,
+                node.stride,
+            );
+            let (mut top, mut below) = block.as_mut().split_at_row_mut(width);
+            faer::linalg::cholesky::llt::factor::cholesky_in_place(
+                top.as_mut(),
+                no_regularisation(),
+                self.par,
+                MemStack::new(&mut self.work),
+                Default::default(),
+            )
+            .map_err(|e| {
+                format!(
+                    "the normal matrix is not positive definite (column {}): {e:?}",
+                    node.columns.start
+                )
+            })?;
+            faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+                top.as_ref(),
+                below.as_mut().transpose_mut(),
+                self.par,
+            );
+        }
+        let interior = self.interior;
+        for node in self.nodes.iter().filter(|n| n.columns.start >= interior) {
+            let block = MatRef::from_column_major_slice_with_stride(
+                &self.values[node.span()],
+                node.height(),
+                node.width(),
+                node.stride,
+            );
+            let rows = &self.rows[node.rows.clone()];
+            for c in 0..node.width() {
+                let column = node.columns.start + c - interior;
+                for (r, &row) in rows.iter().enumerate().skip(c) {
+                    schur[(row - interior, column)] = block[(r, c)];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Subtracts from node `t` the products of the rows of each of its
+    /// descendants that fall on its columns and below.
+    fn gather_updates(&mut self, t: usize) {
+        let target = &self.nodes[t];
+        for (local, &row) in self.rows[target.rows.clone()].iter().enumerate() {
+            self.local_row[row] = local;
+        }
+        let (head, tail) = self.values.split_at_mut(target.offset);
+        let mut block = MatMut::from_column_major_slice_with_stride_mut(
+            &mut tail[..target.span().len()],
+            target.height(),
+            target.width(),
+            target.stride,
+        );
+        for &d in &self.descendants[t] {
+            let node = &self.nodes[d];
+            let rows = &self.rows[node.rows.clone()];
+            let below = &rows[node.width()..];
+            // Its rows on the target's columns, and from there down.
+            let first = node.width() + below.partition_point(|&r| r < target.columns.start);
+            let on = rows[first..].partition_point(|&r| r < target.columns.end);
+            let down = rows.len() - first;
+            let lower = MatRef::from_column_major_slice_with_stride(
+                &head[node.span()],
+                node.height(),
+                node.width(),
+                node.stride,
+            )
+            .subrows(first, down);
+            let facing = lower.subrows(0, on);
+            self.product.resize(down * on, 0.0);
+            let mut product = MatMut::from_column_major_slice_mut(&mut self.product, down, on);
+            let (top, bottom) = product.as_mut().split_at_row_mut(on);
+            faer::linalg::matmul::triangular::matmul(
+                top,
+                faer::linalg::matmul::triangular::BlockStructure::TriangularLower,
+                Accum::Replace,
+                facing,
+                faer::linalg::matmul::triangular::BlockStructure::Rectangular,
+                facing.transpose(),
+                faer::linalg::matmul::triangular::BlockStructure::Rectangular,
+                1.0,
+                self.par,
+            );
+            faer::linalg::matmul::matmul(
+                bottom,
+                Accum::Replace,
+                lower.subrows(on, down - on),
+                facing.transpose(),
+                1.0,
+                self.par,
+            );
+            let targets = &rows[first..];
+            for j in 0..on {
+                let column = targets[j] - target.columns.start;
+                for i in j..down {
+                    block[(self.local_row[targets[i]], column)] -= product[(i, j)];
+                }
+            }
+        }
+    }
+
+    /// w = L_ii⁻¹ r_i on the interior (`w` holds r_i there and zeros on
+    /// the separator), and −L_Si w_i = −K_Si K_ii⁻¹ r_i on the separator.
+    pub(super) fn forward(&self, w: &mut [f64]) {
+        let mut product = Vec::new();
+        for node in self
+            .nodes
+            .iter()
+            .take_while(|n| n.columns.start < self.interior)
+        {
+            let block = self.block(node);
+            let (top, below) = block.split_at_row(node.width());
+            let own =
+                MatMut::from_column_major_slice_mut(&mut w[node.columns.clone()], node.width(), 1);
+            faer::linalg::triangular_solve::solve_lower_triangular_in_place(top, own, Par::Seq);
+            product.resize(below.nrows(), 0.0);
+            let mut out = MatMut::from_column_major_slice_mut(&mut product, below.nrows(), 1);
+            let own = MatRef::from_column_major_slice(&w[node.columns.clone()], node.width(), 1);
+            faer::linalg::matmul::matmul(out.as_mut(), Accum::Replace, below, own, 1.0, Par::Seq);
+            for (&row, value) in self.rows[node.rows.start + node.width()..node.rows.end]
+                .iter()
+                .zip(&product)
+            {
+                w[row] -= value;
+            }
+        }
+    }
+
+    /// x_i = L_ii⁻ᵀ (w_i − L_Siᵀ x_S) in place, `w` holding w_i on the
+    /// interior and x_S on the separator.
+    pub(super) fn backward(&self, w: &mut [f64]) {
+        let mut gathered = Vec::new();
+        for node in self
+            .nodes
+            .iter()
+            .rev()
+            .filter(|n| n.columns.start < self.interior)
+        {
+            let block = self.block(node);
+            let (top, below) = block.split_at_row(node.width());
+            gathered.clear();
+            gathered.extend(
+                self.rows[node.rows.start + node.width()..node.rows.end]
+                    .iter()
+                    .map(|&row| w[row]),
+            );
+            let gathered = MatRef::from_column_major_slice(&gathered, below.nrows(), 1);
+            let mut own =
+                MatMut::from_column_major_slice_mut(&mut w[node.columns.clone()], node.width(), 1);
+            faer::linalg::matmul::matmul(
+                own.as_mut(),
+                Accum::Add,
+                below.transpose(),
+                gathered,
+                -1.0,
+                Par::Seq,
+            );
+            faer::linalg::triangular_solve::solve_upper_triangular_in_place(
+                top.transpose(),
+                own,
+                Par::Seq,
+            );
+        }
+    }
+
+    fn block(&self, node: &Node) -> MatRef<'_, f64> {
+        MatRef::from_column_major_slice_with_stride(
+            &self.values[node.span()],
+            node.height(),
+            node.width(),
+            node.stride,
+        )
+    }
+}
