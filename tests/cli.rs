@@ -249,16 +249,20 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
     assert!(!chosen.contains("warning: "), "{chosen}");
     // COCD on two ranks, with the separator the ranks factorise together:
     // 400 discs, three unknowns each, cut across the box's height (the
-    // shorter cut) at the discs' median height, 200 on each rank (boxes
-    // of equal lengths would cut it along its height: 197 and 203, 57
-    // unknowns in the separator against 54).
+    // shorter cut) among the discs so that the ranks' interiors match: the
+    // upper box holds 212 discs, 19 of them in the separator, the lower
+    // 188 (564 and 579 unknowns of its own each; at the discs' median
+    // height, 200 each, the separator held 54 unknowns and the interiors
+    // 600 and 546).
     let boxed = text(&["check", &case("static_box.toml"), "--ranks", "2"]);
     assert!(
         boxed.contains(
-            "COCD on 2 ranks (process grid 1 x 2 x 1): the contact program's separator: 54 \
+            "COCD on 2 ranks (process grid 1 x 2 x 1): the contact program's separator: 57 \
              of 1200 unknowns"
-        ) && boxed.contains("boxes cut at the grains' quantiles along the split axes: y = ")
-            && boxed.contains("grains per rank at the start: 200 to 200"),
+        ) && boxed
+            .contains("boxes cut among the grains for equal interiors along the split axes: y = ")
+            && boxed.contains("grains per rank at the start: 188 to 212")
+            && boxed.contains("ranks' interiors 564 to 579 unknowns"),
         "{boxed}"
     );
     // An axisymmetric scene runs on one rank.

@@ -128,7 +128,7 @@ pub fn report(
     if !cuts.is_empty() {
         let _ = writeln!(
             out,
-            "  boxes cut at the grains' quantiles along the split axes: {cuts} m"
+            "  boxes cut among the grains for equal interiors along the split axes: {cuts} m"
         );
     }
     let mut mean_cells = None;

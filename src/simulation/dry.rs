@@ -125,7 +125,7 @@ impl DryModel {
                 if cuts.is_empty() {
                     String::new()
                 } else {
-                    format!(", boxes cut at the grains' quantiles: {cuts}")
+                    format!(", boxes cut among the grains for equal interiors: {cuts}")
                 }
             ));
             warnings.extend(sharing::load_warning(
