@@ -124,19 +124,20 @@ pub fn process_grid(
         domain,
         size,
         min_width,
-        positions,
         domain.extent(),
         ProcessGrid::even,
+        |grid| grid.grains_per_box(domain, positions),
     )
     .map(|grid| grid.ranks)
 }
 
-/// The process grid for `size` ranks with its cuts at the grains'
-/// quantiles along each split axis that is not periodic
-/// ([`balanced_cuts`]), chosen by the rules of [`process_grid`]: each
-/// single cut then shares the grains evenly, and the least area of cuts
-/// decides between grids that do so alike, the area taken over the box
-/// that holds the grains (each side at least `min_width`), which is where
+/// The process grid for `size` ranks with its cuts among the grains along
+/// each split axis that is not periodic, chosen by the rules of
+/// [`process_grid`] with the cuts at the grains' quantiles (each single cut
+/// then shares the grains evenly, and the least area of cuts decides
+/// between grids that do so alike), then moved so that along each axis the
+/// boxes' interiors match ([`balanced_cuts`]); the area of a cut is taken
+/// over the box that holds the grains (each side at least `min_width`), which is where
 /// a cut meets them.
 pub fn balanced_process_grid(
     domain: &Domain,
@@ -153,11 +154,20 @@ pub fn balanced_process_grid(
             extent[axis] = (high - low).max(min_width);
         }
     }
-    choose(domain, size, min_width, positions, extent, |ranks| {
-        ProcessGrid {
+    let chosen = choose(
+        domain,
+        size,
+        min_width,
+        extent,
+        |ranks| ProcessGrid {
             ranks,
-            cuts: balanced_cuts(domain, ranks, min_width, positions),
-        }
+            cuts: cuts_among(domain, ranks, min_width, positions, 0.0),
+        },
+        |grid| grid.grains_per_box(domain, positions),
+    )?;
+    Ok(ProcessGrid {
+        ranks: chosen.ranks,
+        cuts: balanced_cuts(domain, chosen.ranks, min_width, positions),
     })
 }
 
@@ -172,6 +182,18 @@ pub fn balanced_cuts(
     min_width: f64,
     positions: &[Vec3],
 ) -> BoxCuts {
+    cuts_among(domain, ranks, min_width, positions, min_width)
+}
+
+/// [`balanced_cuts`] with the layer `layer` wide above each cut left out
+/// of the interiors (zero: the grains' quantiles).
+fn cuts_among(
+    domain: &Domain,
+    ranks: [usize; 3],
+    min_width: f64,
+    positions: &[Vec3],
+    layer: f64,
+) -> BoxCuts {
     let mut cuts = BoxCuts::default();
     for axis in 0..3 {
         let n = ranks[axis];
@@ -183,7 +205,7 @@ pub fn balanced_cuts(
             .map(|x| x[axis].clamp(domain.lower[axis], domain.upper[axis]))
             .collect();
         along.sort_by(f64::total_cmp);
-        let at = cuts_sharing_interiors(&along, n, min_width);
+        let at = cuts_sharing_interiors(&along, n, layer);
         if boxes_at_least(domain.lower[axis], &at, domain.upper[axis], min_width) {
             cuts[axis] = at;
         }
@@ -235,15 +257,15 @@ fn cuts_sharing_interiors(along: &[f64], n: usize, layer: f64) -> Vec<f64> {
 }
 
 /// The grid among the factorisations of `size` (each given its cuts by
-/// `grid_of`) by the rules of [`process_grid`], the area of a cut taken
-/// over the sides `extent`.
+/// `grid_of`) by the rules of [`process_grid`], the load of a box given by
+/// `loads` and the area of a cut taken over the sides `extent`.
 fn choose(
     domain: &Domain,
     size: usize,
     min_width: f64,
-    positions: &[Vec3],
     extent: Vec3,
     grid_of: impl Fn([usize; 3]) -> ProcessGrid,
+    loads: impl Fn(&ProcessGrid) -> Vec<usize>,
 ) -> Result<ProcessGrid, String> {
     let dims = domain.dimension.count();
     let mut feasible: Vec<(usize, f64, ProcessGrid)> = Vec::new();
@@ -271,11 +293,7 @@ fn choose(
                     .product();
                 area += cuts as f64 * face;
             }
-            let busiest = grid
-                .grains_per_box(domain, positions)
-                .into_iter()
-                .max()
-                .unwrap_or(0);
+            let busiest = loads(&grid).into_iter().max().unwrap_or(0);
             feasible.push((busiest, area, grid));
         }
     }
