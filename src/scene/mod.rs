@@ -487,11 +487,12 @@ pub fn build_with(
 /// be at least one interaction range wide along a split axis.
 ///
 /// Under COCD the boxes end among the grains along each split axis that is
-/// not periodic, every box with the same interior ([`balanced_process_grid`]):
-/// the ranks factorise the grains along the cuts together, and a shorter
-/// cut that shares the grains evenly makes that separator smaller (a 2D packing of 50,000
-/// discs at rest in the lower half of its domain: 408 unknowns across its
-/// height against 831 along it; docs/cluster.md). Other scenes keep boxes
+/// not periodic, every box with the same interior
+/// ([`balanced_process_grid`]): the ranks factorise the grains along the
+/// cuts together, and a shorter cut that shares the grains evenly makes
+/// that separator smaller (a 2D packing of 50,000 discs at rest in the
+/// lower half of its domain: 408 unknowns across its height against 831
+/// along it; docs/cluster.md). Other scenes keep boxes
 /// of equal lengths reaching the domain's faces, which hold a spreading
 /// flow longer (a collapse's two halves stay with their ranks).
 pub fn process_grid_of(

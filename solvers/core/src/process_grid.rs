@@ -18,8 +18,8 @@
 //! split axis instead, so that every box has the same interior to
 //! factorise (its grains less the layer along its lower cut, which the
 //! ranks factorise together), and then the least area of cuts decides
-//! alone. The flow's grid, whose
-//! boxes must be those of its cells, keeps equal lengths.
+//! alone. The flow's grid, whose boxes must be those of its cells, keeps
+//! equal lengths.
 
 use crate::domain::{BoxCuts, Domain, Subdomain};
 use crate::Vec3;
@@ -124,9 +124,9 @@ pub fn process_grid(
         domain,
         size,
         min_width,
+        positions,
         domain.extent(),
         ProcessGrid::even,
-        |grid| grid.grains_per_box(domain, positions),
     )
     .map(|grid| grid.ranks)
 }
@@ -137,8 +137,8 @@ pub fn process_grid(
 /// then shares the grains evenly, and the least area of cuts decides
 /// between grids that do so alike), then moved so that along each axis the
 /// boxes' interiors match ([`balanced_cuts`]); the area of a cut is taken
-/// over the box that holds the grains (each side at least `min_width`), which is where
-/// a cut meets them.
+/// over the box that holds the grains (each side at least `min_width`),
+/// which is where a cut meets them.
 pub fn balanced_process_grid(
     domain: &Domain,
     size: usize,
@@ -154,17 +154,12 @@ pub fn balanced_process_grid(
             extent[axis] = (high - low).max(min_width);
         }
     }
-    let chosen = choose(
-        domain,
-        size,
-        min_width,
-        extent,
-        |ranks| ProcessGrid {
+    let chosen = choose(domain, size, min_width, positions, extent, |ranks| {
+        ProcessGrid {
             ranks,
             cuts: cuts_among(domain, ranks, min_width, positions, 0.0),
-        },
-        |grid| grid.grains_per_box(domain, positions),
-    )?;
+        }
+    })?;
     Ok(ProcessGrid {
         ranks: chosen.ranks,
         cuts: balanced_cuts(domain, chosen.ranks, min_width, positions),
@@ -257,15 +252,15 @@ fn cuts_sharing_interiors(along: &[f64], n: usize, layer: f64) -> Vec<f64> {
 }
 
 /// The grid among the factorisations of `size` (each given its cuts by
-/// `grid_of`) by the rules of [`process_grid`], the load of a box given by
-/// `loads` and the area of a cut taken over the sides `extent`.
+/// `grid_of`) by the rules of [`process_grid`], the area of a cut taken
+/// over the sides `extent`.
 fn choose(
     domain: &Domain,
     size: usize,
     min_width: f64,
+    positions: &[Vec3],
     extent: Vec3,
     grid_of: impl Fn([usize; 3]) -> ProcessGrid,
-    loads: impl Fn(&ProcessGrid) -> Vec<usize>,
 ) -> Result<ProcessGrid, String> {
     let dims = domain.dimension.count();
     let mut feasible: Vec<(usize, f64, ProcessGrid)> = Vec::new();
@@ -293,7 +288,11 @@ fn choose(
                     .product();
                 area += cuts as f64 * face;
             }
-            let busiest = loads(&grid).into_iter().max().unwrap_or(0);
+            let busiest = grid
+                .grains_per_box(domain, positions)
+                .into_iter()
+                .max()
+                .unwrap_or(0);
             feasible.push((busiest, area, grid));
         }
     }

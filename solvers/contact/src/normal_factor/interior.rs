@@ -59,8 +59,9 @@ pub(super) struct InteriorFactor {
     rows: Vec<usize>,
     /// The nodes whose rows below reach each node, in order.
     descendants: Vec<Vec<usize>>,
-    /// Where each entry of M's upper triangle (CSC) goes in `values`.
-    destination: Vec<usize>,
+    /// Each entry of M's upper triangle: the entry of K it copies, and
+    /// where it goes in `values`.
+    destination: Vec<(usize, usize)>,
     /// Where the diagonal of each separator column stands in `values`.
     separator_diagonal: Vec<usize>,
     values: Vec<f64>,
@@ -73,12 +74,14 @@ pub(super) struct InteriorFactor {
 }
 
 impl InteriorFactor {
-    /// The factor of `matrix` (M's upper triangle, CSC, its first
-    /// `interior` columns the interior) on the supernodes of `symbolic`,
-    /// factorised on `par`.
+    /// The factor of the pattern `matrix` (M's upper triangle, CSC, its
+    /// first `interior` columns the interior; `source`: the entry of K each
+    /// of its entries copies) on the supernodes of `symbolic`, factorised on
+    /// `par`.
     pub(super) fn new(
         symbolic: &SymbolicSupernodalCholesky<usize>,
         matrix: &CscMatrix<f64>,
+        source: &[usize],
         interior: usize,
         par: Par,
     ) -> Self {
@@ -152,8 +155,9 @@ impl InteriorFactor {
         };
         let mut destination = Vec::with_capacity(matrix.nzval.len());
         for column in 0..size {
-            for k in matrix.colptr[column]..matrix.colptr[column + 1] {
-                destination.push(at(column, matrix.rowval[k]));
+            let entries = matrix.colptr[column]..matrix.colptr[column + 1];
+            for (&from, &row) in source[entries.clone()].iter().zip(&matrix.rowval[entries]) {
+                destination.push((from, at(column, row)));
             }
         }
         let separator_diagonal = (interior..size).map(|c| at(c, c)).collect();
@@ -180,18 +184,18 @@ impl InteriorFactor {
         }
     }
 
-    /// Factorises the interior of `matrix` (the pattern given to `new`),
+    /// Factorises the interior of M, its entries read from K's `values`,
     /// `shift` added to the separator's diagonal, and writes the lower
     /// triangle of T into `schur` (ns × ns).
     pub(super) fn factorise(
         &mut self,
-        matrix: &CscMatrix<f64>,
+        values: &[f64],
         shift: &[f64],
         schur: &mut Mat<f64>,
     ) -> Result<(), String> {
         self.values.fill(0.0);
-        for (&to, &value) in self.destination.iter().zip(&matrix.nzval) {
-            self.values[to] += value;
+        for &(from, to) in &self.destination {
+            self.values[to] += values[from];
         }
         for (&to, &added) in self.separator_diagonal.iter().zip(shift) {
             self.values[to] += added;

@@ -12,10 +12,6 @@ pub(crate) struct Half {
     pub(super) unknown: Vec<usize>,
     /// Interior columns (the separator's follow).
     interior: usize,
-    /// M_i's upper pattern and values, and the entry of K each value
-    /// copies.
-    matrix: CscMatrix<f64>,
-    source: Vec<usize>,
     factor: InteriorFactor,
     /// T_i = K_SS − K_Si K_ii⁻¹ K_iS (lower triangle).
     pub(super) schur_part: Mat<f64>,
@@ -203,13 +199,11 @@ impl Half {
         let SymbolicCholeskyRaw::Supernodal(supernodal) = symbolic.raw() else {
             return Err("the split factor needs a supernodal factorisation".into());
         };
-        let factor = InteriorFactor::new(supernodal, &local_matrix, ni, par);
+        let factor = InteriorFactor::new(supernodal, &local_matrix, &source, ni, par);
         let ns = separator.len();
         Ok(Half {
             unknown,
             interior: ni,
-            matrix: local_matrix,
-            source,
             factor,
             schur_part: Mat::zeros(ns, ns),
             forward_solution: vec![0.0; size],
@@ -228,11 +222,8 @@ impl Half {
         matrix: &CscMatrix<f64>,
         shift: &[f64],
     ) -> Result<(), String> {
-        for (value, &k) in self.matrix.nzval.iter_mut().zip(&self.source) {
-            *value = matrix.nzval[k];
-        }
         self.factor
-            .factorise(&self.matrix, shift, &mut self.schur_part)
+            .factorise(&matrix.nzval, shift, &mut self.schur_part)
     }
 
     /// w_i = L_ii⁻¹ r_i; returns −(K_Si K_ii⁻¹ r_i) = −L_Si w_i.

@@ -254,19 +254,28 @@ fn the_whole_supernodal_factor_is_the_same_on_any_number_of_threads() {
     assert!(same_bits(&one, &solved_on(2, &matrix, &b, usize::MAX)));
 }
 
-/// The dense lower triangle of K's principal block on `rows` × `columns`.
+/// K's block on `rows` × `columns`, dense, from its upper triangle.
 fn dense_block(matrix: &CscMatrix<f64>, rows: &[usize], columns: &[usize]) -> Mat<f64> {
-    let mut full = Mat::<f64>::zeros(matrix.n, matrix.n);
+    let position = |of: &[usize]| {
+        let mut at = vec![usize::MAX; matrix.n];
+        for (k, &u) in of.iter().enumerate() {
+            at[u] = k;
+        }
+        at
+    };
+    let (row_at, column_at) = (position(rows), position(columns));
+    let mut block = Mat::<f64>::zeros(rows.len(), columns.len());
     for c in 0..matrix.n {
         for k in matrix.colptr[c]..matrix.colptr[c + 1] {
             let r = matrix.rowval[k];
-            full[(r, c)] = matrix.nzval[k];
-            full[(c, r)] = matrix.nzval[k];
+            for (i, j) in [(r, c), (c, r)] {
+                if row_at[i] != usize::MAX && column_at[j] != usize::MAX {
+                    block[(row_at[i], column_at[j])] = matrix.nzval[k];
+                }
+            }
         }
     }
-    Mat::from_fn(rows.len(), columns.len(), |i, j| {
-        full[(rows[i], columns[j])]
-    })
+    block
 }
 
 /// A half factorised up to its separator gives the separator's Schur
