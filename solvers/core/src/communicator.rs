@@ -188,6 +188,16 @@ impl Communicator {
         let _ = values;
     }
 
+    /// Overwrites `values` on every rank with the `root` rank's (every rank
+    /// passes as many).
+    pub fn broadcast(&self, root: usize, values: &mut [f64]) {
+        #[cfg(feature = "mpi")]
+        if let Some(world) = &self.world {
+            world.broadcast(root, values);
+        }
+        let _ = (root, values);
+    }
+
     /// Whether every rank can read the others' [`SharedArray`]s: MPI ranks
     /// that all run on one node (a single rank reads only its own).
     pub fn shares_memory(&self) -> bool {
@@ -315,6 +325,12 @@ pub mod mpi_backend {
             let local = values.to_vec();
             self.communicator
                 .all_reduce_into(&local[..], values, SystemOperation::sum());
+        }
+
+        pub fn broadcast(&self, root: usize, values: &mut [f64]) {
+            self.communicator
+                .process_at_rank(root as i32)
+                .broadcast_into(values);
         }
 
         pub fn sum_count(&self, local: u64) -> u64 {

@@ -49,6 +49,7 @@ use faer::{Accum, Conj, Mat, MatMut, Par, Side};
 
 mod interior;
 mod shared;
+mod shared_schur;
 mod split;
 #[cfg(test)]
 mod tests;

@@ -24,11 +24,14 @@
 //!   Σ = P_S + Σ_r (T_r − P_{S_r} − E_r),
 //!
 //! dense over S: each rank adds its part, the ranks sum them (one
-//! reduction of the lower triangle per factorisation), and every rank
-//! factorises the same Σ. A solve K x = r is that of the split: per rank
+//! reduction of the lower triangle per factorisation), and the ranks
+//! factorise Σ together, each a share of its column blocks
+//! ([`super::shared_schur`]), every rank ending with the whole factor.
+//! A solve K x = r is that of the split: per rank
 //! the forward solve, one reduction of the separator's right-hand side,
 //! x_S from Σ on every rank, and per rank the back solve of its interior.
 
+use super::shared_schur::{factorise_together, Workspace};
 use super::split::Half;
 use super::*;
 use grainflow_core::Communicator;
@@ -54,7 +57,7 @@ pub(crate) struct SharedFactor {
     /// Σ's lower triangle, packed by columns, as the ranks sum it.
     packed: Vec<f64>,
     schur: Mat<f64>,
-    dense_work: MemBuffer,
+    dense_work: Workspace,
     communicator: Communicator,
 }
 
@@ -117,13 +120,7 @@ impl SharedFactor {
             }
             (None, entries)
         };
-        let dense_work = MemBuffer::new(
-            faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
-                ns,
-                Par::Seq,
-                Default::default(),
-            ),
-        );
+        let dense_work = Workspace::new(ns);
         // The diagonal closes its column of the upper triangle.
         let touched_diagonal: Vec<usize> = touched_columns
             .iter()
@@ -207,8 +204,8 @@ impl SharedFactor {
             }
             self.schur[(j, j)] += self.mass[j];
         }
-        // Every rank holds the same Σ and factorises it alike.
-        factorise_schur(&mut self.schur, &mut self.dense_work)
+        // Every rank holds the same Σ; each factorises its share of it.
+        factorise_together(&mut self.schur, &self.communicator, &mut self.dense_work)
     }
 
     /// Overwrites `rhs` ([r_I; r_S], r_S the same on every rank) with

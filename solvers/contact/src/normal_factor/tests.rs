@@ -363,3 +363,81 @@ fn a_half_factorised_up_to_its_separator_gives_the_dense_schur_complement() {
         assert!(error < 1e-14, "backward error {error:e}");
     }
 }
+
+/// The blocked Cholesky that ranks share ([`super::shared_schur`]), on one
+/// rank: the same factor as the dense one of faer, over two full blocks
+/// and a part one, and a matrix that is not positive definite refused
+/// with the columns of the block where it fails.
+#[test]
+fn the_schur_complement_factorised_by_blocks_is_the_dense_cholesky() {
+    use super::shared_schur::{factorise_together, Workspace, BLOCK};
+    use grainflow_core::Communicator;
+    let n = 2 * BLOCK + 37;
+    // Σ = B Bᵀ + n I, B with entries in [−1, 1): well conditioned, dense.
+    let mut pseudo_random = 7u64;
+    let mut next = || {
+        pseudo_random = pseudo_random
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        2.0 * ((pseudo_random >> 11) as f64 / (1u64 << 53) as f64) - 1.0
+    };
+    let b = Mat::<f64>::from_fn(n, n, |_, _| next());
+    let schur = Mat::<f64>::from_fn(n, n, |i, j| {
+        (0..n).map(|k| b[(i, k)] * b[(j, k)]).sum::<f64>() + if i == j { n as f64 } else { 0.0 }
+    });
+    let mut dense = schur.clone();
+    let mut work = MemBuffer::new(
+        faer::linalg::cholesky::llt::factor::cholesky_in_place_scratch::<f64>(
+            n,
+            Par::Seq,
+            Default::default(),
+        ),
+    );
+    factorise_schur(&mut dense, &mut work).unwrap();
+    let mut blocked = schur.clone();
+    factorise_together(
+        &mut blocked,
+        &Communicator::serial(),
+        &mut Workspace::new(n),
+    )
+    .unwrap();
+    let (mut largest, mut scale) = (0.0f64, 0.0f64);
+    for j in 0..n {
+        for i in j..n {
+            largest = largest.max((blocked[(i, j)] - dense[(i, j)]).abs());
+            scale = scale.max(dense[(i, j)].abs());
+        }
+    }
+    // And L Lᵀ gives Σ back.
+    let mut residual = 0.0f64;
+    for j in 0..n {
+        for i in j..n {
+            let product: f64 = (0..=j).map(|k| blocked[(i, k)] * blocked[(j, k)]).sum();
+            residual = residual.max((product - schur[(i, j)]).abs());
+        }
+    }
+    let schur_scale = (0..n).map(|i| schur[(i, i)]).fold(0.0, f64::max);
+    println!(
+        "blocked against dense Cholesky: {:.2e} relative; L Lᵀ − Σ: {:.2e} relative",
+        largest / scale,
+        residual / schur_scale
+    );
+    assert!(largest <= 1e-13 * scale, "{largest} of {scale}");
+    assert!(
+        residual <= 1e-14 * schur_scale,
+        "{residual} of {schur_scale}"
+    );
+    // Negative on a diagonal of the second block: refused there.
+    let mut indefinite = schur.clone();
+    indefinite[(BLOCK + 5, BLOCK + 5)] = -1.0;
+    let error = factorise_together(
+        &mut indefinite,
+        &Communicator::serial(),
+        &mut Workspace::new(n),
+    )
+    .unwrap_err();
+    assert!(
+        error.contains(&format!("columns {BLOCK} to {}", 2 * BLOCK)),
+        "{error}"
+    );
+}
