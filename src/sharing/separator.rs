@@ -11,9 +11,10 @@
 //!
 //!   Σ = K_SS − Σ_r K_Sr K_rr⁻¹ K_rS,
 //!
-//! dense and of the separator's size: ns² numbers to hold and ns³/3
-//! multiply–adds to factorise, at every interior-point iteration. That
-//! size, not the ranks' interiors, sets what several ranks can gain.
+//! dense and of the separator's size: ns² numbers that every rank holds
+//! and ns³/3 multiply–adds to factorise at every interior-point iteration,
+//! which the ranks share by column blocks. That size, not the ranks'
+//! interiors, sets what several ranks can gain.
 
 use grainflow_contact::{contacts, Partner};
 use grainflow_core::ProcessGrid;
@@ -112,6 +113,12 @@ impl Separator {
         (self.separator as f64).powi(3) / 3.0
     }
 
+    /// A rank's share of [`Separator::schur_flops`]: the ranks factorise Σ
+    /// together, each its column blocks (dealt round them).
+    pub fn schur_flops_per_rank(&self) -> f64 {
+        self.schur_flops() / self.interiors.len().max(1) as f64
+    }
+
     /// The lines `check --ranks N` prints.
     pub fn describe(&self) -> String {
         let share = 100.0 * self.separator as f64 / self.unknowns.max(1) as f64;
@@ -119,7 +126,8 @@ impl Separator {
             "the contact program's separator: {} of {} unknowns ({share:.1} %), the grains of \
              {} of {} candidate pairs that cross a rank boundary; its dense Schur complement \
              {} (about {} held on every rank while it is summed and factorised) and {:.1e} \
-             multiply-adds per interior-point iteration; ranks' interiors {} to {} unknowns",
+             multiply-adds per interior-point iteration to factorise it, {:.1e} on each rank; \
+             ranks' interiors {} to {} unknowns",
             self.separator,
             self.unknowns,
             self.crossing_pairs,
@@ -127,6 +135,7 @@ impl Separator {
             crate::footprint::human_bytes(self.schur_bytes()),
             crate::footprint::human_bytes(self.held_per_rank_bytes()),
             self.schur_flops(),
+            self.schur_flops_per_rank(),
             self.interiors.iter().min().copied().unwrap_or(0),
             self.interiors.iter().max().copied().unwrap_or(0),
         )
@@ -205,5 +214,7 @@ mod tests {
         assert_eq!(separator.crossing_pairs, 3);
         assert_eq!(separator.pairs, 21);
         assert_eq!(separator.schur_bytes(), 8.0 * 18.0 * 18.0);
+        // Two ranks share Σ's factor.
+        assert_eq!(separator.schur_flops_per_rank(), 18.0f64.powi(3) / 6.0);
     }
 }
