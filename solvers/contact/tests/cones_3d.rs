@@ -124,7 +124,8 @@ fn the_interior_point_solves_3d_cones_as_clarabel_does() {
         let reference = solve(ConicSolver::Clarabel);
         assert!(
             ours.fallback_reason.is_none(),
-            "μ = {friction}: Clarabel took over"
+            "μ = {friction}: Clarabel took over: {:?}",
+            ours.fallback_reason
         );
         let speed = scales.velocity;
         let largest = (0..bodies.len())

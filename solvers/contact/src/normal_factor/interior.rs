@@ -68,6 +68,8 @@ pub(super) struct InteriorFactor {
     /// Scratch: local row of each row of M in the node being updated, the
     /// product of a descendant's rows, the dense Cholesky's work.
     local_row: Vec<usize>,
+    /// The node's local row of each row of the descendant being gathered.
+    target_rows: Vec<usize>,
     product: Vec<f64>,
     work: MemBuffer,
     par: Par,
@@ -178,6 +180,7 @@ impl InteriorFactor {
             separator_diagonal,
             values: vec![0.0; symbolic.len_val()],
             local_row: vec![0; size],
+            target_rows: Vec::new(),
             product: Vec::new(),
             work,
             par,
@@ -253,7 +256,10 @@ impl InteriorFactor {
     }
 
     /// Subtracts from node `t` the products of the rows of each of its
-    /// descendants that fall on its columns and below.
+    /// descendants that fall on its columns and below. Where those rows are
+    /// consecutive rows of the node (and the columns they fall on
+    /// consecutive columns) the product goes into the node's block in
+    /// place; elsewhere through a scratch block, scattered row by row.
     fn gather_updates(&mut self, t: usize) {
         let target = &self.nodes[t];
         for (local, &row) in self.rows[target.rows.clone()].iter().enumerate() {
@@ -282,6 +288,40 @@ impl InteriorFactor {
             )
             .subrows(first, down);
             let facing = lower.subrows(0, on);
+            let targets = &rows[first..];
+            self.target_rows.clear();
+            self.target_rows
+                .extend(targets.iter().map(|&r| self.local_row[r]));
+            let local = &self.target_rows;
+            let in_place =
+                local[down - 1] - local[0] == down - 1 && targets[on - 1] - targets[0] == on - 1;
+            if in_place {
+                // The rows are the node's rows local[0].., its columns
+                // targets[0] − start..: L_t −= L_d L_dᵀ there directly.
+                let column = targets[0] - target.columns.start;
+                let mut update = block.as_mut().submatrix_mut(local[0], column, down, on);
+                let (top, bottom) = update.as_mut().split_at_row_mut(on);
+                faer::linalg::matmul::triangular::matmul(
+                    top,
+                    faer::linalg::matmul::triangular::BlockStructure::TriangularLower,
+                    Accum::Add,
+                    facing,
+                    faer::linalg::matmul::triangular::BlockStructure::Rectangular,
+                    facing.transpose(),
+                    faer::linalg::matmul::triangular::BlockStructure::Rectangular,
+                    -1.0,
+                    self.par,
+                );
+                faer::linalg::matmul::matmul(
+                    bottom,
+                    Accum::Add,
+                    lower.subrows(on, down - on),
+                    facing.transpose(),
+                    -1.0,
+                    self.par,
+                );
+                continue;
+            }
             self.product.resize(down * on, 0.0);
             let mut product = MatMut::from_column_major_slice_mut(&mut self.product, down, on);
             let (top, bottom) = product.as_mut().split_at_row_mut(on);
@@ -304,11 +344,17 @@ impl InteriorFactor {
                 1.0,
                 self.par,
             );
-            let targets = &rows[first..];
             for j in 0..on {
                 let column = targets[j] - target.columns.start;
+                let destination = block
+                    .as_mut()
+                    .col_mut(column)
+                    .try_as_col_major_mut()
+                    .unwrap();
+                let destination = destination.as_slice_mut();
+                let source = &self.product[j * down..(j + 1) * down];
                 for i in j..down {
-                    block[(self.local_row[targets[i]], column)] -= product[(i, j)];
+                    destination[local[i]] -= source[i];
                 }
             }
         }
