@@ -5,9 +5,10 @@
 //!
 //! Fitted on packings at rest (every grain in contact, the most a step
 //! holds), one thread of this project's 2-core machine, ε = 1e-8, the
-//! other core busy (`docs/performance.md`, "What a COCD step holds"):
-//! 3D 38.1 and 166.7 s at 8,748 and 17,986 spheres, 2D 10.0 and 22.7 s
-//! at 50,000 and 100,000 discs. `c N^b` through the two points.
+//! other core idle, with faer 0.24's kernels (`docs/performance.md`,
+//! "The dense kernels"): 3D 27.0 and 105.1 s at 8,748 and 17,986
+//! spheres, 2D 6.76 and 17.25 s at 50,000 and 100,000 discs. `c N^b`
+//! through the two points.
 
 use super::cost_estimate::clock;
 use grainflow_contact::ConicSolver;
@@ -15,11 +16,12 @@ use grainflow_contact::ConicSolver;
 /// The longest step `check` times (s).
 pub const PROBE_LONGEST_STEP: f64 = 60.0;
 
-const SECONDS_3D: [(f64, f64); 2] = [(8_748.0, 38.1), (17_986.0, 166.7)];
-const SECONDS_2D: [(f64, f64); 2] = [(50_000.0, 10.0), (100_000.0, 22.7)];
+const SECONDS_3D: [(f64, f64); 2] = [(8_748.0, 27.0), (17_986.0, 105.1)];
+const SECONDS_2D: [(f64, f64); 2] = [(50_000.0, 6.76), (100_000.0, 17.25)];
 
 /// Clarabel on the same 3D program of 8,748 spheres took 59 times the
-/// interior point's time (2,256 s against 38.1 s, `docs/performance.md`).
+/// interior point's time (2,256 s against 38.1 s, `docs/performance.md`,
+/// before faer 0.24's kernels made the interior point faster still).
 const CLARABEL_OVER_INTERIOR_POINT: f64 = 59.0;
 
 /// Seconds of one COCD step of `grains` at rest in `dimension` with
@@ -68,15 +70,15 @@ mod tests {
     #[test]
     fn a_step_is_timed_below_a_minute_and_predicted_above() {
         // Through the measured points.
-        assert!((step_seconds(3, 8_748.0) / 38.1 - 1.0).abs() < 1e-12);
-        assert!((step_seconds(2, 50_000.0) / 10.0 - 1.0).abs() < 1e-12);
+        assert!((step_seconds(3, 8_748.0) / 27.0 - 1.0).abs() < 1e-12);
+        assert!((step_seconds(2, 50_000.0) / 6.76 - 1.0).abs() < 1e-12);
         // The 2D erodible-bed scenes (up to some 10⁴ discs) are timed.
         let ours = ConicSolver::InteriorPoint;
         assert!(untimed_line(2, 20_000, 1000.0, ours).is_none());
         assert!(untimed_line(3, 10_000, 10.0, ours).is_none());
-        // The paper's 122,932 spheres: about 2.4 hours a step.
+        // The paper's 122,932 spheres: about 1.1 hours a step.
         let line = untimed_line(3, 122_932, 10.0, ours).unwrap();
-        assert!(line.contains("about 2:2"), "{line}");
+        assert!(line.contains("about 1:0"), "{line}");
         // Clarabel is not timed on 10,000 spheres.
         assert!(untimed_line(3, 10_000, 10.0, ConicSolver::Clarabel).is_some());
     }

@@ -130,7 +130,7 @@ impl DryModel {
             ));
             warnings.extend(sharing::load_warning(
                 ranks,
-                Some(particles as f64 / ranks as f64),
+                sharing::grains_judged(case, particles as f64 / ranks as f64),
                 None,
             ));
         }

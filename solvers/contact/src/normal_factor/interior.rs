@@ -344,8 +344,8 @@ impl InteriorFactor {
                 1.0,
                 self.par,
             );
-            for j in 0..on {
-                let column = targets[j] - target.columns.start;
+            for (j, &row) in targets.iter().enumerate().take(on) {
+                let column = row - target.columns.start;
                 let destination = block
                     .as_mut()
                     .col_mut(column)
