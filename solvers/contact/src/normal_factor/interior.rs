@@ -287,7 +287,6 @@ impl InteriorFactor {
                 node.stride,
             )
             .subrows(first, down);
-            let facing = lower.subrows(0, on);
             let targets = &rows[first..];
             self.target_rows.clear();
             self.target_rows
@@ -299,51 +298,13 @@ impl InteriorFactor {
                 // The rows are the node's rows local[0].., its columns
                 // targets[0] − start..: L_t −= L_d L_dᵀ there directly.
                 let column = targets[0] - target.columns.start;
-                let mut update = block.as_mut().submatrix_mut(local[0], column, down, on);
-                let (top, bottom) = update.as_mut().split_at_row_mut(on);
-                faer::linalg::matmul::triangular::matmul(
-                    top,
-                    faer::linalg::matmul::triangular::BlockStructure::TriangularLower,
-                    Accum::Add,
-                    facing,
-                    faer::linalg::matmul::triangular::BlockStructure::Rectangular,
-                    facing.transpose(),
-                    faer::linalg::matmul::triangular::BlockStructure::Rectangular,
-                    -1.0,
-                    self.par,
-                );
-                faer::linalg::matmul::matmul(
-                    bottom,
-                    Accum::Add,
-                    lower.subrows(on, down - on),
-                    facing.transpose(),
-                    -1.0,
-                    self.par,
-                );
+                let update = block.as_mut().submatrix_mut(local[0], column, down, on);
+                rows_times_facing(update, lower, on, Accum::Add, -1.0, self.par);
                 continue;
             }
             self.product.resize(down * on, 0.0);
-            let mut product = MatMut::from_column_major_slice_mut(&mut self.product, down, on);
-            let (top, bottom) = product.as_mut().split_at_row_mut(on);
-            faer::linalg::matmul::triangular::matmul(
-                top,
-                faer::linalg::matmul::triangular::BlockStructure::TriangularLower,
-                Accum::Replace,
-                facing,
-                faer::linalg::matmul::triangular::BlockStructure::Rectangular,
-                facing.transpose(),
-                faer::linalg::matmul::triangular::BlockStructure::Rectangular,
-                1.0,
-                self.par,
-            );
-            faer::linalg::matmul::matmul(
-                bottom,
-                Accum::Replace,
-                lower.subrows(on, down - on),
-                facing.transpose(),
-                1.0,
-                self.par,
-            );
+            let product = MatMut::from_column_major_slice_mut(&mut self.product, down, on);
+            rows_times_facing(product, lower, on, Accum::Replace, 1.0, self.par);
             for (j, &row) in targets.iter().enumerate().take(on) {
                 let column = row - target.columns.start;
                 let destination = block
@@ -432,4 +393,40 @@ impl InteriorFactor {
             node.stride,
         )
     }
+}
+
+/// `destination` (accumulated as `accum`) of `alpha` times the products of
+/// the rows of `lower` with its first `on` rows, L_d L_d,facingᵀ: the first
+/// `on` rows of the product are the lower triangle of a symmetric block,
+/// the rest rectangular.
+fn rows_times_facing(
+    mut destination: MatMut<'_, f64>,
+    lower: MatRef<'_, f64>,
+    on: usize,
+    accum: Accum,
+    alpha: f64,
+    par: Par,
+) {
+    use faer::linalg::matmul::triangular::BlockStructure;
+    let facing = lower.subrows(0, on);
+    let (top, bottom) = destination.as_mut().split_at_row_mut(on);
+    faer::linalg::matmul::triangular::matmul(
+        top,
+        BlockStructure::TriangularLower,
+        accum,
+        facing,
+        BlockStructure::Rectangular,
+        facing.transpose(),
+        BlockStructure::Rectangular,
+        alpha,
+        par,
+    );
+    faer::linalg::matmul::matmul(
+        bottom,
+        accum,
+        lower.subrows(on, lower.nrows() - on),
+        facing.transpose(),
+        alpha,
+        par,
+    );
 }
