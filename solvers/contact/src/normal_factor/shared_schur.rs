@@ -19,8 +19,9 @@
 //! column reaches every rank, each ends with the whole of L for the
 //! triangular solves (two per interior-point iteration, ns² each). The
 //! broadcasts carry ns²/2 numbers in all, as the reduction that summed Σ.
-//! The arithmetic of every block is fixed by the block layout and the
-//! number of ranks, not by timing: runs repeat bit for bit.
+//! Every block takes the updates of the block columns before it in their
+//! order, whichever rank owns it: the factor is the same on any number of
+//! ranks, and on one it is faer's dense Cholesky to the bit (the test).
 
 use super::*;
 use grainflow_core::Communicator;
