@@ -431,7 +431,7 @@ pub fn solve(
     for (xc, qc) in x.iter_mut().zip(&q) {
         *xc -= qc;
     }
-    factor.solve(&mut x);
+    factor.solve(&pattern.matrix, &mut x);
     let mut ax = vec![0.0; m];
     pattern.times(&x, &mut ax);
     let mut s: Vec<f64> = b.iter().zip(&ax).map(|(bi, axi)| bi - axi).collect();
@@ -536,7 +536,7 @@ pub fn solve(
                 for c in 0..n {
                     dx[c] = rhs[c] - r_d[c];
                 }
-                factor.solve(dx);
+                factor.solve(&pattern.matrix, dx);
                 pattern.times(dx, &mut adx);
                 for i in 0..m {
                     ds[i] = -r_p[i] - adx[i];

@@ -93,11 +93,12 @@ fn no_regularisation() -> LltRegularization<f64> {
     }
 }
 
-/// Σ = LLᵀ in place (dense; L in the lower triangle), the separator's
-/// Schur complement.
-fn factorise_schur(schur: &mut Mat<f64>, work: &mut MemBuffer) -> Result<(), String> {
+/// A dense symmetric block = LLᵀ in place (L in the lower triangle): the
+/// separator's Schur complement Σ, or a diagonal block of it
+/// ([`shared_schur`]).
+fn factorise_schur(schur: MatMut<'_, f64>, work: &mut MemBuffer) -> Result<(), String> {
     faer::linalg::cholesky::llt::factor::cholesky_in_place(
-        schur.as_mut(),
+        schur,
         no_regularisation(),
         Par::Seq,
         MemStack::new(work),
@@ -211,10 +212,11 @@ impl NormalFactor {
         }
     }
 
-    /// Overwrites `rhs` with K⁻¹ rhs.
-    pub(crate) fn solve(&mut self, rhs: &mut [f64]) {
+    /// Overwrites `rhs` with K⁻¹ rhs, `matrix` being K as last factorised
+    /// (the whole factor refines its solve with it).
+    pub(crate) fn solve(&mut self, matrix: &CscMatrix<f64>, rhs: &mut [f64]) {
         match self {
-            NormalFactor::Whole(whole) => whole.solve(rhs),
+            NormalFactor::Whole(whole) => whole.solve(matrix, rhs),
             NormalFactor::Split(split) => split.solve(rhs),
             NormalFactor::Shared(shared) => shared.solve(rhs),
         }
@@ -233,9 +235,7 @@ pub(crate) struct WholeFactor {
     values: Vec<f64>,
     work: MemBuffer,
     par: Par,
-    /// The matrix last factorised and the solve's residual, for its
-    /// refinement.
-    matrix: CscMatrix<f64>,
+    /// The solve's residual, for its refinement.
     residual: Vec<f64>,
 }
 
@@ -287,13 +287,11 @@ impl WholeFactor {
             symbolic,
             work: MemBuffer::new(scratch),
             par,
-            matrix: matrix.clone(),
             residual: Vec::with_capacity(matrix.n),
         })
     }
 
     fn factorise(&mut self, matrix: &CscMatrix<f64>) -> Result<(), String> {
-        self.matrix.clone_from(matrix);
         factorise_numeric(
             &self.symbolic,
             &mut self.values,
@@ -309,19 +307,18 @@ impl WholeFactor {
     /// the next iterations need: without the step, a heap of 100 spheres
     /// at μ = 0.9 (`tests/cones_3d.rs`) wandered from iteration 13 on and
     /// lost a pivot at 19 with the supernodal kernels of faer 0.24.
-    fn solve(&mut self, rhs: &mut [f64]) {
-        let n = rhs.len();
+    /// `matrix` is K, the matrix last factorised.
+    fn solve(&mut self, matrix: &CscMatrix<f64>, rhs: &mut [f64]) {
         self.residual.clear();
         self.residual.extend_from_slice(rhs);
         self.solve_once(rhs);
-        symmetric_subtract_product(&self.matrix, rhs, &mut self.residual);
+        symmetric_subtract_product(matrix, rhs, &mut self.residual);
         let mut correction = std::mem::take(&mut self.residual);
         self.solve_once(&mut correction);
         for (x, d) in rhs.iter_mut().zip(&correction) {
             *x += d;
         }
         self.residual = correction;
-        debug_assert_eq!(self.residual.len(), n);
     }
 
     fn solve_once(&mut self, rhs: &mut [f64]) {

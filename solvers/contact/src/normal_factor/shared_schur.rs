@@ -126,14 +126,7 @@ fn factorise_block_column(
         .as_mut()
         .submatrix_mut(start, start, ns - start, width);
     let (mut diagonal, mut panel) = column.as_mut().split_at_row_mut(width);
-    faer::linalg::cholesky::llt::factor::cholesky_in_place(
-        diagonal.as_mut(),
-        no_regularisation(),
-        Par::Seq,
-        MemStack::new(work),
-        Default::default(),
-    )
-    .map_err(|e| format!("{e:?}"))?;
+    factorise_schur(diagonal.as_mut(), work)?;
     // L_ik = Σ_ik L_kk⁻ᵀ, i.e. L_ikᵀ = L_kk⁻¹ Σ_ikᵀ.
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(
         diagonal.as_ref(),

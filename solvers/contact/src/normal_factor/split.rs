@@ -102,7 +102,7 @@ impl SplitFactor {
             let (i, j) = (r.max(c), r.min(c));
             self.schur[(i, j)] -= matrix.nzval[k];
         }
-        factorise_schur(&mut self.schur, &mut self.dense_work)
+        factorise_schur(self.schur.as_mut(), &mut self.dense_work)
     }
 
     pub(super) fn solve(&mut self, rhs: &mut [f64]) {

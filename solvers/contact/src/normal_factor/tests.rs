@@ -104,7 +104,7 @@ fn backward_error(matrix: &CscMatrix<f64>, x: &[f64], b: &[f64]) -> f64 {
 fn solve_with(factor: &mut NormalFactor, matrix: &CscMatrix<f64>, b: &[f64]) -> Vec<f64> {
     factor.factorise(matrix).unwrap();
     let mut x = b.to_vec();
-    factor.solve(&mut x);
+    factor.solve(matrix, &mut x);
     x
 }
 
@@ -393,7 +393,7 @@ fn the_schur_complement_factorised_by_blocks_is_the_dense_cholesky() {
             Default::default(),
         ),
     );
-    factorise_schur(&mut dense, &mut work).unwrap();
+    factorise_schur(dense.as_mut(), &mut work).unwrap();
     let mut blocked = schur.clone();
     factorise_together(
         &mut blocked,
