@@ -400,6 +400,14 @@ pub fn contact_gap(case: &Case) -> f64 {
     cells * smallest
 }
 
+/// Whether the scene's contacts are COCD's conic programs, whose step
+/// factorises a sparse Cholesky factor at every interior-point iteration
+/// (its ranks are balanced by grains and judged apart from the other
+/// models').
+pub fn solved_by_cocd(case: &Case) -> bool {
+    case.contact_section().model == ContactModel::Cocd
+}
+
 /// Hard contact (Martin et al. 2022), for `contact.model` = cocd or nscd.
 pub fn hard_contact(case: &Case) -> Option<HardContact> {
     let c = case.contact_section();
@@ -502,7 +510,7 @@ pub fn process_grid_of(
     range: f64,
     positions: &[Vec3],
 ) -> Result<ProcessGrid, String> {
-    let balanced = hard_contact(case).is_some_and(|hard| hard.method == Method::Cocd);
+    let balanced = solved_by_cocd(case);
     let Some(ranks) = case
         .parallel
         .as_ref()

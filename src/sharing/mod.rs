@@ -23,11 +23,9 @@ pub fn cocd_separator(
     case: &Case,
     ranks: usize,
 ) -> Result<Option<(Separator, ProcessGrid)>, String> {
-    let Some(hard) = case
-        .has_grains()
+    let Some(hard) = (case.has_grains() && scene::solved_by_cocd(case))
         .then(|| scene::hard_contact(case))
         .flatten()
-        .filter(|hard| hard.method == grainflow_contact::Method::Cocd)
     else {
         return Ok(None);
     };
@@ -75,9 +73,7 @@ pub const CELLS_PER_RANK_WARNING: usize = 100_000;
 /// and 1.08 s on two (800 grains a rank: efficiency 0.95); the packings
 /// of 8,748 and 17,986 spheres 0.94–0.98 and 0.92 (docs/cluster.md).
 pub fn grains_judged(case: &Case, grains_per_rank: f64) -> Option<f64> {
-    let cocd = scene::hard_contact(case)
-        .is_some_and(|hard| hard.method == grainflow_contact::Method::Cocd);
-    (!cocd).then_some(grains_per_rank)
+    (!scene::solved_by_cocd(case)).then_some(grains_per_rank)
 }
 
 /// The warning for ranks holding `grains` grains and `cells` fluid cells
