@@ -8,7 +8,9 @@ The packing: spheres of d = 1 mm +- 10 % (rho = 2500 kg/m3) on a jittered
 lattice in a square box (side chosen for --spheres), packed by the soft DEM
 to rest (e = 0.2, t_c = 2e-4 s, mu = 0.3); their radii are then shrunk by
 1.5 % (the soft contacts overlap by up to 5 % of a radius, which hard
-contact refuses) and ten COCD steps of 1 ms settle them. From that state
+contact refuses) and ten COCD steps of 1 ms settle them (--settle-steps;
+0 times the first hard step from the shrunk deposit, as for 1.2e5 spheres,
+where each settling step takes most of an hour on one thread). From that state
 one step of 1 ms is timed per configuration (`seconds_per_solve`, the
 conic solve with its assembly), --repeats times, alternating the
 configurations. With --ranks 1,2 each configuration also runs on that
@@ -18,8 +20,8 @@ Schur complement factorised together. Prints the table and writes it as
 JSON.
 
 usage: scripts/bench/cocd_step_3d.py [--spheres 10000] [--tolerances 1e-8,1e-5]
-         [--threads 1,2] [--ranks 1] [--repeats 2] [--clarabel] [--work DIR]
-         [--json FILE]
+         [--threads 1,2] [--ranks 1] [--repeats 2] [--settle-steps 10]
+         [--clarabel] [--work DIR] [--json FILE]
 """
 import argparse, csv, json, math, os, subprocess, sys
 
@@ -105,22 +107,29 @@ def fill(binary, work, spheres):
     return side, top
 
 
-def packing(binary, work, spheres):
-    """The packing at rest after the hard settling: a CSV of the spheres."""
-    rest = os.path.join(work, "rest.csv")
-    if os.path.exists(rest):
-        return rest
-    side, top = fill(binary, work, spheres)
-    # Shrink the radii by 1.5 %, at rest.
-    rows = shrunk(os.path.join(work, "fill", "final_particles.csv"), 0.985)
-    with open(os.path.join(work, "shrunk.csv"), "w", newline="") as f:
-        csv.writer(f, lineterminator="\n").writerows(rows)
-    settle = os.path.join(work, "settle.toml")
-    write(settle, step_case(side, 2 * top + 0.01, "shrunk.csv", "end = 1.0e-2\ndt = 1.0e-3"))
-    run(binary, settle, os.path.join(work, "settle"))
-    os.replace(os.path.join(work, "settle", "final_particles.csv"), rest)
-    write(os.path.join(work, "box.json"), json.dumps({"side": side, "height": 2 * top + 0.01}))
-    return rest
+def packing(binary, work, spheres, settle_steps):
+    """The packing after `settle_steps` hard steps of 1 ms: the name of its
+    CSV of spheres in WORK (the soft fill and the shrinking are kept and
+    reused by later calls)."""
+    name = "shrunk.csv" if settle_steps == 0 else f"rest_{settle_steps}.csv"
+    if os.path.exists(os.path.join(work, name)):
+        return name
+    if not os.path.exists(os.path.join(work, "shrunk.csv")):
+        side, top = fill(binary, work, spheres)
+        write(os.path.join(work, "box.json"), json.dumps({"side": side, "height": 2 * top + 0.01}))
+        # Shrink the radii by 1.5 %, at rest.
+        rows = shrunk(os.path.join(work, "fill", "final_particles.csv"), 0.985)
+        with open(os.path.join(work, "shrunk.csv"), "w", newline="") as f:
+            csv.writer(f, lineterminator="\n").writerows(rows)
+    if settle_steps > 0:
+        with open(os.path.join(work, "box.json")) as f:
+            box = json.load(f)
+        settle = os.path.join(work, "settle.toml")
+        write(settle, step_case(box["side"], box["height"], "shrunk.csv",
+                                f"end = {settle_steps}.0e-3\ndt = 1.0e-3"))
+        run(binary, settle, os.path.join(work, "settle"))
+        os.replace(os.path.join(work, "settle", "final_particles.csv"), os.path.join(work, name))
+    return name
 
 
 def step_case(side, height, csv, time):
@@ -136,6 +145,8 @@ def main():
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--ranks", default="1", help="MPI ranks, e.g. 1,2")
+    ap.add_argument("--settle-steps", type=int, default=10,
+                    help="hard steps of 1 ms before the timed one (0: from the shrunk deposit)")
     ap.add_argument("--clarabel", action="store_true")
     ap.add_argument("--work", default="/tmp/grainflow_cocd3d_bench")
     ap.add_argument("--binary", default="target/release/grainflow")
@@ -144,11 +155,11 @@ def main():
     binary = os.path.abspath(a.binary)
     work = os.path.join(a.work, str(a.spheres))
     os.makedirs(work, exist_ok=True)
-    packing(binary, work, a.spheres)
+    rest = packing(binary, work, a.spheres, a.settle_steps)
     with open(os.path.join(work, "box.json")) as f:
         box = json.load(f)
     case = os.path.join(work, "step.toml")
-    write(case, step_case(box["side"], box["height"], "rest.csv", "end = 1.0e-3\ndt = 1.0e-3"))
+    write(case, step_case(box["side"], box["height"], rest, "end = 1.0e-3\ndt = 1.0e-3"))
     configs = [("interior_point", t, float(e), r) for e in a.tolerances.split(",")
                for r in map(int, a.ranks.split(","))
                for t in (map(int, a.threads.split(",")) if r == 1 else [1])]
@@ -173,7 +184,8 @@ def main():
                       "max_penetration": max(m["max_penetration"] for m in ms),
                       "max_coulomb_violation": max(m["max_coulomb_violation"] for m in ms)})
     if a.json:
-        write(a.json, json.dumps({"spheres": a.spheres, "results": table}, indent=1))
+        write(a.json, json.dumps({"spheres": a.spheres, "settle_steps": a.settle_steps,
+                                  "results": table}, indent=1))
 
 
 if __name__ == "__main__":
