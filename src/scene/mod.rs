@@ -16,6 +16,7 @@ use crate::case::{BlockSection, Case, ContactModel};
 use grainflow_contact::{ConicSolver, HardContact, Method};
 use grainflow_core::{
     balanced_cuts, balanced_process_grid, fits, process_grid, Communicator, Dimension, Domain,
+    PairedGrains,
     ProcessGrid, Vec3,
 };
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
@@ -481,7 +482,8 @@ pub fn build_with(
         }
         None => {
             let centres: Vec<Vec3> = placed.iter().map(|p| p.position).collect();
-            process_grid_of(case, &system.domain, communicator.size(), range, &centres)?
+            let radii: Vec<f64> = placed.iter().map(|p| p.radius).collect();
+            process_grid_of(case, &system.domain, communicator.size(), range, &centres, &radii)?
         }
     };
     system.decompose_in(communicator, &grid);
@@ -491,7 +493,8 @@ pub fn build_with(
 
 /// The process grid of a dry case on `size` ranks: `parallel.process_grid`
 /// if given (and more than one rank runs), else the one that shares the
-/// grains at `positions` best with the least area of cuts. Every box must
+/// grains at `positions` (of radii `radii`) best with the least area of
+/// cuts. Every box must
 /// be at least one interaction range wide along a split axis.
 ///
 /// Under COCD the boxes end among the grains along each split axis that is
@@ -509,8 +512,14 @@ pub fn process_grid_of(
     size: usize,
     range: f64,
     positions: &[Vec3],
+    radii: &[f64],
 ) -> Result<ProcessGrid, String> {
     let balanced = solved_by_cocd(case);
+    let paired = PairedGrains {
+        centres: positions,
+        radii,
+        pairing_gap: hard_contact(case).map_or(0.0, |hard| hard.threshold),
+    };
     let Some(ranks) = case
         .parallel
         .as_ref()
@@ -518,7 +527,7 @@ pub fn process_grid_of(
         .filter(|_| size > 1)
     else {
         return if balanced {
-            balanced_process_grid(domain, size, range, positions)
+            balanced_process_grid(domain, size, range, &paired)
         } else {
             process_grid(domain, size, range, positions).map(ProcessGrid::even)
         };
@@ -535,7 +544,7 @@ pub fn process_grid_of(
     let grid = ProcessGrid {
         ranks,
         cuts: if balanced {
-            balanced_cuts(domain, ranks, range, positions)
+            balanced_cuts(domain, ranks, range, &paired)
         } else {
             Default::default()
         },

@@ -33,7 +33,8 @@ pub fn cocd_separator(
     hard.prepare(&mut system);
     let centres = &system.particles.position[..system.particles.n_owned];
     let range = system.range_for(system.particles.max_radius());
-    let grid = scene::process_grid_of(case, &system.domain, ranks, range, centres)?;
+    let radii = &system.particles.radius[..system.particles.n_owned];
+    let grid = scene::process_grid_of(case, &system.domain, ranks, range, centres, radii)?;
     Ok(Some((Separator::of(&system, hard.threshold, &grid), grid)))
 }
 
@@ -118,7 +119,8 @@ pub fn report(
             let system = system.expect("a scene with grains or a fluid");
             let centres: Vec<Vec3> = positions(system);
             let range = system.range_for(system.particles.max_radius());
-            scene::process_grid_of(case, &system.domain, ranks, range, &centres)?
+            let radii = &system.particles.radius[..system.particles.n_owned];
+            scene::process_grid_of(case, &system.domain, ranks, range, &centres, radii)?
         }
     };
     let process_grid = boxes.ranks;

@@ -18,7 +18,7 @@ pub use domain::{
 };
 pub use process_grid::{
     balanced_cuts, balanced_process_grid, describe_cuts, fits, grains_per_box, process_grid,
-    ProcessGrid,
+    PairedGrains, ProcessGrid,
 };
 pub use shared::SharedArray;
 pub use state::{State, StateError};

@@ -131,6 +131,63 @@ pub fn process_grid(
     .map(|grid| grid.ranks)
 }
 
+/// The grains a process grid shares under hard contact: their centres and
+/// radii, and the gap below which two grains pair (the contact candidates'
+/// threshold), which decides the grains along a cut that join the ranks'
+/// separator.
+#[derive(Clone, Copy, Debug)]
+pub struct PairedGrains<'a> {
+    pub centres: &'a [Vec3],
+    pub radii: &'a [f64],
+    pub pairing_gap: f64,
+}
+
+impl PairedGrains<'_> {
+    /// How many grains at or above `cut` along `axis` (the higher box's
+    /// side) pair with a grain below it: |x_i − x_j| − r_i − r_j below the
+    /// pairing gap. `order` lists the grains by their coordinate along
+    /// `axis`, `along` those coordinates in that order. The grains below
+    /// within reach of the cut are binned on the other two axes, so that
+    /// each grain above looks at its 3 × 3 bins only.
+    fn joining_above(&self, axis: usize, cut: f64, order: &[usize], along: &[f64]) -> usize {
+        let largest = self.radii.iter().copied().fold(0.0, f64::max);
+        let reach = 2.0 * largest + self.pairing_gap.max(0.0);
+        if reach <= 0.0 {
+            return 0;
+        }
+        let at = |x: f64| along.partition_point(|&a| a < x);
+        let (low, split, high) = (at(cut - reach), at(cut), at(cut + reach));
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let bin = |k: usize| {
+            let x = self.centres[k];
+            ((x[u] / reach).floor() as i64, (x[v] / reach).floor() as i64)
+        };
+        let mut below: std::collections::HashMap<(i64, i64), Vec<usize>> =
+            std::collections::HashMap::new();
+        for &k in &order[low..split] {
+            below.entry(bin(k)).or_default().push(k);
+        }
+        order[split..high]
+            .iter()
+            .filter(|&&i| {
+                let (bu, bv) = bin(i);
+                (-1..=1).any(|du| {
+                    (-1..=1).any(|dv| {
+                        below.get(&(bu + du, bv + dv)).is_some_and(|cell| {
+                            cell.iter().any(|&j| {
+                                let gap = (self.centres[i] - self.centres[j]).norm()
+                                    - self.radii[i]
+                                    - self.radii[j];
+                                gap < self.pairing_gap
+                            })
+                        })
+                    })
+                })
+            })
+            .count()
+    }
+}
+
 /// The process grid for `size` ranks with its cuts among the grains along
 /// each split axis that is not periodic, chosen by the rules of
 /// [`process_grid`] with the cuts at the grains' quantiles (each single cut
@@ -143,8 +200,9 @@ pub fn balanced_process_grid(
     domain: &Domain,
     size: usize,
     min_width: f64,
-    positions: &[Vec3],
+    grains: &PairedGrains,
 ) -> Result<ProcessGrid, String> {
+    let positions = grains.centres;
     let mut extent = domain.extent();
     if !positions.is_empty() {
         for axis in 0..3 {
@@ -157,50 +215,55 @@ pub fn balanced_process_grid(
     let chosen = choose(domain, size, min_width, positions, extent, |ranks| {
         ProcessGrid {
             ranks,
-            cuts: cuts_among(domain, ranks, min_width, positions, 0.0),
+            cuts: cuts_among(domain, ranks, min_width, grains, false),
         }
     })?;
     Ok(ProcessGrid {
         ranks: chosen.ranks,
-        cuts: balanced_cuts(domain, chosen.ranks, min_width, positions),
+        cuts: balanced_cuts(domain, chosen.ranks, min_width, grains),
     })
 }
 
 /// The cuts of a process grid of `ranks` boxes along each split axis that
-/// is not periodic, placed among the grains at `positions` so that every
-/// box's interior holds as many grains ([`cuts_sharing_interiors`]);
-/// equal lengths along an axis where that would leave a box narrower than
-/// `min_width`, with fewer grains than boxes, or periodic.
+/// is not periodic, placed among the grains so that every box's interior
+/// holds as many grains ([`cuts_sharing_interiors`]); equal lengths along
+/// an axis where that would leave a box narrower than `min_width`, with
+/// fewer grains than boxes, or periodic.
 pub fn balanced_cuts(
     domain: &Domain,
     ranks: [usize; 3],
     min_width: f64,
-    positions: &[Vec3],
+    grains: &PairedGrains,
 ) -> BoxCuts {
-    cuts_among(domain, ranks, min_width, positions, min_width)
+    cuts_among(domain, ranks, min_width, grains, true)
 }
 
-/// [`balanced_cuts`] with the layer `layer` wide above each cut left out
-/// of the interiors (zero: the grains' quantiles).
+/// [`balanced_cuts`], the grains that pair across each cut from above
+/// left out of the interiors where `separators` (else the grains'
+/// quantiles).
 fn cuts_among(
     domain: &Domain,
     ranks: [usize; 3],
     min_width: f64,
-    positions: &[Vec3],
-    layer: f64,
+    grains: &PairedGrains,
+    separators: bool,
 ) -> BoxCuts {
+    let positions = grains.centres;
     let mut cuts = BoxCuts::default();
     for axis in 0..3 {
         let n = ranks[axis];
         if n == 1 || domain.periodic[axis] || positions.len() < n {
             continue;
         }
-        let mut along: Vec<f64> = positions
-            .iter()
-            .map(|x| x[axis].clamp(domain.lower[axis], domain.upper[axis]))
-            .collect();
-        along.sort_by(f64::total_cmp);
-        let at = cuts_sharing_interiors(&along, n, layer);
+        let coordinate =
+            |k: usize| positions[k][axis].clamp(domain.lower[axis], domain.upper[axis]);
+        let mut order: Vec<usize> = (0..positions.len()).collect();
+        order.sort_by(|&a, &b| coordinate(a).total_cmp(&coordinate(b)));
+        let along: Vec<f64> = order.iter().map(|&k| coordinate(k)).collect();
+        let at = cuts_sharing_interiors(&along, n, |cut| match separators {
+            true => grains.joining_above(axis, cut, &order, &along),
+            false => 0,
+        });
         if boxes_at_least(domain.lower[axis], &at, domain.upper[axis], min_width) {
             cuts[axis] = at;
         }
@@ -209,38 +272,40 @@ fn cuts_among(
 }
 
 /// The n − 1 cuts among the sorted coordinates `along` that leave each of
-/// n boxes the same interior: a box's grains less the layer `layer` wide
-/// above its lower cut. Under hard contact the ranks factorise their
-/// interiors apart and the grains along each cut together, the higher
-/// box's layer being that separator (`grainflow_contact::shared_program`),
-/// so each box then has as much to factorise; cut at the plain quantiles,
-/// the lowest box of a 3D packing on two ranks held 4,374 grains to
-/// factorise against the other's 4,009, and took 1.2 times as long. Each
-/// cut lies midway between the two grains on either side of its count:
-/// box k holds the interior I and the layer above cut k − 1, with
-/// I = (N − Σ layers)/n, the layers taken at the last cuts (a fixed point
-/// reached in a few rounds; plain quantiles where `layer` is zero). The
-/// layer is taken one interaction range wide, wider than the grains that
-/// pair across a cut: on that packing the higher box's layer counted 556
-/// grains where 361 joined the separator, and the interiors came out at
-/// 4,096 and 4,291 grains; the step on two ranks took 21.4–21.6 s against
-/// 23.5 s at the quantiles (docs/cluster.md).
-fn cuts_sharing_interiors(along: &[f64], n: usize, layer: f64) -> Vec<f64> {
+/// n boxes the same interior: a box's grains less those above its lower
+/// cut that join the separator, `joining_above(cut)` of them. Under hard
+/// contact the ranks factorise their interiors apart and the grains along
+/// each cut together, the higher box's grains that pair across it being
+/// that separator (`grainflow_contact::shared_program`), so each box then
+/// has as much to factorise; cut at the plain quantiles, the lowest box of
+/// a 3D packing on two ranks held 4,374 grains to factorise against the
+/// other's 4,009, and took 1.2 times as long. Each cut lies midway between
+/// the two grains on either side of its count: box k holds the interior I
+/// and the separator above cut k − 1, with I = (N − Σ separators)/n, the
+/// separators counted at the last cuts (a fixed point reached in a few
+/// rounds; plain quantiles where none joins). Counted exactly, not as a
+/// layer one interaction range wide: on that packing such a layer held 556
+/// grains where 361 joined the separator, and the interiors came out 5 %
+/// apart (docs/cluster.md).
+fn cuts_sharing_interiors(
+    along: &[f64],
+    n: usize,
+    joining_above: impl Fn(f64) -> usize,
+) -> Vec<f64> {
     let count = along.len();
     let midway = |split: usize| {
         let split = split.clamp(1, count - 1);
         0.5 * (along[split - 1] + along[split])
     };
-    let below = |x: f64| along.partition_point(|&a| a < x);
     let mut at: Vec<f64> = (1..n).map(|k| midway(count * k / n)).collect();
     for _ in 0..8 {
-        let layers: usize = at.iter().map(|&c| below(c + layer) - below(c)).sum();
-        let interior = count.saturating_sub(layers) as f64 / n as f64;
+        let joined: usize = at.iter().map(|&c| joining_above(c)).sum();
+        let interior = count.saturating_sub(joined) as f64 / n as f64;
         let (mut reached, mut next) = (0.0, Vec::with_capacity(n - 1));
         for _ in 1..n {
             reached += interior;
             let cut = midway(reached.round() as usize);
-            reached += (below(cut + layer) - below(cut)) as f64;
+            reached += joining_above(cut) as f64;
             next.push(cut);
         }
         if next == at {
@@ -374,33 +439,41 @@ mod tests {
         let low: Vec<Vec3> = (0..100)
             .map(|k| Vec3::new(-2.0 + 0.001 * k as f64, 0.06, 0.003 * k as f64))
             .collect();
+        // Neighbours 3.16 mm apart, radii 1.5 mm: each grain pairs with the
+        // next (gap 0.16 mm below 0.2 mm), not the one after.
+        let radii = vec![1.5e-3; low.len()];
+        let paired = PairedGrains {
+            centres: &low,
+            radii: &radii,
+            pairing_gap: 2e-4,
+        };
         assert_eq!(process_grid(&tall, 2, 0.01, &low).unwrap(), [2, 1, 1]);
-        let grid = balanced_process_grid(&tall, 2, 0.01, &low).unwrap();
+        let grid = balanced_process_grid(&tall, 2, 0.01, &paired).unwrap();
         assert_eq!(grid.ranks, [1, 1, 2]);
-        // The higher box's layer of 0.01 holds three grains (0.147, 0.150,
-        // 0.153): the interiors (100 − 3)/2, rounded to 49 below and 48
-        // above; the cut midway between the 49th and 50th grains' heights.
+        // One grain above the cut pairs across it: the interiors
+        // (100 − 1)/2 = 49.5, rounded to 50 below; the cut midway between
+        // the 50th and 51st grains' heights.
         assert_eq!(grid.cuts[2].len(), 1);
-        assert!((grid.cuts[2][0] - 0.1455).abs() < 1e-12, "{:?}", grid.cuts);
-        assert_eq!(grid.grains_per_box(&tall, &low), vec![49, 51]);
-        // Four ranks, across the height: each box's interior 22 or 23
-        // grains, the three higher boxes holding a layer of three more.
-        let four = balanced_process_grid(&tall, 4, 0.01, &low).unwrap();
+        assert!((grid.cuts[2][0] - 0.1485).abs() < 1e-12, "{:?}", grid.cuts);
+        assert_eq!(grid.grains_per_box(&tall, &low), vec![50, 50]);
+        // Four ranks, across the height: each box's interior 24 or 25
+        // grains, the three higher boxes holding one more that pairs below.
+        let four = balanced_process_grid(&tall, 4, 0.01, &paired).unwrap();
         assert_eq!(four.ranks, [1, 1, 4]);
         let held = four.grains_per_box(&tall, &low);
         let interiors: Vec<usize> = held
             .iter()
             .enumerate()
-            .map(|(k, &h)| if k == 0 { h } else { h - 3 })
+            .map(|(k, &h)| if k == 0 { h } else { h - 1 })
             .collect();
         assert!(
-            interiors.iter().all(|&i| (22..=23).contains(&i)),
+            interiors.iter().all(|&i| (24..=25).contains(&i)),
             "{held:?}"
         );
-        // Without a layer the cuts are the quantiles: 25 grains each.
+        // Without a separator the cuts are the quantiles: 25 grains each.
         let mut heights: Vec<f64> = low.iter().map(|x| x.z).collect();
         heights.sort_by(f64::total_cmp);
-        let quantiles = cuts_sharing_interiors(&heights, 4, 0.0);
+        let quantiles = cuts_sharing_interiors(&heights, 4, |_| 0);
         assert_eq!(quantiles.len(), 3);
         for (k, cut) in quantiles.iter().enumerate() {
             let expected = 0.5 * (heights[25 * (k + 1) - 1] + heights[25 * (k + 1)]);
@@ -408,14 +481,69 @@ mod tests {
         }
         // A quantile cut that would leave a box narrower than the range
         // falls back to equal lengths on that axis.
-        let narrow = balanced_cuts(&tall, [1, 1, 2], 0.9, &low);
+        let narrow = balanced_cuts(&tall, [1, 1, 2], 0.9, &paired);
         assert!(narrow[2].is_empty(), "{narrow:?}");
         // Periodic axes keep equal lengths.
         let periodic = Domain {
             periodic: [false, false, true],
             ..tall.clone()
         };
-        assert!(balanced_cuts(&periodic, [1, 1, 2], 0.01, &low)[2].is_empty());
+        assert!(balanced_cuts(&periodic, [1, 1, 2], 0.01, &paired)[2].is_empty());
+    }
+
+    /// A jittered 3D packing of 2,000 grains of unequal radii cut in two:
+    /// the grains above the cut that pair with one below (counted here
+    /// pair by pair) join the separator, and the two interiors come out
+    /// within two grains of each other.
+    #[test]
+    fn a_packing_cut_in_two_leaves_equal_interiors_once_the_separator_is_out() {
+        let domain = Domain {
+            dimension: Dimension::Three,
+            lower: Vec3::zeros(),
+            upper: Vec3::new(0.01, 0.01, 0.04),
+            periodic: [false; 3],
+            gravity: Vec3::zeros(),
+        };
+        // 10 × 10 × 20 sites 1 mm apart, jittered by up to ±0.15 mm; radii
+        // 0.40–0.48 mm (a linear congruential sequence: no dependency).
+        let mut seed = 12_345u64;
+        let mut uniform = move || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut centres, mut radii) = (Vec::new(), Vec::new());
+        for k in 0..2000 {
+            let site = [k % 10, (k / 10) % 10, k / 100];
+            centres.push(Vec3::from_fn(|a, _| {
+                1e-3 * (site[a] as f64 + 0.5) + 3e-4 * (uniform() - 0.5)
+            }));
+            radii.push(4e-4 + 8e-5 * uniform());
+        }
+        let gap = 1e-4;
+        let paired = PairedGrains {
+            centres: &centres,
+            radii: &radii,
+            pairing_gap: gap,
+        };
+        let grid = balanced_process_grid(&domain, 2, 2e-3, &paired).unwrap();
+        assert_eq!(grid.ranks, [1, 1, 2], "{grid:?}");
+        let cut = grid.cuts[2][0];
+        let n = centres.len();
+        let joined = (0..n)
+            .filter(|&i| centres[i].z >= cut)
+            .filter(|&i| {
+                (0..n).any(|j| {
+                    centres[j].z < cut
+                        && (centres[i] - centres[j]).norm() - radii[i] - radii[j] < gap
+                })
+            })
+            .count();
+        let below = (0..n).filter(|&i| centres[i].z < cut).count();
+        let above = n - below - joined;
+        // Enough to matter: cut at the quantile, the interiors would be
+        // `joined` apart (47 here).
+        assert!(joined > 20, "{joined} grains pair across the cut");
+        assert!(below.abs_diff(above) <= 2, "interiors {below} and {above}");
     }
 
     /// A flat packing at the bottom of a tall box is cut along its height,
@@ -441,9 +569,16 @@ mod tests {
                 )
             })
             .collect();
-        // Across x or y (0.27 of area each, the first wins) rather than
-        // across z (0.81), the box's smallest face.
-        let grid = balanced_process_grid(&tall, 2, 0.01, &flat).unwrap();
+        // Grains 0.1 apart of radius 0.04 do not pair at a gap of 0.01:
+        // the cut is the quantile. Across x or y (0.27 of area each, the
+        // first wins) rather than across z (0.81), the box's smallest face.
+        let radii = vec![0.04; flat.len()];
+        let paired = PairedGrains {
+            centres: &flat,
+            radii: &radii,
+            pairing_gap: 0.01,
+        };
+        let grid = balanced_process_grid(&tall, 2, 0.01, &paired).unwrap();
         assert_eq!(grid.ranks, [1, 2, 1]);
         assert!((grid.cuts[1][0] - 0.5).abs() < 1e-12, "{:?}", grid.cuts);
         assert_eq!(grid.grains_per_box(&tall, &flat), vec![200, 200]);
