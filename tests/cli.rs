@@ -255,10 +255,12 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
     // COCD on two ranks, with the separator the ranks factorise together:
     // 400 discs, three unknowns each, cut across the box's height (the
     // shorter cut) among the discs so that the ranks' interiors match: the
-    // upper box holds 212 discs, 19 of them in the separator, the lower
-    // 188 (564 and 579 unknowns of its own each; at the discs' median
-    // height, 200 each, the separator held 54 unknowns and the interiors
-    // 600 and 546).
+    // upper box holds 210 discs, 19 of them in the separator (the discs
+    // above the cut that pair with one below), the lower 190 (570 and 573
+    // unknowns of their own; at the discs' median height, 200 each, the
+    // separator held 54 unknowns and the interiors 600 and 546; with a
+    // layer one interaction range wide taken for the separator, 564 and
+    // 579).
     let boxed = text(&["check", &case("static_box.toml"), "--ranks", "2"]);
     assert!(
         boxed.contains(
@@ -266,8 +268,8 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
              of 1200 unknowns"
         ) && boxed
             .contains("boxes cut among the grains for equal interiors along the split axes: y = ")
-            && boxed.contains("grains per rank at the start: 188 to 212")
-            && boxed.contains("ranks' interiors 564 to 579 unknowns"),
+            && boxed.contains("grains per rank at the start: 190 to 210")
+            && boxed.contains("ranks' interiors 570 to 573 unknowns"),
         "{boxed}"
     );
     // An axisymmetric scene runs on one rank.
