@@ -449,16 +449,17 @@ tracked_interval = 1.0e-3
 /// rows; the grains that pairs on two ranks reach form a separator whose
 /// Schur complement the ranks factorise together): the 2D column collapse
 /// of `cases/` (410 discs on a bed of 28 glued ones) in a domain cut to
-/// 0.25 × 0.2 m so that the ranks' boxes cut the column (separator of 13
+/// 0.25 × 0.2 m so that the ranks' boxes cut the column (separator of 18
 /// discs on 2 ranks), and the 3D static box (1,600 spheres) with gravity
 /// tilted by 45° so that the packing slumps against its wall (separator of
-/// 117 spheres on 2 ranks, 230 on 4). It is one rank's program with its
+/// 116 spheres on 2 ranks, 226 on 4). It is one rank's program with its
 /// sums in another order: the states agree within 1e-10, positions
 /// relative to the largest coordinate, velocities to the largest speed V,
-/// spins as ωR/V. Measured: 2D 4.8e-11 (2 ranks), 2.4e-11 and 1.9e-11 (4)
-/// after 5 steps; 3D 2.0e-11 (2) and 2.8e-11 (4) after 3 steps. Clarabel on
-/// the program gathered on every rank (the reference, and the interior
-/// point's fallback), 2D on 2 ranks: 1.7e-12.
+/// spins as ωR/V. Measured (2026-12-05, the cuts leaving equal interiors):
+/// 2D 1.8e-11 (2 ranks), 2.3e-11 and 1.3e-11 (4) after 5 steps; 3D 2.3e-11
+/// (2) and 3.6e-11 (4) after 3 steps. Clarabel on the program gathered on
+/// every rank (the reference, and the interior point's fallback), 2D on 2
+/// ranks: 2.0e-12.
 #[test]
 fn cocd_on_2_and_4_ranks_matches_the_serial_run() {
     let dir = tempfile::tempdir().unwrap();
