@@ -100,12 +100,12 @@ impl Separator {
 
     /// Bytes every rank holds for Σ while the ranks sum and factorise it
     /// (`grainflow_contact::normal_factor`, the shared factor): Σ itself
-    /// (ns² numbers), its packed lower triangle and the copy the sum over
-    /// the ranks sends (ns²/2 numbers each), and the rank's own part of it
-    /// from its interior, at most the whole separator (ns²): 3 ns² numbers.
-    /// Beside the rank's share of the scene, not divided among the ranks.
+    /// (ns² numbers, summed over the ranks in place by block columns) and
+    /// the rank's own part of it from its interior, at most the whole
+    /// separator (ns²): 2 ns² numbers. Beside the rank's share of the
+    /// scene, not divided among the ranks.
     pub fn held_per_rank_bytes(&self) -> f64 {
-        3.0 * self.schur_bytes()
+        2.0 * self.schur_bytes()
     }
 
     /// Multiply–adds of one dense Cholesky factorisation of Σ.

@@ -24,14 +24,15 @@
 //!   Σ = P_S + Σ_r (T_r − P_{S_r} − E_r),
 //!
 //! dense over S: each rank adds its part, the ranks sum them (one
-//! reduction of the lower triangle per factorisation), and the ranks
+//! reduction of the lower triangle per factorisation, by block columns),
+//! and the ranks
 //! factorise Σ together, each a share of its column blocks
 //! ([`super::shared_schur`]), every rank ending with the whole factor.
 //! A solve K x = r is that of the split: per rank
 //! the forward solve, one reduction of the separator's right-hand side,
 //! x_S from Σ on every rank, and per rank the back solve of its interior.
 
-use super::shared_schur::{factorise_together, Workspace};
+use super::shared_schur::{factorise_together, sum_together, Workspace};
 use super::split::Half;
 use super::*;
 use grainflow_core::Communicator;
@@ -54,8 +55,7 @@ pub(crate) struct SharedFactor {
     shift: Vec<f64>,
     /// P on the separator.
     mass: Vec<f64>,
-    /// Σ's lower triangle, packed by columns, as the ranks sum it.
-    packed: Vec<f64>,
+    /// Σ (its lower triangle): the rank's part, then the sum, then L.
     schur: Mat<f64>,
     dense_work: Workspace,
     communicator: Communicator,
@@ -134,16 +134,10 @@ impl SharedFactor {
             touched_entries,
             touched_diagonal,
             mass: mass[interior..].to_vec(),
-            packed: vec![0.0; ns * (ns + 1) / 2],
             schur: Mat::zeros(ns, ns),
             dense_work,
             communicator: communicator.clone(),
         })
-    }
-
-    /// Position of Σ(i, j), i ≥ j, in the packed lower triangle.
-    fn packed_at(ns: usize, i: usize, j: usize) -> usize {
-        j * ns - j * (j + 1) / 2 + i
     }
 
     /// Factorises `matrix` (the pattern given to `new`), with the other
@@ -170,22 +164,24 @@ impl SharedFactor {
             }));
         }
         // This rank's part of Σ: T_r − P − E_r over its touched separator
-        // (K_SS^r − P where it has no interior).
-        self.packed.fill(0.0);
+        // (K_SS^r − P where it has no interior), in Σ's lower triangle.
+        for j in 0..ns {
+            self.schur.col_as_slice_mut(j)[j..].fill(0.0);
+        }
         let touched = &self.touched;
         match &self.half {
             Some(half) => {
                 let t = &half.schur_part;
                 for (b, &j) in touched.iter().enumerate() {
                     for (a, &i) in touched.iter().enumerate().skip(b) {
-                        self.packed[Self::packed_at(ns, i, j)] += t[(a, b)];
+                        self.schur[(i, j)] += t[(a, b)];
                     }
                 }
             }
             None => {
                 for &(r, c, k) in &self.touched_entries {
                     let (i, j) = (touched[r.max(c)], touched[r.min(c)]);
-                    self.packed[Self::packed_at(ns, i, j)] += matrix.nzval[k];
+                    self.schur[(i, j)] += matrix.nzval[k];
                 }
             }
         }
@@ -195,13 +191,10 @@ impl SharedFactor {
             } else {
                 0.0
             };
-            self.packed[Self::packed_at(ns, i, i)] -= self.mass[i] + shift;
+            self.schur[(i, i)] -= self.mass[i] + shift;
         }
-        self.communicator.sum_each(&mut self.packed);
+        sum_together(&mut self.schur, &self.communicator, &mut self.dense_work);
         for j in 0..ns {
-            for i in j..ns {
-                self.schur[(i, j)] = self.packed[Self::packed_at(ns, i, j)];
-            }
             self.schur[(j, j)] += self.mass[j];
         }
         // Every rank holds the same Σ; each factorises its share of it.
