@@ -16,8 +16,7 @@ use crate::case::{BlockSection, Case, ContactModel};
 use grainflow_contact::{ConicSolver, HardContact, Method};
 use grainflow_core::{
     balanced_cuts, balanced_process_grid, fits, process_grid, Communicator, Dimension, Domain,
-    PairedGrains,
-    ProcessGrid, Vec3,
+    PairedGrains, ProcessGrid, Vec3,
 };
 use grainflow_dem::generate::{self, Material, RadiusDistribution};
 use grainflow_dem::particles::NewParticle;
@@ -483,7 +482,14 @@ pub fn build_with(
         None => {
             let centres: Vec<Vec3> = placed.iter().map(|p| p.position).collect();
             let radii: Vec<f64> = placed.iter().map(|p| p.radius).collect();
-            process_grid_of(case, &system.domain, communicator.size(), range, &centres, &radii)?
+            process_grid_of(
+                case,
+                &system.domain,
+                communicator.size(),
+                range,
+                &centres,
+                &radii,
+            )?
         }
     };
     system.decompose_in(communicator, &grid);
