@@ -38,15 +38,18 @@ pub fn immersed_bytes_per_cell(dimension: usize) -> usize {
 /// program and the interior point's vectors (`docs/performance.md`, "What
 /// a COCD step holds"). Measured peak resident memory less the scene's:
 ///
-/// - 3D spheres: 98, 236, 602, 1,455 MB at 2,057, 4,312, 8,748, 17,986;
-///   fitted through the two largest (the fit 1.04, 1.07, 1, 1 times the
-///   measure). The factor fills faster than `N`: nested dissection's top
-///   separator is a slice of the packing.
+/// - 3D spheres: 98, 236, 602, 1,455 MB at 2,057, 4,312, 8,748, 17,986,
+///   and 16.29 GB at 112,896 (16.46 GB peak less the scene's 0.18 GB,
+///   ε = 1e-5, 2026-12-05); fitted through the two largest (0.94 times
+///   the measure at 8,748, 1.00 at a packing of 37,004 measured apart).
+///   The factor fills faster than `N`: nested dissection's top separator
+///   is a slice of the packing. The fit through 8,748 and 17,986 alone
+///   (`N^1.23`) fell 15 % short at 112,896.
 /// - 2D discs: 91, 175, 398, 707 MB at 12,500, 25,000, 50,000, 100,000;
 ///   least squares in logarithms (1.00, 1.04, 0.92, 1.04 times): about
 ///   linear, the matrix split in two above 7,000 discs.
 const COCD_BYTES_2D: (f64, f64) = (7015.3, 1.0042);
-const COCD_BYTES_3D: (f64, f64) = (8915.9, 1.2251);
+const COCD_BYTES_3D: (f64, f64) = (3683.9, 1.3152);
 
 /// [`COCD_BYTES_2D`], [`COCD_BYTES_3D`] for `grains` in `dimension`.
 pub fn cocd_step_bytes(dimension: usize, grains: f64) -> f64 {
@@ -334,7 +337,7 @@ mod tests {
 
     /// A 3D packing of 250,000 spheres at rest fits a 24 GB machine with
     /// the soft DEM (about 0.4 GB) but not with COCD, whose factor alone
-    /// needs about 37 GB there: `check` and `run` refuse it naming the
+    /// needs about 46 GB there: `check` and `run` refuse it naming the
     /// contact model, before anything is built.
     #[test]
     fn a_cocd_factor_larger_than_the_machine_is_refused_naming_the_contact_model() {
