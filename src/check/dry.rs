@@ -185,7 +185,9 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
     // A COCD step of a large packing takes minutes to hours: predicted,
     // not timed.
     if let Some(h) = hard.as_ref().filter(|h| h.method == Method::Cocd) {
-        if let Some(line) = super::cocd_cost::untimed_line(dim, n, steps, h.conic_solver) {
+        if let Some(line) =
+            super::cocd_cost::untimed_line(dim, n, steps, h.conic_solver, h.tolerance)
+        {
             let _ = writeln!(out, "{line}");
             let _ = writeln!(out, "{}", memory_line(case));
             return Ok(out);
