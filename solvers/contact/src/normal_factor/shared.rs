@@ -23,11 +23,11 @@
 //!
 //!   Σ = P_S + Σ_r (T_r − P_{S_r} − E_r),
 //!
-//! dense over S: each rank adds its part, the ranks sum them (one
-//! reduction of the lower triangle per factorisation, by block columns),
-//! and the ranks
-//! factorise Σ together, each a share of its column blocks
-//! ([`super::shared_schur`]), every rank ending with the whole factor.
+//! dense over S: each rank adds its part, the ranks sum them (the lower
+//! triangle reduced in place, block column by block column, at each
+//! factorisation), and the ranks factorise Σ together, each a share of
+//! its column blocks ([`super::shared_schur`]), every rank ending with the
+//! whole factor.
 //! A solve K x = r is that of the split: per rank
 //! the forward solve, one reduction of the separator's right-hand side,
 //! x_S from Σ on every rank, and per rank the back solve of its interior.
