@@ -143,15 +143,27 @@ pub struct PairedGrains<'a> {
 }
 
 impl PairedGrains<'_> {
+    /// The farthest two centres can be and still pair.
+    fn reach(&self) -> f64 {
+        let largest = self.radii.iter().copied().fold(0.0, f64::max);
+        2.0 * largest + self.pairing_gap.max(0.0)
+    }
+
     /// How many grains at or above `cut` along `axis` (the higher box's
     /// side) pair with a grain below it: |x_i − x_j| − r_i − r_j below the
-    /// pairing gap. `order` lists the grains by their coordinate along
-    /// `axis`, `along` those coordinates in that order. The grains below
+    /// pairing gap. `reach` is [`PairedGrains::reach`], taken once by the
+    /// caller; `order` lists the grains by their coordinate along `axis`,
+    /// `along` those coordinates in that order. The grains below
     /// within reach of the cut are binned on the other two axes, so that
     /// each grain above looks at its 3 × 3 bins only.
-    fn joining_above(&self, axis: usize, cut: f64, order: &[usize], along: &[f64]) -> usize {
-        let largest = self.radii.iter().copied().fold(0.0, f64::max);
-        let reach = 2.0 * largest + self.pairing_gap.max(0.0);
+    fn joining_above(
+        &self,
+        axis: usize,
+        cut: f64,
+        reach: f64,
+        order: &[usize],
+        along: &[f64],
+    ) -> usize {
         if reach <= 0.0 {
             return 0;
         }
@@ -249,6 +261,7 @@ fn cuts_among(
     separators: bool,
 ) -> BoxCuts {
     let positions = grains.centres;
+    let reach = grains.reach();
     let mut cuts = BoxCuts::default();
     for axis in 0..3 {
         let n = ranks[axis];
@@ -261,7 +274,7 @@ fn cuts_among(
         order.sort_by(|&a, &b| coordinate(a).total_cmp(&coordinate(b)));
         let along: Vec<f64> = order.iter().map(|&k| coordinate(k)).collect();
         let at = cuts_sharing_interiors(&along, n, |cut| match separators {
-            true => grains.joining_above(axis, cut, &order, &along),
+            true => grains.joining_above(axis, cut, reach, &order, &along),
             false => 0,
         });
         if boxes_at_least(domain.lower[axis], &at, domain.upper[axis], min_width) {
