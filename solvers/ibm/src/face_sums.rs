@@ -9,7 +9,8 @@ use grainflow_fluid::{Block, Grid};
 use rayon::prelude::*;
 
 use crate::exponents::{forced_fraction, Exponents};
-use crate::forcing::{Bodies, ImmersedBoundaries};
+use crate::faces::Row;
+use crate::forcing::{Bodies, Body, ImmersedBoundaries};
 
 impl ImmersedBoundaries {
     /// Adds `Σ_p β_p` and `Σ_p β_p U_p` of `bodies`, `β = 1 − (1 − α)^exponent`
@@ -44,18 +45,8 @@ impl ImmersedBoundaries {
                     if faces.is_empty() || reach.end <= layers.start || reach.start >= layers.end {
                         continue;
                     }
-                    let exponent = exponents.of(body.particle);
-                    for row in faces.rows_in(dim, layers.clone()) {
-                        let (base, slope) = body.rigid_along(&row, component, faces.step);
-                        let at = row.first - first..row.first - first + row.len();
-                        let sums = total[at.clone()].iter_mut().zip(&mut target[at]);
-                        for (i, (alpha, (total, target))) in row.alpha.iter().zip(sums).enumerate()
-                        {
-                            let beta = forced_fraction(*alpha, exponent);
-                            *total += beta;
-                            *target += beta * (base + i as f64 * slope);
-                        }
-                    }
+                    let rows = faces.rows_in(dim, layers.clone());
+                    add_body_sums(body, component, rows, exponents, total, target, first);
                 }
             };
             let (total, target) = (
@@ -72,6 +63,50 @@ impl ImmersedBoundaries {
                     .enumerate()
                     .for_each(|(index, (total, target))| fill_slab(index, total, target));
             }
+        }
+    }
+}
+
+impl ImmersedBoundaries {
+    /// [`ImmersedBoundaries::add_forcing_sums`] of one body alone, on one
+    /// thread: bodies added one after the other in list order, each as soon
+    /// as its fractions are made (while they are in cache), give every face
+    /// the same sum, in the same order, as the pass over all of them.
+    pub(crate) fn add_forcing_sums_of(&mut self, grid: &Grid, body: &Body, exponents: &Exponents) {
+        for component in 0..grid.dim() {
+            let faces = &body.faces[component];
+            if !faces.is_empty() {
+                let (total, target) = (
+                    &mut self.total_fraction[component],
+                    &mut self.solid_velocity[component],
+                );
+                add_body_sums(body, component, faces.rows(), exponents, total, target, 0);
+            }
+        }
+    }
+}
+
+/// Adds `β` and `β U` of `body` on its `rows` of faces of `component` into
+/// `total` and `target`, which start at the flat face index `first`.
+fn add_body_sums<'a>(
+    body: &Body,
+    component: usize,
+    rows: impl Iterator<Item = Row<'a>>,
+    exponents: &Exponents,
+    total: &mut [f64],
+    target: &mut [f64],
+    first: usize,
+) {
+    let exponent = exponents.of(body.particle);
+    let step = body.faces[component].step;
+    for row in rows {
+        let (base, slope) = body.rigid_along(&row, component, step);
+        let at = row.first - first..row.first - first + row.len();
+        let sums = total[at.clone()].iter_mut().zip(&mut target[at]);
+        for (i, (alpha, (total, target))) in row.alpha.iter().zip(sums).enumerate() {
+            let beta = forced_fraction(*alpha, exponent);
+            *total += beta;
+            *target += beta * (base + i as f64 * slope);
         }
     }
 }

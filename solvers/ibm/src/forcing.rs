@@ -318,17 +318,36 @@ impl ImmersedBoundaries {
         // Grains pressed into others take their shares of the faces first
         // (`overlaps.rs`): they are measured after.
         let pressed = pressed_bodies(&bodies, self.width);
-        let per_body: Vec<Option<(Vec3, Vec3)>> = bodies
-            .list
-            .par_iter_mut()
-            .zip(&pressed)
-            .map_init(FaceScratch::default, |scratch, (body, &pressed)| {
-                body.faces = self.body_faces(particles, grid, unknowns, body, scratch);
-                (!pressed).then(|| body.inner_momentum(velocity, volume))
-            })
-            .collect();
-        let per_body: Vec<(Vec3, Vec3)> = if self.layer == LayerForcing::EveryStage {
-            self.add_forcing_sums(grid, &bodies, &Exponents::Uniform(1.0));
+        let every_stage = self.layer == LayerForcing::EveryStage;
+        let per_body: Vec<Option<(Vec3, Vec3)>> =
+            if every_stage && rayon::current_num_threads() == 1 {
+                // One thread: each body's forcing sums added as soon as its
+                // fractions are made, in list order (the same bits as the pass
+                // over all bodies, one read of the fractions the fewer).
+                let mut scratch = FaceScratch::default();
+                let mut per_body = Vec::with_capacity(bodies.list.len());
+                for (body, &pressed) in bodies.list.iter_mut().zip(&pressed) {
+                    body.faces = self.body_faces(particles, grid, unknowns, body, &mut scratch);
+                    self.add_forcing_sums_of(grid, body, &Exponents::Uniform(1.0));
+                    per_body.push((!pressed).then(|| body.inner_momentum(velocity, volume)));
+                }
+                per_body
+            } else {
+                let per_body = bodies
+                    .list
+                    .par_iter_mut()
+                    .zip(&pressed)
+                    .map_init(FaceScratch::default, |scratch, (body, &pressed)| {
+                        body.faces = self.body_faces(particles, grid, unknowns, body, scratch);
+                        (!pressed).then(|| body.inner_momentum(velocity, volume))
+                    })
+                    .collect();
+                if every_stage {
+                    self.add_forcing_sums(grid, &bodies, &Exponents::Uniform(1.0));
+                }
+                per_body
+            };
+        let per_body: Vec<(Vec3, Vec3)> = if every_stage {
             bodies.forcing_sums_made = true;
             self.forcing_sums_pending = true;
             let totals = &self.total_fraction;
