@@ -352,9 +352,12 @@ impl FaceRows {
     /// [`FaceRows::share`] and [`FaceRows::moments`] of `q = α v` in one
     /// pass over the rows, `v` the face field `field`: each fraction
     /// becomes its share and is read at once for the fluid's momentum in
-    /// the body (the same sums, in the same order, as the two passes).
-    pub fn share_and_weigh(&mut self, totals: &[f64], field: &[f64]) -> (f64, Vec3) {
+    /// the body (the same sums, in the same order, as the two passes), and
+    /// for [`FaceRows::sum`] of the shares (the same bits), which the grid
+    /// volumes of a scene with a body force read.
+    pub fn share_and_weigh(&mut self, totals: &[f64], field: &[f64]) -> (f64, Vec3, f64) {
         let (mut sum, mut moment) = (0.0, Vec3::zeros());
+        let mut fractions = 0.0;
         let mut start = 0;
         for r in 0..self.rows.len() {
             let stored = self.rows[r];
@@ -368,6 +371,7 @@ impl FaceRows {
                 if total > 1.0 {
                     *alpha /= total;
                 }
+                fractions += *alpha;
                 let q = *alpha * value;
                 plain += q;
                 along += i as f64 * q;
@@ -377,7 +381,7 @@ impl FaceRows {
             moment.x += self.step * along;
             start += len;
         }
-        (sum, moment)
+        (sum, moment, fractions)
     }
 
     /// `(Σ q, Σ q r)` over the faces, `q` a scalar on each face given row

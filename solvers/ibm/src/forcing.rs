@@ -83,6 +83,9 @@ pub(crate) struct Body {
     /// and the grid volumes all read them (the exponential of eq. 8 is
     /// the costly part of each face).
     pub(crate) faces: Vec<FaceRows>,
+    /// `Σ α` over its faces of each component, where the pass that made
+    /// its shares summed them ([`FaceRows::share_and_weigh`]).
+    fraction_sums: Option<Vec3>,
 }
 
 impl Body {
@@ -97,6 +100,7 @@ impl Body {
             angular_velocity: Vec3::zeros(),
             radius,
             faces: Vec::new(),
+            fraction_sums: None,
         }
     }
 
@@ -109,6 +113,7 @@ impl Body {
             angular_velocity: self.angular_velocity,
             radius: self.radius,
             faces: Vec::new(),
+            fraction_sums: None,
         }
     }
 
@@ -174,13 +179,17 @@ impl Body {
     ) -> (Vec3, Vec3) {
         let mut momentum = Vec3::zeros();
         let mut angular = Vec3::zeros();
+        let mut fraction_sums = Vec3::zeros();
         for (component, faces) in self.faces.iter_mut().enumerate() {
-            let (sum, moment) = faces.share_and_weigh(&totals[component], &velocity[component]);
+            let (sum, moment, fractions) =
+                faces.share_and_weigh(&totals[component], &velocity[component]);
             momentum[component] += sum;
+            fraction_sums[component] = fractions;
             let mut axis = Vec3::zeros();
             axis[component] = 1.0;
             angular += moment.cross(&axis);
         }
+        self.fraction_sums = Some(fraction_sums);
         (momentum * volume, angular * volume)
     }
 
@@ -273,7 +282,11 @@ impl ImmersedBoundaries {
         let mut volumes = vec![Vec3::zeros(); bodies.count];
         for body in &bodies.list {
             for (component, faces) in body.faces.iter().enumerate() {
-                volumes[body.particle][component] += faces.sum() * volume;
+                let sum = match body.fraction_sums {
+                    Some(sums) => sums[component],
+                    None => faces.sum(),
+                };
+                volumes[body.particle][component] += sum * volume;
             }
         }
         volumes
@@ -586,6 +599,7 @@ impl ImmersedBoundaries {
                 angular_velocity: particles.angular_velocity[p],
                 radius: particles.radius[p],
                 faces: Vec::new(),
+                fraction_sums: None,
             })
             .collect();
         Bodies {
