@@ -96,11 +96,11 @@ pub(crate) struct FaceRows {
 /// what it keeps.
 #[derive(Default)]
 pub(crate) struct FaceScratch {
-    /// `x` of each face.
-    x: Vec<f64>,
-    /// `y² + z²` and `|y| + |z|` of its row.
-    across: Vec<f64>,
-    across_l1: Vec<f64>,
+    /// `|r|²` and `|x| + |y| + |z|` of each face's offset `r`.
+    squared: Vec<f64>,
+    l1: Vec<f64>,
+    /// `i Δx` for the faces `i` of a row, from its first.
+    along: Vec<f64>,
     /// The first and last face index of each row of a plane, unclipped.
     bounds: Vec<(f64, f64)>,
 }
@@ -158,16 +158,17 @@ impl FaceRows {
         // Each face's offset: x, and y² + z² and |y| + |z| of its row, for
         // the fractions made all at once below.
         let FaceScratch {
-            x,
-            across,
-            across_l1,
+            squared,
+            l1,
+            along,
             bounds,
         } = scratch;
-        x.clear();
-        across.clear();
-        across_l1.clear();
+        squared.clear();
+        l1.clear();
         let short = |n: usize| u16::try_from(n).expect("a support spans fewer than 65,536 faces");
         let (reach_squared, step) = (reach * reach, grid.spacing[0]);
+        along.clear();
+        along.extend((0..extent[0]).map(|i| i as f64 * step));
         let x_range = stencil.start[0]..stencil.end[0];
         let lines_along_y = &lines[lines_y..lines_z];
         for k in 0..extent[2] {
@@ -190,10 +191,13 @@ impl FaceRows {
                         let i = faces.start - stencil.start[0];
                         let len = faces.len();
                         let first_x = lines[i];
-                        x.extend((0..len).map(|i| first_x + i as f64 * step));
-                        let start = across.len();
-                        across.resize(start + len, across_squared);
-                        across_l1.resize(start + len, y.abs() + z.abs());
+                        let along = &along[..len];
+                        squared.extend(along.iter().map(|&d| {
+                            let x = first_x + d;
+                            x * x + across_squared
+                        }));
+                        let across_l1 = y.abs() + z.abs();
+                        l1.extend(along.iter().map(|&d| (first_x + d).abs() + across_l1));
                         rows.push(StoredRow {
                             len: short(len),
                             i: short(i),
@@ -203,14 +207,14 @@ impl FaceRows {
                     }
                 }
                 if slow == 1 {
-                    plane_starts.push((rows.len(), x.len()));
+                    plane_starts.push((rows.len(), squared.len()));
                 }
             }
             if slow == 2 {
-                plane_starts.push((rows.len(), x.len()));
+                plane_starts.push((rows.len(), squared.len()));
             }
         }
-        let alpha = face_fractions(x, across, across_l1, radius, width);
+        let alpha = face_fractions(squared, l1, radius, width);
         let mut faces = FaceRows {
             origin: grid.index(stencil.start[0], stencil.start[1], stencil.start[2]),
             strides: [grid.stride(1), grid.stride(2)],

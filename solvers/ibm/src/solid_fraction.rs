@@ -34,23 +34,16 @@ pub fn solid_fraction(offset: [f64; 3], radius: f64, width: f64) -> f64 {
     fraction_at(squared, l1, radius, width)
 }
 
-/// [`solid_fraction`] on many faces at once: the fraction at the offset
-/// `(x[f], y, z)` from the centre of each face `f`, with `across[f] =
-/// y² + z²` and `across_l1[f] = |y| + |z|`. The immersed boundaries make
-/// every face's fraction here, once per stage, in one loop over a body's
-/// faces that the compiler turns into vector instructions.
-pub fn face_fractions(
-    x: &[f64],
-    across: &[f64],
-    across_l1: &[f64],
-    radius: f64,
-    width: f64,
-) -> Vec<f64> {
-    x.iter()
-        .zip(across.iter().zip(across_l1))
-        .map(|(x, (across, across_l1))| {
-            fraction_at(x * x + across, x.abs() + across_l1, radius, width)
-        })
+/// [`solid_fraction`] on many faces at once: the fraction of each face
+/// `f` whose offset `r` from the centre has `|r|² = squared[f]` and
+/// `|x| + |y| + |z| = l1[f]`. The immersed boundaries make every face's
+/// fraction here, once per stage, in one loop over a body's faces that the
+/// compiler turns into vector instructions.
+pub fn face_fractions(squared: &[f64], l1: &[f64], radius: f64, width: f64) -> Vec<f64> {
+    squared
+        .iter()
+        .zip(l1)
+        .map(|(&squared, &l1)| fraction_at(squared, l1, radius, width))
         .collect()
 }
 
@@ -176,9 +169,9 @@ mod tests {
         let (r, w, h) = (1.0, 0.1, 0.07);
         let (y, z) = (0.4f64, -0.2f64);
         let x: Vec<f64> = (0..37).map(|i| -1.3 + i as f64 * h).collect();
-        let across = vec![y * y + z * z; x.len()];
-        let across_l1 = vec![y.abs() + z.abs(); x.len()];
-        let alpha = face_fractions(&x, &across, &across_l1, r, w);
+        let squared: Vec<f64> = x.iter().map(|x| x * x + (y * y + z * z)).collect();
+        let l1: Vec<f64> = x.iter().map(|x| x.abs() + (y.abs() + z.abs())).collect();
+        let alpha = face_fractions(&squared, &l1, r, w);
         for (alpha, x) in alpha.iter().zip(&x) {
             let face = solid_fraction([*x, y, z], r, w);
             assert!((alpha - face).abs() <= 4.0 * f64::EPSILON * face, "{x}");
