@@ -19,12 +19,18 @@ contact law as in 3D); the 3D releases with the soft DEM (a COCD step on
 12,000 spheres takes minutes). --scene coarse runs the same with d = 16 mm
 (`cases/data/column_2d_coarse.csv`, `channel_collapse_3d_coarse.csv`),
 where --models-3d soft cocd also runs COCD in 3D (about 2 s a step on
-1,491 spheres). Writes one row per run with the front
-at 0.4 and 1 s, and the mass profiles beside it (`_profiles.csv`).
+1,491 spheres). --scene paper is the paper's grain, d = 4 mm: the 2D
+column of the erodible-bed study at that size
+(`cases/data/column_2d_paper.csv`, 1,777 discs) and a 3D column of about
+95,000 spheres, rained into --work by the fill case at that size (hours
+on two cores; not kept in the repository). Writes one row per run with
+the front at 0.4 and 1 s, and the mass profiles beside it
+(`_profiles.csv`).
 
 The same command run again resumes: the deposit and the runs that
-finished are kept. --jobs 2 runs two releases side by side, one thread
-each.
+finished are kept, and a 3D rain or release that was stopped (a session
+or a job limit) goes on from its newest checkpoint. --jobs 2 runs two
+releases side by side, one thread each; --threads N gives each run N.
 """
 import argparse
 import concurrent.futures
@@ -50,7 +56,12 @@ SCENES = {
              "deposit_3d": "channel_collapse_3d.csv", "length_3d": 2.5, "contact_time": 1e-4},
     "coarse": {"radius": 8e-3, "deposit_2d": "column_2d_coarse.csv",
                "deposit_3d": "channel_collapse_3d_coarse.csv", "length_3d": 1.5, "contact_time": 2e-4},
+    "paper": {"radius": 2e-3, "deposit_2d": "column_2d_paper.csv",
+              "deposit_3d": None, "length_3d": 2.0, "contact_time": 5e-5},
 }
+# The fine scene's 3D column; a scene of radius r rains (4 mm / r)^3 times
+# as many grains, for the same column.
+FINE_COLUMN_GRAINS = 11930
 FIELDS = [
     "dimension", "model", "slope", "member", "dt", "status", "column_grains", "initial_length",
     "initial_height", "aspect_ratio", "front_0.4", "front_1.0", "runout", "front_max_speed",
@@ -58,7 +69,23 @@ FIELDS = [
 ]
 
 
-def fill_3d(binary, work):
+def fill_sets(scene):
+    """The --set of the 3D rain at the scene's grain size (none for the
+    fine scene): the same column in grains (r/4 mm)^-3 times as many,
+    the contact time scaled with d, and the glued bed under the column
+    only (the release lays the whole channel's; the lattices coincide)."""
+    if scene["radius"] == SCENES["fine"]["radius"]:
+        return []
+    r = scene["radius"]
+    spacing = 2.2 * r
+    count = round(FINE_COLUMN_GRAINS * (SCENES["fine"]["radius"] / r) ** 3)
+    return [f"particles.radius={r}", f"particles.block[0].spacing={spacing}",
+            f"particles.block[0].lower=[{1.1 * r},0.0,0.0]",
+            f"particles.block[0].upper=[0.21,0.2,{spacing}]", "domain.upper=[0.25,0.2,0.6]",
+            f"particles.block[1].count={count}", f"contact.contact_time={scene['contact_time']}"]
+
+
+def fill_3d(binary, work, scene, threads):
     """Rains the 3D column (`channel_collapse_fill_3d.toml`) and writes its
     deposit as `cases/data/channel_collapse_3d.csv` holds it: centres and
     radii to seven digits (10 nm, a thousandth of the soft contacts'
@@ -67,7 +94,9 @@ def fill_3d(binary, work):
     if os.path.exists(deposit):
         return deposit
     out = os.path.join(work, "fill_3d")
-    summary, refusal = run_case(binary, os.path.join(CASES, "channel_collapse_fill_3d.toml"), out, [])
+    sets = fill_sets(scene) + ([f"parallel.threads={threads}"] if threads else [])
+    summary, refusal = run_case(binary, os.path.join(CASES, "channel_collapse_fill_3d.toml"), out, sets,
+                                resume=True)
     if summary is None:
         sys.exit(f"3D fill refused: {refusal}")
     with open(os.path.join(out, "final_particles.csv")) as f, open(deposit, "w") as d:
@@ -154,7 +183,7 @@ def release(binary, work, scene, dimension, model, slope, member, deposit, end, 
         with open(finished) as f:
             summary, refusal = json.load(f), None
     else:
-        summary, refusal = run_case(binary, case, out, sets)
+        summary, refusal = run_case(binary, case, out, sets, resume=dimension == 3)
     row = {"dimension": dimension, "model": model, "slope": slope, "member": member, "dt": dt}
     if summary is None:
         row.update(status="refused", stop_reason=refusal)
@@ -187,7 +216,9 @@ def main():
     parser.add_argument("--members", type=int, nargs=2, default=[8, 1], metavar=("2D", "3D"),
                         help="runs per slope and model, gravity perturbed (2D and 3D)")
     parser.add_argument("--scene", choices=sorted(SCENES), default="fine",
-                        help="fine: d = 8 mm (11,930 spheres); coarse: d = 16 mm (1,491)")
+                        help="fine: d = 8 mm (11,930 spheres); coarse: d = 16 mm (1,491); "
+                             "paper: d = 4 mm (about 95,000, rained into --work)")
+    parser.add_argument("--threads", type=int, help="threads of each run (one with --jobs 2)")
     parser.add_argument("--models-3d", nargs="+", default=["soft"], help="soft and/or cocd")
     parser.add_argument("--cocd-dt", type=float, nargs=2, default=[5e-4, 1e-3], metavar=("2D", "3D"))
     parser.add_argument("--rain", action="store_true",
@@ -196,13 +227,15 @@ def main():
     args = parser.parse_args()
     os.makedirs(args.work, exist_ok=True)
     scene = SCENES[args.scene]
-    if args.rain and args.scene != "fine":
-        sys.exit("--rain makes the fine scene's deposit only")
-    deposits = {2: os.path.join(CASES, "data", scene["deposit_2d"]),
-                3: fill_3d(args.binary, args.work) if args.rain else
-                os.path.join(CASES, "data", scene["deposit_3d"])}
+    if args.rain and args.scene == "coarse":
+        sys.exit("--rain makes the fine and paper scenes' deposits only")
+    threads = 1 if args.jobs > 1 else args.threads
+    rain = args.rain or scene["deposit_3d"] is None
+    deposits = {2: os.path.join(CASES, "data", scene["deposit_2d"])}
+    if 3 in args.dimension:
+        deposits[3] = (fill_3d(args.binary, args.work, scene, threads) if rain else
+                       os.path.join(CASES, "data", scene["deposit_3d"]))
     cocd_dt = {2: args.cocd_dt[0], 3: args.cocd_dt[1]}
-    threads = 1 if args.jobs > 1 else None
     members_2d, members_3d = args.members
     jobs = [(3, m, s, k) for k in range(members_3d) for s in args.slope for m in args.models_3d
             if 3 in args.dimension]
