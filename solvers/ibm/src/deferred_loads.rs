@@ -19,8 +19,9 @@ use grainflow_core::Vec3;
 use grainflow_fluid::{Block, Grid};
 use rayon::prelude::*;
 
+use crate::body::Body;
 use crate::face_sums::touched_block;
-use crate::forcing::{Bodies, Body, ImmersedBoundaries, Loads};
+use crate::forcing::{Bodies, ImmersedBoundaries, Loads};
 
 impl ImmersedBoundaries {
     /// Eq. 7 on the predicted `velocity`, as [`ImmersedBoundaries::apply`]

@@ -8,9 +8,10 @@
 use grainflow_fluid::{Block, Grid};
 use rayon::prelude::*;
 
+use crate::body::Body;
 use crate::exponents::{forced_fraction, Exponents};
 use crate::faces::Row;
-use crate::forcing::{Bodies, Body, ImmersedBoundaries};
+use crate::forcing::{Bodies, ImmersedBoundaries};
 
 impl ImmersedBoundaries {
     /// Adds `Σ_p β_p` and `Σ_p β_p U_p` of `bodies`, `β = 1 − (1 − α)^exponent`

@@ -19,6 +19,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod axisymmetric;
+mod body;
 pub mod coupled;
 mod deferred_loads;
 mod exponents;

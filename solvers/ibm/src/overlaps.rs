@@ -142,7 +142,7 @@ pub(crate) fn pressed_bodies(bodies: &Bodies, width: f64) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forcing::Body;
+    use crate::body::Body;
     use grainflow_core::Vec3;
 
     /// A random bed of 400 grains of mixed sizes, some far apart, some
