@@ -66,9 +66,7 @@ impl ImmersedBoundaries {
             }
         }
     }
-}
 
-impl ImmersedBoundaries {
     /// [`ImmersedBoundaries::add_forcing_sums`] of one body alone, on one
     /// thread: bodies added one after the other in list order, each as soon
     /// as its fractions are made (while they are in cache), give every face
