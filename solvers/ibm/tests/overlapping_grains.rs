@@ -158,7 +158,8 @@ fn grains_pressed_together_share_the_fluid_of_their_overlapping_layers() {
 /// forcing's loads and the forced flow of pressed grains moving apart at
 /// different speeds and spins equal those of the bodies shared first and
 /// forced after (`bodies`, then `inner_momentum` and `apply`) to
-/// round-off.
+/// round-off, and the grid volumes summed in the pass that makes the
+/// shares equal the shares' sums to the bit.
 #[test]
 fn the_stages_forcing_of_pressed_grains_equals_the_shared_forcing() {
     let middle = Vec3::new(2.0, 2.0, 2.0);
@@ -181,6 +182,7 @@ fn the_stages_forcing_of_pressed_grains_equals_the_shared_forcing() {
             let momentum = immersed.inner_momentum(&grid, &fluid.velocity, &bodies);
             (bodies, momentum)
         };
+        let volumes = immersed.grid_volumes(&grid, &bodies);
         let loads = immersed.apply(
             &grid,
             &mut fluid.velocity,
@@ -194,10 +196,16 @@ fn the_stages_forcing_of_pressed_grains_equals_the_shared_forcing() {
             all.extend_from_slice(&loads.torque[..n]);
             all
         };
-        (vectors(&momentum), vectors(&loads), fluid.velocity.clone())
+        (
+            vectors(&momentum),
+            vectors(&loads),
+            fluid.velocity.clone(),
+            volumes,
+        )
     };
-    let (momentum_stage, loads_stage, flow_stage) = run(true);
-    let (momentum_shared, loads_shared, flow_shared) = run(false);
+    let (momentum_stage, loads_stage, flow_stage, volumes_stage) = run(true);
+    let (momentum_shared, loads_shared, flow_shared, volumes_shared) = run(false);
+    assert_eq!(volumes_stage, volumes_shared);
     let worst = |a: &[Vec3], b: &[Vec3]| {
         let scale = a.iter().map(|v| v.norm()).fold(0.0, f64::max);
         a.iter()
