@@ -368,6 +368,38 @@ fn check_runs_a_pour_through_its_first_batches_and_sums_the_rest() {
     assert!((0.15..0.21).contains(&landing), "{landing}");
 }
 
+/// Grains that start apart and will pack cost several times more a step
+/// once packed than `check`'s probe times at the start (a column of 2,700
+/// spheres rained on a floor: 5.2 times, `docs/performance.md`): `check`
+/// says so, counts the steps after the highest grain's fall at the packed
+/// cost, and leaves a lone grain, which never packs, as timed.
+#[test]
+fn check_counts_the_steps_of_grains_that_will_pack_at_the_packed_cost() {
+    let text = |name: &str| {
+        let output = grainflow().args(["check", &case(name)]).output().unwrap();
+        assert!(output.status.success());
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    let rain = text("column_collapse_2d.toml");
+    let line = rain
+        .lines()
+        .find(|l| l.contains("the grains start apart"))
+        .unwrap_or_else(|| panic!("{rain}"));
+    assert!(line.contains("counted at 2.2 times"), "{line}");
+    // 400 discs rained from up to about 0.5 m: the highest lands after
+    // √(2H/g), about a third of a second.
+    let landed: f64 = line
+        .split("the steps after t = ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
+    assert!((0.2..0.45).contains(&landed), "{landed}");
+    let lone = text("bouncing_dry.toml");
+    assert!(lone.contains("estimated wall time"), "{lone}");
+    assert!(!lone.contains("the grains start apart"), "{lone}");
+}
+
 /// A fluid step short against the time a grain takes to cross a cell makes
 /// the grains look larger under the forcing of eq. 7: `check` warns, and
 /// names `coupling.forcing_step`, which, set to the calibration step,
