@@ -199,9 +199,18 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
         .num_threads(threads.threads)
         .build()
         .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
+    // Soft grains apart at the first step that will pack: the packed steps
+    // cost several times more (read at the first step: a long probe on a
+    // fast machine may already see them land).
+    let mut packing = None;
+    let mut first = true;
     let estimate = pool.install(|| {
         cost_estimate::probe(setup, steps, Evolution::Contacts, || {
-            stepper.step(&mut system, dt, limit).is_none()
+            let stepped = stepper.step(&mut system, dt, limit).is_none();
+            if std::mem::take(&mut first) && stepped && hard.is_none() {
+                packing = packing_of(&system, dt);
+            }
+            stepped
         })
     });
     if let Some(estimate) = estimate {
@@ -210,9 +219,6 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
         } else {
             "steps to time.end"
         };
-        // Soft grains timed apart that will pack: the packed steps cost
-        // several times more.
-        let packing = hard.is_none().then(|| packing_of(&system, dt)).flatten();
         match packing {
             Some((packing, contacts, landed)) => {
                 let estimate = estimate.packing(setup, steps, packing);
