@@ -134,6 +134,12 @@ pub const PACKED_OVER_APART_3D: f64 = 5.2;
 /// with soft contacts at its start, 86.5 µs a step, and packed
 /// (`cases/erodible_bed_2d.toml`), 190 µs.
 pub const PACKED_OVER_APART_2D: f64 = 2.2;
+/// The same for COCD in 2D, whose conic program grows with the contacts:
+/// rains run at 7.9 and 8.2 times the cost of the steps `check` timed at
+/// their start (`cases/column_fill_cocd_2d.toml`, 566 steps;
+/// `cases/static_box_fill.toml`, 2,000 steps; `docs/performance.md`, each
+/// case's wall time).
+pub const PACKED_OVER_APART_COCD_2D: f64 = 8.0;
 
 /// Grains that start apart under gravity and will pack (a rain, a cloud
 /// released above a floor): the steps timed at the start cost less than

@@ -199,16 +199,17 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
         .num_threads(threads.threads)
         .build()
         .map_err(|e| RunError::Case(format!("cannot start threads: {e}")))?;
-    // Soft grains apart at the first step that will pack: the packed steps
+    // Grains apart at the first step that will pack: the packed steps
     // cost several times more (read at the first step: a long probe on a
     // fast machine may already see them land).
     let mut packing = None;
     let mut first = true;
+    let method = hard.as_ref().map(|h| h.method);
     let estimate = pool.install(|| {
         cost_estimate::probe(setup, steps, Evolution::Contacts, || {
             let stepped = stepper.step(&mut system, dt, limit).is_none();
-            if std::mem::take(&mut first) && stepped && hard.is_none() {
-                packing = packing_of(&system, dt);
+            if std::mem::take(&mut first) && stepped {
+                packing = packing_of(&system, dt, method);
             }
             stepped
         })
@@ -228,7 +229,8 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
                     "  the grains start apart ({contacts:.2} contacts a grain) and will pack: \
                      the steps after t = {landed:.3} s, when the highest has fallen to the \
                      lowest, counted at {} times the steps timed here (a packed step's cost \
-                     over one of grains apart, measured on this code in {dim}D)",
+                     over one of grains apart, measured on this code for this contact model \
+                     in {dim}D)",
                     packing.cost_ratio
                 );
             }
@@ -246,7 +248,8 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
 /// cost of their start, not 5.2), and a few grains do not pack at all.
 const PACKING_GRAINS: usize = 300;
 
-/// Whether the moving grains of `system`, at least [`PACKING_GRAINS`] of
+/// Whether the moving grains of `system` (soft, or hard under `method`),
+/// at least [`PACKING_GRAINS`] of
 /// them, are apart (fewer than a quarter of a contact each, where a
 /// packing holds 1.5 to 3) under gravity, and if so
 /// how their run's cost grows ([`cost_estimate::Packing`]), with their
@@ -255,6 +258,7 @@ const PACKING_GRAINS: usize = 300;
 fn packing_of(
     system: &grainflow_dem::DemSystem,
     dt: f64,
+    method: Option<Method>,
 ) -> Option<(cost_estimate::Packing, f64, f64)> {
     let p = &system.particles;
     let moving: Vec<usize> = (0..p.n_owned).filter(|&k| !p.is_fixed(k)).collect();
@@ -272,9 +276,13 @@ fn packing_of(
     let lowest = moving.iter().map(depth).fold(f64::NEG_INFINITY, f64::max);
     let highest = moving.iter().map(depth).fold(f64::INFINITY, f64::min);
     let landed = (2.0 * (lowest - highest) / gravity).sqrt();
-    let cost_ratio = match system.domain.dimension.count() {
-        2 => cost_estimate::PACKED_OVER_APART_2D,
-        _ => cost_estimate::PACKED_OVER_APART_3D,
+    // Measured for the soft DEM and for COCD in 2D; NSCD and COCD in 3D
+    // keep the probe's cost.
+    let cost_ratio = match (method, system.domain.dimension.count()) {
+        (None, 2) => cost_estimate::PACKED_OVER_APART_2D,
+        (None, _) => cost_estimate::PACKED_OVER_APART_3D,
+        (Some(Method::Cocd), 2) => cost_estimate::PACKED_OVER_APART_COCD_2D,
+        _ => return None,
     };
     let packing = cost_estimate::Packing {
         apart_steps: landed / dt,
