@@ -77,12 +77,20 @@ def fill_sets(scene):
     if scene["radius"] == SCENES["fine"]["radius"]:
         return []
     r = scene["radius"]
-    spacing = 2.2 * r
     count = round(FINE_COLUMN_GRAINS * (SCENES["fine"]["radius"] / r) ** 3)
+    return bed_sets_3d(r, 0.25, 0.21) + [f"particles.block[1].count={count}",
+                                         f"contact.contact_time={scene['contact_time']}"]
+
+
+def bed_sets_3d(r, length, bed_length):
+    """The --set of grains of radius r in a 3D channel `length` long on a
+    glued lattice 2.2 r apart, its first sphere at 1.1 r from the back
+    wall, reaching `bed_length` (the rain's and the release's lattices
+    coincide)."""
+    spacing = 2.2 * r
     return [f"particles.radius={r}", f"particles.block[0].spacing={spacing}",
-            f"particles.block[0].lower=[{1.1 * r},0.0,0.0]",
-            f"particles.block[0].upper=[0.21,0.2,{spacing}]", "domain.upper=[0.25,0.2,0.6]",
-            f"particles.block[1].count={count}", f"contact.contact_time={scene['contact_time']}"]
+            f"domain.upper=[{length},0.2,0.6]", f"particles.block[0].lower=[{1.1 * r},0.0,0.0]",
+            f"particles.block[0].upper=[{bed_length},0.2,{spacing}]"]
 
 
 def fill_3d(binary, work, scene, threads):
@@ -131,12 +139,11 @@ def scene_sets(scene, dimension):
     if scene["radius"] == SCENES["fine"]["radius"]:
         return []
     r, length = scene["radius"], scene["length_3d"]
-    spacing = 2.2 * r
-    sets = [f"particles.radius={r}", f"particles.block[0].spacing={spacing}"]
     if dimension == 2:
-        return sets + [f"particles.block[0].upper=[2.5,{spacing}]"]
-    return sets + [f"domain.upper=[{length},0.2,0.6]", f"particles.block[0].lower=[{1.1 * r},0.0,0.0]",
-                   f"particles.block[0].upper=[{length},0.2,{spacing}]", f"walls[2].point=[{length},0.0,0.0]"]
+        spacing = 2.2 * r
+        return [f"particles.radius={r}", f"particles.block[0].spacing={spacing}",
+                f"particles.block[0].upper=[2.5,{spacing}]"]
+    return bed_sets_3d(r, length, length) + [f"walls[2].point=[{length},0.0,0.0]"]
 
 
 def hard_contact_3d(work, deposit):

@@ -19,6 +19,16 @@ fn case(name: &str) -> String {
 
 /// Runs `grainflow run` on a case with overrides into a fresh directory;
 /// returns (exit code, stderr, whether the output directory exists).
+/// The number written right after `words` in `line` (panics naming the
+/// line if there is none).
+fn number_after<T: std::str::FromStr>(line: &str, words: &str) -> T {
+    line.split(words)
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"))
+}
+
 fn run_with(overrides: &[&str]) -> (i32, String, bool) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
@@ -340,14 +350,10 @@ fn check_runs_a_pour_through_its_first_batches_and_sums_the_rest() {
         .unwrap_or_else(|| panic!("{text}"));
     // The probe runs up to four batches within its wall-time budget (three
     // on a loaded host); the rest of the 147 are summed.
-    let count_after = |words: &str| -> usize {
-        line.split(words)
-            .nth(1)
-            .and_then(|rest| rest.split(' ').next())
-            .and_then(|v| v.parse().ok())
-            .unwrap_or_else(|| panic!("{line}"))
-    };
-    let (probed, summed) = (count_after("the first "), count_after("then "));
+    let (probed, summed): (usize, usize) = (
+        number_after(line, "the first "),
+        number_after(line, "then "),
+    );
     assert!(
         (2..=4).contains(&probed) && probed + summed == 147,
         "{line}"
@@ -359,12 +365,7 @@ fn check_runs_a_pour_through_its_first_batches_and_sums_the_rest() {
     );
     // The batch time read from the line: the silo's batches land in about
     // 0.17–0.19 s (the run's log), never the pour's 0.03 s interval.
-    let landing: f64 = line
-        .split("one batch landing every ")
-        .nth(1)
-        .and_then(|rest| rest.split(' ').next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("{line}"));
+    let landing: f64 = number_after(line, "one batch landing every ");
     assert!((0.15..0.21).contains(&landing), "{landing}");
 }
 
@@ -388,12 +389,7 @@ fn check_counts_the_steps_of_grains_that_will_pack_at_the_packed_cost() {
     assert!(line.contains("counted at 2.2 times"), "{line}");
     // 400 discs rained from up to about 0.5 m: the highest lands after
     // √(2H/g), about a third of a second.
-    let landed: f64 = line
-        .split("the steps after t = ")
-        .nth(1)
-        .and_then(|rest| rest.split(' ').next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("{line}"));
+    let landed: f64 = number_after(line, "the steps after t = ");
     assert!((0.2..0.45).contains(&landed), "{landed}");
     let lone = text("bouncing_dry.toml");
     assert!(lone.contains("estimated wall time"), "{lone}");

@@ -220,23 +220,21 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
         } else {
             "steps to time.end"
         };
-        match packing {
-            Some((packing, contacts, landed)) => {
-                let estimate = estimate.packing(setup, steps, packing);
-                let _ = writeln!(out, "{}", estimate.line(steps, what));
-                let _ = writeln!(
-                    out,
-                    "  the grains start apart ({contacts:.2} contacts a grain) and will pack: \
+        let estimate = match packing {
+            Some((packing, _, _)) => estimate.packing(setup, steps, packing),
+            None => estimate,
+        };
+        let _ = writeln!(out, "{}", estimate.line(steps, what));
+        if let Some((packing, contacts, landed)) = packing {
+            let _ = writeln!(
+                out,
+                "  the grains start apart ({contacts:.2} contacts a grain) and will pack: \
                      the steps after t = {landed:.3} s, when the highest has fallen to the \
                      lowest, counted at {} times the steps timed here (a packed step's cost \
                      over one of grains apart, measured on this code for this contact model \
                      in {dim}D)",
-                    packing.cost_ratio
-                );
-            }
-            None => {
-                let _ = writeln!(out, "{}", estimate.line(steps, what));
-            }
+                packing.cost_ratio
+            );
         }
     }
     let _ = writeln!(out, "{}", memory_line(case));
