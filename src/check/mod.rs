@@ -64,7 +64,7 @@ fn cocd_separator(case: &Case, ranks: usize) -> Result<String, RunError> {
     let per_rank = Footprint::of(case).per_rank_bytes(ranks, separator.held_per_rank_bytes());
     Ok(format!(
         "  COCD on {ranks} ranks (process grid {} x {} x {}): {}; memory per rank about {} \
-         (its share of the scene and Σ)\n",
+         (its share of the scene, Σ and its factor's dense end)\n",
         grid.ranks[0],
         grid.ranks[1],
         grid.ranks[2],

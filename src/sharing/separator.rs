@@ -20,6 +20,25 @@ use grainflow_contact::{contacts, Partner};
 use grainflow_core::ProcessGrid;
 use grainflow_dem::DemSystem;
 
+/// The dense end of a rank's factor over the ns_t separator unknowns its
+/// pairs reach, in units of ns_t² numbers: what the most loaded rank's
+/// peak resident memory holds beyond its share of the scene (the whole
+/// scene's estimate over the ranks) and Σ, one COCD step on packings at
+/// rest, ε = 1e-5, one thread a rank (2026-12-05):
+///
+/// | spheres | ranks | ns | ns_t | measured | estimate |
+/// | --- | --- | --- | --- | --- | --- |
+/// | 8,748 | 2 | 2,172 | 2,172 | 401 MiB | 365 MiB (−9 %) |
+/// | 8,748 | 3 | 4,308 | 4,308 | 571 MiB | 537 MiB (−6 %) |
+/// | 8,748 | 4 (2 × 2) | 4,236 | 2,208 | 362 MiB | 330 MiB (−9 %) |
+/// | 17,986 | 2 | 3,522 | 3,522 | 954 MiB | 942 MiB (−1 %) |
+/// | 17,986 | 3 | 7,032 | 7,032 | 1,282 MiB | 1,414 MiB (+10 %) |
+/// | 17,986 | 4 (2 × 2) | 6,954 | 3,588 | 870 MiB | 869 MiB (0 %) |
+///
+/// The measured excess spans 1.15–2.52 ns_t², the larger at the smaller
+/// packing.
+pub const SEPARATOR_BLOCK_OVER_SQUARE: f64 = 1.5;
+
 /// The program's unknowns as shared among ranks.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Separator {
@@ -29,6 +48,9 @@ pub struct Separator {
     pub separator: usize,
     /// Unknowns of each rank's interior.
     pub interiors: Vec<usize>,
+    /// The most separator unknowns the pairs of one rank reach: that
+    /// rank's factor ends in a dense block over them.
+    pub touched: usize,
     /// Candidate pairs of two free grains, and those across ranks.
     pub pairs: usize,
     pub crossing_pairs: usize,
@@ -56,15 +78,22 @@ impl Separator {
         let mut in_separator = vec![false; n];
         let (mut pairs, mut crossing_pairs) = (0, 0);
         let listed = contacts::listed(system, threshold);
-        for (a, partner) in listed.partner.iter().enumerate() {
-            let Partner::Grain(j) = *partner else {
-                continue;
-            };
-            let (i, j) = (listed.grain[a] as usize, j as usize);
-            // A fixed grain has no unknowns: its pairs couple nothing.
-            if p.is_fixed(i) || p.is_fixed(j) {
-                continue;
-            }
+        // The pairs of two free grains, each with the rank that holds it:
+        // the lower of the two owners.
+        let free_pairs: Vec<(usize, usize, usize)> = listed
+            .partner
+            .iter()
+            .enumerate()
+            .filter_map(|(a, partner)| {
+                let Partner::Grain(j) = *partner else {
+                    return None;
+                };
+                let (i, j) = (listed.grain[a] as usize, j as usize);
+                // A fixed grain has no unknowns: its pairs couple nothing.
+                (!p.is_fixed(i) && !p.is_fixed(j)).then(|| (i, j, owner[i].min(owner[j])))
+            })
+            .collect();
+        for &(i, j, _) in &free_pairs {
             pairs += 1;
             if owner[i] != owner[j] {
                 // The lower rank holds the pair; the other grain's columns
@@ -74,6 +103,19 @@ impl Separator {
                 in_separator[higher] = true;
             }
         }
+        // The separator grains each rank's pairs reach.
+        let mut reached: Vec<(usize, usize)> = free_pairs
+            .iter()
+            .flat_map(|&(i, j, rank)| [(rank, i), (rank, j)])
+            .filter(|&(_, k)| in_separator[k])
+            .collect();
+        reached.sort_unstable();
+        reached.dedup();
+        let mut touched_grains = vec![0usize; grid.rank_count()];
+        for &(rank, _) in &reached {
+            touched_grains[rank] += 1;
+        }
+        let touched = per_grain * touched_grains.iter().copied().max().unwrap_or(0);
         let mut interiors = vec![0; grid.rank_count()];
         let (mut unknowns, mut separator) = (0, 0);
         for k in (0..n).filter(|&k| !p.is_fixed(k)) {
@@ -88,6 +130,7 @@ impl Separator {
             unknowns,
             separator,
             interiors,
+            touched,
             pairs,
             crossing_pairs,
         }
@@ -98,14 +141,15 @@ impl Separator {
         8.0 * (self.separator as f64).powi(2)
     }
 
-    /// Bytes every rank holds for Σ while the ranks sum and factorise it
-    /// (`grainflow_contact::normal_factor`, the shared factor): Σ itself
-    /// (ns² numbers, summed over the ranks in place by block columns) and
-    /// the rank's own part of it from its interior, at most the whole
-    /// separator (ns²): 2 ns² numbers. Beside the rank's share of the
-    /// scene, not divided among the ranks.
+    /// Bytes a rank holds for the separator beyond its share of the scene
+    /// (`grainflow_contact::normal_factor`, the shared factor): Σ itself,
+    /// ns² numbers on every rank, and the end of the rank's own factor, a
+    /// dense block over the separator unknowns its pairs reach (ns_t of
+    /// them on the rank that reaches most), which the sparse factor's last
+    /// supernode holds together with the interior columns merged into it:
+    /// [`SEPARATOR_BLOCK_OVER_SQUARE`] ns_t² numbers.
     pub fn held_per_rank_bytes(&self) -> f64 {
-        2.0 * self.schur_bytes()
+        self.schur_bytes() + SEPARATOR_BLOCK_OVER_SQUARE * 8.0 * (self.touched as f64).powi(2)
     }
 
     /// Multiply–adds of one dense Cholesky factorisation of Σ.
@@ -125,9 +169,9 @@ impl Separator {
         format!(
             "the contact program's separator: {} of {} unknowns ({share:.1} %), the grains of \
              {} of {} candidate pairs that cross a rank boundary; its dense Schur complement \
-             {} (about {} held on every rank while it is summed and factorised) and {:.1e} \
+             {} (with the dense end of a rank's own factor, about {} held on a rank) and {:.1e} \
              multiply-adds per interior-point iteration to factorise it, {:.1e} on each rank; \
-             ranks' interiors {} to {} unknowns",
+             ranks' interiors {} to {} unknowns; one rank's pairs reach at most {} of the separator's",
             self.separator,
             self.unknowns,
             self.crossing_pairs,
@@ -138,6 +182,7 @@ impl Separator {
             self.schur_flops_per_rank(),
             self.interiors.iter().min().copied().unwrap_or(0),
             self.interiors.iter().max().copied().unwrap_or(0),
+            self.touched,
         )
     }
 }
@@ -196,6 +241,8 @@ mod tests {
                 unknowns: 96,
                 separator: 24,
                 interiors: vec![48, 24],
+                // Both ranks' pairs reach the whole column.
+                touched: 24,
                 pairs: 24,
                 crossing_pairs: 4,
             }
@@ -203,6 +250,24 @@ mod tests {
         // Unsplit, nothing crosses.
         let whole = Separator::of(&layer(&[]), 1e-4, &ProcessGrid::even([1, 1, 1]));
         assert_eq!((whole.separator, whole.interiors), (0, vec![96]));
+    }
+
+    /// On a 2 × 2 grid the separator is the upper ranks' grains along both
+    /// cuts, 7 spheres; each rank's pairs reach 4 of them at most (the
+    /// lowest rank's crossing pairs reach the 2 + 2 beyond its two cuts;
+    /// the highest rank's own pairs 3), so a rank's factor ends in a dense
+    /// block over 24 of the 42 separator unknowns, and the held bytes are
+    /// Σ's and 1.5 times that block's square.
+    #[test]
+    fn on_a_two_by_two_grid_a_rank_reaches_part_of_the_separator() {
+        let separator = Separator::of(&layer(&[]), 1e-4, &ProcessGrid::even([2, 2, 1]));
+        assert_eq!(separator.separator, 42);
+        assert_eq!(separator.crossing_pairs, 8);
+        assert_eq!(separator.touched, 24);
+        assert_eq!(
+            separator.held_per_rank_bytes(),
+            8.0 * (42.0f64 * 42.0 + 1.5 * 24.0 * 24.0)
+        );
     }
 
     /// A fixed grain has no unknowns, and its pairs couple nothing.

@@ -23,6 +23,10 @@ use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
 use faer::MatRef;
 use std::ops::Range;
 
+/// Columns of a descendant's update made at a time where it cannot be
+/// subtracted in place (see `gather_updates`).
+const PRODUCT_COLUMNS: usize = 256;
+
 /// A block of columns of L with the same rows below their diagonal block.
 struct Node {
     columns: Range<usize>,
@@ -188,13 +192,16 @@ impl InteriorFactor {
     }
 
     /// Factorises the interior of M, its entries read from K's `values`,
-    /// `shift` added to the separator's diagonal, and writes the lower
-    /// triangle of T into `schur` (ns × ns).
+    /// `shift` added to the separator's diagonal, and hands each entry of
+    /// T's lower triangle to `write(i, j, T_ij)` (i ≥ j, within the
+    /// separator): the caller puts it where it belongs (a half's own T, or
+    /// straight into the ranks' Σ, which spares a rank a dense ns × ns
+    /// copy).
     pub(super) fn factorise(
         &mut self,
         values: &[f64],
         shift: &[f64],
-        schur: &mut Mat<f64>,
+        mut write: impl FnMut(usize, usize, f64),
     ) -> Result<(), String> {
         self.values.fill(0.0);
         for &(from, to) in &self.destination {
@@ -248,7 +255,7 @@ impl InteriorFactor {
             for c in 0..node.width() {
                 let column = node.columns.start + c - interior;
                 for (r, &row) in rows.iter().enumerate().skip(c) {
-                    schur[(row - interior, column)] = block[(r, c)];
+                    write(row - interior, column, block[(r, c)]);
                 }
             }
         }
@@ -302,20 +309,35 @@ impl InteriorFactor {
                 rows_times_facing(update, lower, on, Accum::Add, -1.0, self.par);
                 continue;
             }
-            self.product.resize(down * on, 0.0);
-            let product = MatMut::from_column_major_slice_mut(&mut self.product, down, on);
-            rows_times_facing(product, lower, on, Accum::Replace, 1.0, self.par);
-            for (j, &row) in targets.iter().enumerate().take(on) {
-                let column = row - target.columns.start;
-                let destination = block
-                    .as_mut()
-                    .col_mut(column)
-                    .try_as_col_major_mut()
-                    .unwrap();
-                let destination = destination.as_slice_mut();
-                let source = &self.product[j * down..(j + 1) * down];
-                for i in j..down {
-                    destination[local[i]] -= source[i];
+            // Through the scratch a block of PRODUCT_COLUMNS columns at a
+            // time: the rows of a descendant below a rank's separator can
+            // reach most of it, and the whole product would then be a
+            // dense copy of the separator's block.
+            for from in (0..on).step_by(PRODUCT_COLUMNS) {
+                let to = (from + PRODUCT_COLUMNS).min(on);
+                let (height, width) = (down - from, to - from);
+                self.product.resize(height * width, 0.0);
+                let product = MatMut::from_column_major_slice_mut(&mut self.product, height, width);
+                rows_times_facing(
+                    product,
+                    lower.subrows(from, height),
+                    width,
+                    Accum::Replace,
+                    1.0,
+                    self.par,
+                );
+                for (j, &row) in targets.iter().enumerate().take(to).skip(from) {
+                    let column = row - target.columns.start;
+                    let destination = block
+                        .as_mut()
+                        .col_mut(column)
+                        .try_as_col_major_mut()
+                        .unwrap();
+                    let destination = destination.as_slice_mut();
+                    let source = &self.product[(j - from) * height..(j - from + 1) * height];
+                    for i in j..down {
+                        destination[local[i]] -= source[i - from];
+                    }
                 }
             }
         }

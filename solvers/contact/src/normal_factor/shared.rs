@@ -153,9 +153,25 @@ impl SharedFactor {
         for (t, (&i, &k)) in self.touched.iter().zip(&self.touched_diagonal).enumerate() {
             self.shift[t] = diagonal[i] + self.mass[i] - matrix.nzval[k];
         }
+        // This rank's part of Σ: T_r − P − E_r over its touched separator
+        // (K_SS^r − P where it has no interior), in Σ's lower triangle. The
+        // interior's factor hands T_r over entry by entry, so that no rank
+        // holds a second dense copy of it.
+        for j in 0..ns {
+            self.schur.col_as_slice_mut(j)[j..].fill(0.0);
+        }
+        let (touched, schur) = (&self.touched, &mut self.schur);
         let own = match &mut self.half {
-            Some(half) => half.factorise_shifted(matrix, &self.shift),
-            None => Ok(()),
+            Some(half) => half.factorise_into(matrix, &self.shift, |a, b, t| {
+                schur[(touched[a], touched[b])] += t;
+            }),
+            None => {
+                for &(r, c, k) in &self.touched_entries {
+                    let (i, j) = (touched[r.max(c)], touched[r.min(c)]);
+                    schur[(i, j)] += matrix.nzval[k];
+                }
+                Ok(())
+            }
         };
         let failed_here = own.is_err();
         if self.communicator.any(failed_here) {
@@ -163,28 +179,7 @@ impl SharedFactor {
                 "the normal matrix is not positive definite on another rank".into()
             }));
         }
-        // This rank's part of Σ: T_r − P − E_r over its touched separator
-        // (K_SS^r − P where it has no interior), in Σ's lower triangle.
-        for j in 0..ns {
-            self.schur.col_as_slice_mut(j)[j..].fill(0.0);
-        }
         let touched = &self.touched;
-        match &self.half {
-            Some(half) => {
-                let t = &half.schur_part;
-                for (b, &j) in touched.iter().enumerate() {
-                    for (a, &i) in touched.iter().enumerate().skip(b) {
-                        self.schur[(i, j)] += t[(a, b)];
-                    }
-                }
-            }
-            None => {
-                for &(r, c, k) in &self.touched_entries {
-                    let (i, j) = (touched[r.max(c)], touched[r.min(c)]);
-                    self.schur[(i, j)] += matrix.nzval[k];
-                }
-            }
-        }
         for (t, &i) in touched.iter().enumerate() {
             let shift = if self.half.is_some() {
                 self.shift[t]

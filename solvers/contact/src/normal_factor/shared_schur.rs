@@ -58,10 +58,11 @@ impl Workspace {
 /// Sums the lower triangles of the ranks' `schur` (each rank's part of Σ)
 /// into every rank's, block column by block column through the
 /// workspace's buffer (collective): Σ needs no second copy, packed or in
-/// the reduction's send buffer, on any rank (2 ns² numbers held at the
-/// peak with the rank's own part from its interior, against 3 ns² when the
-/// whole packed triangle was summed at once: 1.2 GB less a rank at the
-/// 12,414 separator unknowns of the 112,896-sphere packing on 2 ranks).
+/// the reduction's send buffer, on any rank (the rank's own part is
+/// written into Σ by its interior's factor: one dense ns × ns matrix held,
+/// against three when the rank kept its part apart and the whole packed
+/// triangle was summed at once; 1.2 GB a copy at the 12,414 separator
+/// unknowns of the 112,896-sphere packing on 2 ranks).
 /// The ranks sum each entry as in one reduction of the whole triangle.
 pub(super) fn sum_together(
     schur: &mut Mat<f64>,

@@ -13,7 +13,9 @@ pub(crate) struct Half {
     /// Interior columns (the separator's follow).
     interior: usize,
     factor: InteriorFactor,
-    /// T_i = K_SS − K_Si K_ii⁻¹ K_iS (lower triangle).
+    /// T_i = K_SS − K_Si K_ii⁻¹ K_iS (lower triangle), made by `factorise`
+    /// (empty until then: a rank's half writes its T straight into Σ,
+    /// [`Half::factorise_into`]).
     pub(super) schur_part: Mat<f64>,
     /// w_i of the last forward solve.
     forward_solution: Vec<f64>,
@@ -200,12 +202,11 @@ impl Half {
             return Err("the split factor needs a supernodal factorisation".into());
         };
         let factor = InteriorFactor::new(supernodal, &local_matrix, &source, ni, par);
-        let ns = separator.len();
         Ok(Half {
             unknown,
             interior: ni,
             factor,
-            schur_part: Mat::zeros(ns, ns),
+            schur_part: Mat::zeros(0, 0),
             forward_solution: vec![0.0; size],
         })
     }
@@ -222,8 +223,24 @@ impl Half {
         matrix: &CscMatrix<f64>,
         shift: &[f64],
     ) -> Result<(), String> {
+        let ns = self.unknown.len() - self.interior;
+        if self.schur_part.nrows() != ns {
+            self.schur_part = Mat::zeros(ns, ns);
+        }
+        let schur = &mut self.schur_part;
         self.factor
-            .factorise(&matrix.nzval, shift, &mut self.schur_part)
+            .factorise(&matrix.nzval, shift, |i, j, t| schur[(i, j)] = t)
+    }
+
+    /// As `factorise_shifted`, adding each T_ij to `write(i, j, T_ij)`
+    /// instead of keeping T (i ≥ j, within the half's separator).
+    pub(super) fn factorise_into(
+        &mut self,
+        matrix: &CscMatrix<f64>,
+        shift: &[f64],
+        write: impl FnMut(usize, usize, f64),
+    ) -> Result<(), String> {
+        self.factor.factorise(&matrix.nzval, shift, write)
     }
 
     /// w_i = L_ii⁻¹ r_i; returns −(K_Si K_ii⁻¹ r_i) = −L_Si w_i.
