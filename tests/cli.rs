@@ -216,6 +216,35 @@ fn check_warns_between_the_accuracy_and_the_stability_limit() {
     assert_eq!(refused.status.code(), Some(2));
 }
 
+/// COCD looser than 1e-4 lets grains at rest on a slope creep (an
+/// erodible layer at 22° flowed ahead of the front at ε = 1e-3 and held at
+/// 1e-4): `check` warns above it and not at it.
+#[test]
+fn check_warns_of_a_cocd_tolerance_too_loose_to_hold_grains_at_rest() {
+    let text = |args: &[&str]| {
+        let output = grainflow().args(args).output().unwrap();
+        assert!(output.status.success(), "{args:?}");
+        String::from_utf8_lossy(&output.stdout).into_owned()
+    };
+    let loose = text(&[
+        "check",
+        &case("static_box.toml"),
+        "--set",
+        "contact.tolerance=1e-3",
+    ]);
+    assert!(
+        loose.contains("warning: contact.tolerance = 1.0e-3 is looser than 1e-4"),
+        "{loose}"
+    );
+    let held = text(&[
+        "check",
+        &case("static_box.toml"),
+        "--set",
+        "contact.tolerance=1e-4",
+    ]);
+    assert!(!held.contains("contact.tolerance ="), "{held}");
+}
+
 /// `check --ranks N` shows, before a cluster job, how a scene would be
 /// shared: the process grid, each rank's load (the 2,700 grains of the 3D
 /// column, the 32³ cells of the Beltrami flow), the warning when ranks hold

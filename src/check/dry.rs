@@ -117,6 +117,9 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
             "  candidate threshold D = {:.4e} m (widened to 3 v_max dt when grains are faster)",
             hard.threshold
         );
+        if let Some(w) = scene::cocd_tolerance_warning(hard) {
+            let _ = writeln!(out, "{w}");
+        }
         let _ = writeln!(out, "time:");
         let steps = (case.time.end / dt).ceil();
         let _ = writeln!(

@@ -100,11 +100,12 @@ impl DryStepper {
             Some(contact) => {
                 contact.prepare(system);
                 let dt = case.time.dt.expect("validated: hard contact has time.dt");
+                let warning = scene::cocd_tolerance_warning(&contact);
                 let stepper = DryStepper::Hard {
                     contact: Box::new(contact),
                     record: HardRecord::default(),
                 };
-                Ok((stepper, dt, None))
+                Ok((stepper, dt, warning))
             }
             None => {
                 let (dt, contact_time) = time_step(case, system);
