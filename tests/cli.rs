@@ -17,8 +17,14 @@ fn case(name: &str) -> String {
         .to_string()
 }
 
-/// Runs `grainflow run` on a case with overrides into a fresh directory;
-/// returns (exit code, stderr, whether the output directory exists).
+/// What a successful `grainflow ARGS` writes to stdout (panics naming the
+/// arguments if it fails).
+fn stdout_of(args: &[&str]) -> String {
+    let output = grainflow().args(args).output().unwrap();
+    assert!(output.status.success(), "{args:?}");
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
 /// The number written right after `words` in `line` (panics naming the
 /// line if there is none).
 fn number_after<T: std::str::FromStr>(line: &str, words: &str) -> T {
@@ -29,6 +35,8 @@ fn number_after<T: std::str::FromStr>(line: &str, words: &str) -> T {
         .unwrap_or_else(|| panic!("{line}"))
 }
 
+/// Runs `grainflow run` on a case with overrides into a fresh directory;
+/// returns (exit code, stderr, whether the output directory exists).
 fn run_with(overrides: &[&str]) -> (i32, String, bool) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
@@ -221,12 +229,7 @@ fn check_warns_between_the_accuracy_and_the_stability_limit() {
 /// 1e-4): `check` warns above it and not at it.
 #[test]
 fn check_warns_of_a_cocd_tolerance_too_loose_to_hold_grains_at_rest() {
-    let text = |args: &[&str]| {
-        let output = grainflow().args(args).output().unwrap();
-        assert!(output.status.success(), "{args:?}");
-        String::from_utf8_lossy(&output.stdout).into_owned()
-    };
-    let loose = text(&[
+    let loose = stdout_of(&[
         "check",
         &case("static_box.toml"),
         "--set",
@@ -236,7 +239,7 @@ fn check_warns_of_a_cocd_tolerance_too_loose_to_hold_grains_at_rest() {
         loose.contains("warning: contact.tolerance = 1.0e-3 is looser than 1e-4"),
         "{loose}"
     );
-    let held = text(&[
+    let held = stdout_of(&[
         "check",
         &case("static_box.toml"),
         "--set",
@@ -252,12 +255,7 @@ fn check_warns_of_a_cocd_tolerance_too_loose_to_hold_grains_at_rest() {
 /// not run on several ranks.
 #[test]
 fn check_shows_how_a_scene_is_shared_among_ranks() {
-    let text = |args: &[&str]| {
-        let output = grainflow().args(args).output().unwrap();
-        assert!(output.status.success(), "{args:?}");
-        String::from_utf8_lossy(&output.stdout).into_owned()
-    };
-    let column = text(&["check", &case("column_collapse_3d.toml"), "--ranks", "4"]);
+    let column = stdout_of(&["check", &case("column_collapse_3d.toml"), "--ranks", "4"]);
     assert!(column.contains("on 4 MPI ranks:"), "{column}");
     assert!(column.contains("process grid 2 x 2 x 1"), "{column}");
     // 2,700 grains over 4 ranks.
@@ -268,10 +266,10 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
     );
     // Under COCD the factor's work dwarfs the exchanges: 800 spheres a
     // rank ran at an efficiency of 0.95, and no such warning is given.
-    let hard = text(&["check", &case("static_box_3d.toml"), "--ranks", "2"]);
+    let hard = stdout_of(&["check", &case("static_box_3d.toml"), "--ranks", "2"]);
     assert!(hard.contains("(mean 800)"), "{hard}");
     assert!(!hard.contains("grains per rank (below"), "{hard}");
-    let flow = text(&["check", &case("taylor_green_3d.toml"), "--ranks", "4"]);
+    let flow = stdout_of(&["check", &case("taylor_green_3d.toml"), "--ranks", "4"]);
     assert!(flow.contains("process grid 2 x 2 x 1"), "{flow}");
     // 32³ cells over 2 x 2 ranks, the last axis whole.
     assert!(
@@ -282,7 +280,7 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
         flow.contains("8192 cells per rank (below 100000)"),
         "{flow}"
     );
-    let chosen = text(&[
+    let chosen = stdout_of(&[
         "check",
         &case("taylor_green_3d.toml"),
         "--ranks",
@@ -300,7 +298,7 @@ fn check_shows_how_a_scene_is_shared_among_ranks() {
     // separator held 54 unknowns and the interiors 600 and 546; with a
     // layer one interaction range wide taken for the separator, 564 and
     // 579).
-    let boxed = text(&["check", &case("static_box.toml"), "--ranks", "2"]);
+    let boxed = stdout_of(&["check", &case("static_box.toml"), "--ranks", "2"]);
     assert!(
         boxed.contains(
             "COCD on 2 ranks (process grid 1 x 2 x 1): the contact program's separator: 57 \
