@@ -76,7 +76,7 @@ impl Separator {
             })
             .collect();
         let mut in_separator = vec![false; n];
-        let (mut pairs, mut crossing_pairs) = (0, 0);
+        let mut crossing_pairs = 0;
         let listed = contacts::listed(system, threshold);
         // The pairs of two free grains, each with the rank that holds it:
         // the lower of the two owners.
@@ -93,8 +93,8 @@ impl Separator {
                 (!p.is_fixed(i) && !p.is_fixed(j)).then(|| (i, j, owner[i].min(owner[j])))
             })
             .collect();
+        let pairs = free_pairs.len();
         for &(i, j, _) in &free_pairs {
-            pairs += 1;
             if owner[i] != owner[j] {
                 // The lower rank holds the pair; the other grain's columns
                 // then stand on both ranks.
