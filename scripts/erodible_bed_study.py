@@ -19,6 +19,8 @@ thickness and reused by every slope, model and time step.
 --members N releases each deposit N times on each slope, |g| raised by
 k x 1e-8 relative for member k (k = 0 the case's): the same release on
 another of its chaotic paths, for the spread of single runs.
+--first-member K runs members K to N - 1 only, to add to an ensemble
+run before (the deposit is rained again to the same bits).
 
 The same command run again resumes: deposits already in --work are kept,
 and so are runs that finished (their summary.json). --jobs 2 runs two
@@ -181,6 +183,8 @@ def main():
     parser.add_argument("--jobs", type=int, default=1, help="releases side by side, one thread each")
     parser.add_argument("--members", type=int, default=1,
                         help="releases of each deposit and slope, |g| perturbed in its eighth digit")
+    parser.add_argument("--first-member", type=int, default=0,
+                        help="the first member to run (members below it were run before)")
     args = parser.parse_args()
     os.makedirs(args.work, exist_ok=True)
     radius = 0.5 * args.diameter
@@ -198,7 +202,7 @@ def main():
         return row, front
 
     jobs = [(h, slope, model, member) for h in args.thickness for slope in args.slope
-            for model in args.model for member in range(args.members)]
+            for model in args.model for member in range(args.first_member, args.members)]
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         results = list(pool.map(run, jobs))
     rows = [row for row, _ in results]
