@@ -5,9 +5,8 @@
 
 use super::coupled::{
     check_dem_substep, check_density_ratio, collapsed_step, coupled_summary, done_line,
-    CoupledCounts,
+    unstable_step, CoupledCounts,
 };
-use super::fluid::cfl_overrun;
 use crate::analysis::sphere_in_fluid::SphereInFluid;
 use crate::case::Case;
 use crate::{scene::axisymmetric as axisymmetric_scene, RunError};
@@ -144,21 +143,9 @@ impl AxisymmetricModel {
         self.dem_substeps += report.dem_substeps;
         self.max_divergence = report.flow.max_divergence;
         let time = self.system.flow.time;
-        if !report.flow.kinetic_energy.is_finite() || report.dem.non_finite {
-            return Err(format!(
-                "unstable at t = {time:.6e} s (step {steps}): the flow or a grain is not finite"
-            ));
-        }
-        if let Some(why) = cfl_overrun(report.flow.max_cfl, step_dt, case) {
+        if let Some(why) = unstable_step(&report, step_dt, case) {
             return Err(format!(
                 "unstable at t = {time:.6e} s (step {steps}): {why}"
-            ));
-        }
-        if report.dem.max_overlap_ratio > case.time.overlap_limit {
-            return Err(format!(
-                "unstable at t = {time:.6e} s (step {steps}): overlap of {:.3} radii beyond \
-                 time.overlap_limit = {}; reduce time.dt_over_contact_time",
-                report.dem.max_overlap_ratio, case.time.overlap_limit
             ));
         }
         self.steps += 1;

@@ -133,6 +133,25 @@ pub fn collapsed_step(step_dt: f64, case: &Case, time: f64, end: f64) -> Option<
     })
 }
 
+/// What made a coupled step unstable, if anything: a flow or a grain not
+/// finite, a CFL number past what the step allows (with the step to cut),
+/// or an overlap past `time.overlap_limit`.
+pub fn unstable_step(report: &CoupledReport, step_dt: f64, case: &Case) -> Option<String> {
+    if !report.flow.kinetic_energy.is_finite() || report.dem.non_finite {
+        return Some("the flow or a grain is not finite".into());
+    }
+    if let Some(why) = cfl_overrun(report.flow.max_cfl, step_dt, case) {
+        return Some(why);
+    }
+    (report.dem.max_overlap_ratio > case.time.overlap_limit).then(|| {
+        format!(
+            "overlap of {:.3} radii beyond time.overlap_limit = {}; reduce \
+             time.dt_over_contact_time",
+            report.dem.max_overlap_ratio, case.time.overlap_limit
+        )
+    })
+}
+
 /// The fraction of `time.dt` below which an adapted step has collapsed.
 pub const COLLAPSED_STEP: f64 = 1e-3;
 
@@ -419,21 +438,9 @@ impl CoupledModel {
         self.dem_substeps += report.dem_substeps;
         self.max_divergence = report.flow.max_divergence;
         let time = self.system.flow.time;
-        if !report.flow.kinetic_energy.is_finite() || report.dem.non_finite {
-            return Err(format!(
-                "unstable at t = {time:.6e} s (step {steps}): the flow or a grain is not finite"
-            ));
-        }
-        if let Some(why) = cfl_overrun(report.flow.max_cfl, step_dt, case) {
+        if let Some(why) = unstable_step(&report, step_dt, case) {
             return Err(format!(
                 "unstable at t = {time:.6e} s (step {steps}): {why}"
-            ));
-        }
-        if report.dem.max_overlap_ratio > case.time.overlap_limit {
-            return Err(format!(
-                "unstable at t = {time:.6e} s (step {steps}): overlap of {:.3} radii beyond \
-                 time.overlap_limit = {}; reduce time.dt_over_contact_time",
-                report.dem.max_overlap_ratio, case.time.overlap_limit
             ));
         }
         self.steps += 1;
