@@ -660,3 +660,44 @@ fn a_sweep_of_bad_inputs_gets_status_2_a_named_reason_and_no_output() {
     );
     assert_eq!(std::fs::read_to_string(&a_file).unwrap(), "not a folder");
 }
+
+/// A coupled run whose fixed step the flow cannot take stops with status
+/// 3 and a diagnosis naming the CFL number and what to change, and keeps
+/// the outputs of its last good state: in 3D and in (r, z), which share
+/// the diagnosis.
+#[test]
+fn a_coupled_run_past_the_cfl_limit_stops_with_a_diagnosis_keeping_its_outputs() {
+    let scenes: [(&str, &[&str]); 2] = [
+        (
+            "falling_sphere.toml",
+            &[
+                "domain.upper=[0.04,0.04,0.12]",
+                "fluid.cells=[16,16,48]",
+                "particles.block[0].positions=[[0.02,0.02,0.095]]",
+            ],
+        ),
+        ("falling_sphere_axisymmetric.toml", &[]),
+    ];
+    for (name, overrides) in scenes {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("out");
+        let mut command = grainflow();
+        command.args(["run", &case(name), "--out", out.to_str().unwrap()]);
+        for o in overrides.iter().chain(&["time.dt=0.05", "time.end=1.0"]) {
+            command.args(["--set", o]);
+        }
+        let output = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(3), "{name}: {stderr}");
+        assert!(
+            stderr.contains("unstable at t = ")
+                && stderr.contains("beyond the RK3 limit")
+                && stderr.contains("reduce time.dt or set time.cfl")
+                && stderr.contains("hold the last good state"),
+            "{name}: {stderr}"
+        );
+        for file in ["summary.json", "series.csv", "tracked.csv"] {
+            assert!(out.join(file).exists(), "{name}: {file}");
+        }
+    }
+}
