@@ -229,19 +229,10 @@ fn inclined_bed_on_ranks_matches_the_serial_run(extra: &[&str]) {
         "output.fields=false",
     ];
     settings.extend_from_slice(extra);
-    let last_row = |out: &Path| -> Vec<f64> {
-        let text = std::fs::read_to_string(out.join("bed_series.csv")).unwrap();
-        text.lines()
-            .last()
-            .unwrap()
-            .split(',')
-            .map(|v| v.parse().unwrap())
-            .collect()
-    };
     let serial = dir.path().join("serial");
     let (code, stderr) = run(&case, &serial, 1, &settings, Duration::from_secs(120));
     assert_eq!(code, 0, "{stderr}");
-    let reference = last_row(&serial);
+    let reference = last_bed_row(&serial);
     for (grid, ranks) in [("[2,1,1]", 2), ("[4,1,1]", 4)] {
         let out = dir.path().join(format!("ranks_{ranks}"));
         let setting = format!("parallel.process_grid={grid}");
@@ -249,15 +240,10 @@ fn inclined_bed_on_ranks_matches_the_serial_run(extra: &[&str]) {
         all.push(&setting);
         let (code, stderr) = run(&case, &out, ranks, &all, Duration::from_secs(120));
         assert_eq!(code, 0, "{grid}: {stderr}");
-        let row = last_row(&out);
-        let scale = reference[2..5].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (column, (a, b)) in reference.iter().zip(&row).enumerate() {
-            let size = if (2..5).contains(&column) {
-                scale
-            } else {
-                a.abs()
-            };
-            let deviation = (a - b).abs() / size.max(f64::MIN_POSITIVE);
+        let row = last_bed_row(&out);
+        let deviations = bed_row_deviations(&reference, &row);
+        for (column, ((a, b), deviation)) in reference.iter().zip(&row).zip(deviations).enumerate()
+        {
             println!("{extra:?} {grid} column {column}: {a} serial, {b}: {deviation:.2e}");
             assert!(
                 deviation <= 1e-10,

@@ -287,3 +287,30 @@ fn field_deviation(
         .flat_map(|(cell, v)| (0..3).map(move |c| (v[c] - other[cell][c]).abs() / scale))
         .fold(0.0, f64::max)
 }
+
+/// The last row of a run's `bed_series.csv` (the inclined bed's series).
+fn last_bed_row(out: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(out.join("bed_series.csv")).unwrap();
+    let row = text.lines().last().unwrap();
+    row.split(',').map(|v| v.parse().unwrap()).collect()
+}
+
+/// The deviation of each column of a bed series' `row` from `reference`:
+/// the velocity columns (2–4) against the largest of them, the others
+/// against their own size.
+fn bed_row_deviations(reference: &[f64], row: &[f64]) -> Vec<f64> {
+    let scale = reference[2..5].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    reference
+        .iter()
+        .zip(row)
+        .enumerate()
+        .map(|(column, (a, b))| {
+            let size = if (2..5).contains(&column) {
+                scale
+            } else {
+                a.abs()
+            };
+            (a - b).abs() / size.max(f64::MIN_POSITIVE)
+        })
+        .collect()
+}

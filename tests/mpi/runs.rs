@@ -272,11 +272,6 @@ fn a_checkpoint_resumes_on_another_number_of_ranks() {
         "checkpoint.steps=4",
         "checkpoint.keep=10",
     ];
-    let last_row = |out: &Path| -> Vec<f64> {
-        let text = std::fs::read_to_string(out.join("bed_series.csv")).unwrap();
-        let row = text.lines().last().unwrap();
-        row.split(',').map(|v| v.parse().unwrap()).collect()
-    };
     let whole = dir.path().join("bed_2");
     let mut on_two = settings.to_vec();
     on_two.push("parallel.process_grid=[2,1,1]");
@@ -285,15 +280,9 @@ fn a_checkpoint_resumes_on_another_number_of_ranks() {
     let out = dir.path().join("bed_2_to_1");
     let checkpoint = copy_run(&whole, &out, 4);
     resume(&bed, &out, 1, &settings, &checkpoint);
-    let (reference, row) = (last_row(&whole), last_row(&out));
-    let scale = reference[2..5].iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    for (column, (a, b)) in reference.iter().zip(&row).enumerate() {
-        let size = if (2..5).contains(&column) {
-            scale
-        } else {
-            a.abs()
-        };
-        let deviation = (a - b).abs() / size.max(f64::MIN_POSITIVE);
+    let (reference, row) = (last_bed_row(&whole), last_bed_row(&out));
+    let deviations = bed_row_deviations(&reference, &row);
+    for (column, ((a, b), deviation)) in reference.iter().zip(&row).zip(deviations).enumerate() {
         assert!(deviation <= 1e-10, "bed column {column}: {a} against {b}");
     }
 }
