@@ -53,10 +53,15 @@
 //! its added mass, which would eat most of the rebound. With the load
 //! above, each particle therefore carries a virtual mass `C_v ρ V_p`
 //! (after Schwarz, Kempe & Fröhlich 2015): its inertia in the DEM is
-//! `m_p + C_v ρ V_p`, and each stage adds back `C_v ρ V_p Δu / h`, the
-//! velocity change `Δu` of the previous stage spread over this one, which
-//! is the impulse the fluid's lagged answer takes away. Over a run the two
-//! cancel; in a contact the grain and its added mass bounce together.
+//! `m_p + C_v ρ V_p`, and the load hands back the impulse the fluid's
+//! lagged answer takes away. Under eq. 7 the layer answers within about a
+//! stage, and each stage adds back `C_v ρ V_p Δu / h`, the velocity change
+//! `Δu` of the previous stage spread over this one; a layer relaxed more
+//! slowly (held, or at its renewal rate) answers over several stages, and
+//! the load adds back `C_v ρ d/dt ∫_{V_p(t)} u`, as the fluid in the
+//! grain's volume answers ([`crate::stage_loads::VirtualMassReturn`]).
+//! Over a run the two cancel; in a contact the grain and its added mass
+//! bounce together.
 
 use grainflow_core::Vec3;
 use grainflow_core::{State, StateError};
@@ -69,6 +74,7 @@ use crate::forcing::{vectors_on_owners, Bodies, Exponents, ImmersedBoundaries, L
 use crate::layer_forcing::{renewal_exponent, slip_from_sums, SLIP_SUMS};
 use crate::stage_loads::{
     hydrodynamic_loads, inner_momentum_rate, set_stage_loads, GrainLoad, StageMeasures,
+    VirtualMassReturn,
 };
 
 /// Density ratio `ρ_p/ρ` below which the rigid-inner-fluid load (eq. 5–6)
@@ -367,6 +373,7 @@ impl CoupledSystem {
             coupling: self.coupling,
             fluid_density: self.fluid_density,
             virtual_mass: self.virtual_mass,
+            virtual_mass_return: VirtualMassReturn::for_layer(&self.immersed.layer),
         }
     }
 

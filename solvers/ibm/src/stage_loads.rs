@@ -9,6 +9,7 @@ use grainflow_dem::DemSystem;
 
 use crate::coupled::{particle_volume, Coupling};
 use crate::forcing::Loads;
+use crate::layer_forcing::LayerForcing;
 
 /// How the grains take their hydrodynamic loads.
 #[derive(Clone, Copy, Debug)]
@@ -18,6 +19,38 @@ pub(crate) struct GrainLoad {
     pub fluid_density: f64,
     /// `C_v` of the virtual mass.
     pub virtual_mass: f64,
+    /// When the virtual mass's impulse is handed back.
+    pub virtual_mass_return: VirtualMassReturn,
+}
+
+/// When the load hands back the impulse the grain's virtual mass
+/// `C_v ρ V_p` took from it: the fluid the DEM moves with the grain is the
+/// grid's, which answers a change of the grain's velocity as the forcing
+/// makes the layer follow.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum VirtualMassReturn {
+    /// `C_v ρ V_p Δu / h`, `Δu` the grain's velocity change over the
+    /// previous stage: eq. 7 sets a share `α` of each face to the rigid
+    /// motion at every stage, so the fluid answers within about a stage.
+    NextStage,
+    /// `C_v ρ d/dt ∫_{V_p(t)} u`, as the fluid in the grain's volume
+    /// answers: a layer relaxed more slowly than eq. 7 (held, renewal)
+    /// follows a change over several stages, and handing the impulse back
+    /// at once pushed the grain ahead of its fluid (a bounce at St 225
+    /// came back at 0.99 of the dry rebound; docs/validation.md, §10).
+    AsTheFluidAnswers,
+}
+
+impl VirtualMassReturn {
+    /// The form that matches how `layer` relaxes the layer.
+    pub(crate) fn for_layer(layer: &LayerForcing) -> Self {
+        match layer {
+            LayerForcing::EveryStage => VirtualMassReturn::NextStage,
+            LayerForcing::Held { .. } | LayerForcing::Renewal => {
+                VirtualMassReturn::AsTheFluidAnswers
+            }
+        }
+    }
 }
 
 /// What a stage measured on the grid for each owned grain, per unit
@@ -81,7 +114,14 @@ pub(crate) fn hydrodynamic_loads(
         match grain_load.coupling {
             Coupling::InnerFluidMomentum => {
                 let carried = grain_load.virtual_mass * rho * volume;
-                let lagged = p.velocity[k] - p.dem_start_velocity[k];
+                let handed_back = match grain_load.virtual_mass_return {
+                    VirtualMassReturn::NextStage => {
+                        carried * (p.velocity[k] - p.dem_start_velocity[k]) / stage_dt
+                    }
+                    VirtualMassReturn::AsTheFluidAnswers => {
+                        grain_load.virtual_mass * rho * inner_rate.force[k]
+                    }
+                };
                 // −ρ V g where the hydrostatic pressure balances
                 // gravity; along the axes where the fluid carries it
                 // as b, the body force the forcing handed over,
@@ -94,9 +134,8 @@ pub(crate) fn hydrodynamic_loads(
                     }
                     None => -rho * volume * gravity,
                 };
-                loads.force[k] = rho * (forcing.force[k] + inner_rate.force[k])
-                    + buoyancy
-                    + carried * lagged / stage_dt;
+                loads.force[k] =
+                    rho * (forcing.force[k] + inner_rate.force[k]) + buoyancy + handed_back;
                 loads.torque[k] = rho * (forcing.torque[k] + inner_rate.torque[k]);
             }
             Coupling::RigidInnerFluid => {

@@ -130,22 +130,24 @@ fn steady_drift(samples: &[f64]) -> f64 {
     (samples[19] - samples[9]) / 0.05
 }
 
-/// What is left of the frame-dependent lift at D/Δx = 8 has two parts.
-/// A start-up kick against the drift: the grain is spun impulsively, and
-/// the transport through its moving surface enters the load one stage
-/// late (the rate of the previous stage), so while the fluid of the layer
-/// spins up the first stages see part of the fixed-volume error. It is a
-/// lag in time, linear in the drift and first order in the step (v_y after
-/// the first step −1.38e-4, −5.75e-5, −2.13e-5 m/s at Δt = 5, 2.5, 1.25
-/// ms). Then a steady drift along the lift, which does not depend on the
-/// step at a held layer rate (1.90e-3, 1.84e-3, 1.82e-3 m/s² over the last
-/// 0.05 s; 1.51e-3 held at 2.5 ms) and is smaller where the layer is held tighter: a property of
-/// the grid and of the forcing, not of the load's timing. Our reading: the
-/// grid's central differences carry the short waves of the spinning layer
-/// slower than the drift, the forcing pulls the layer back onto the
-/// grain, and the lag between the two acts as a Magnus lift. The velocity
-/// at 0.1 s (the tests above) is the sum of the two, of opposite signs.
-/// Seconds.
+/// What is left of the frame-dependent lift at D/Δx = 8 has two parts,
+/// measured with the layer relaxed at a held rate (that of eq. 7 at 5 ms)
+/// while the step is cut. A start-up kick against the drift: the grain is
+/// spun impulsively, and the transport through its moving surface enters
+/// the load one stage late (the rate of the previous stage), so while the
+/// fluid of the layer spins up the first stages see part of the
+/// fixed-volume error. It is a lag in time, linear in the drift and first
+/// order in the step (v_y after the first step −1.94e-4, −7.58e-5,
+/// −2.69e-5 m/s at Δt = 5, 2.5, 1.25 ms; eq. 7 at 5 ms, whose virtual mass
+/// is handed back in the next stage, −1.38e-4). Then a steady drift along
+/// the lift, which converges as the step is cut (2.04e-3, 1.90e-3,
+/// 1.85e-3 m/s² over the last 0.05 s: the differences fall by 0.37) and is
+/// smaller where the layer is held tighter (1.57e-3 held at 2.5 ms): a
+/// property of the grid and of the forcing. Our reading: the grid's
+/// central differences carry the short waves of the spinning layer slower
+/// than the drift, the forcing pulls the layer back onto the grain, and
+/// the lag between the two acts as a Magnus lift. The velocity at 0.1 s
+/// (the tests above) is the sum of the two, of opposite signs. Seconds.
 #[test]
 fn the_lift_left_at_d_over_dx_8_is_a_start_up_lag_and_a_steady_drift_set_by_the_layer() {
     let runs = [5e-3, 2.5e-3, 1.25e-3].map(|dt| lateral_history_held(5e-3, dt));
@@ -164,20 +166,23 @@ fn the_lift_left_at_d_over_dx_8_is_a_start_up_lag_and_a_steady_drift_set_by_the_
         listed(&drifts)
     );
     // The kick is against the drift's lift and at least halves with the
-    // step (measured 0.42 and 0.37 of the last).
+    // step (measured 0.39 and 0.36 of the last).
     assert!(kicks.iter().all(|&k| k < 0.0), "{kicks:?}");
     assert!(
         kicks[1] > 0.55 * kicks[0] && kicks[2] > 0.55 * kicks[1],
         "{kicks:?}"
     );
-    // The steady drift is the same at every step, within 5 % (measured
-    // 3 %)...
-    let mean = drifts.iter().sum::<f64>() / 3.0;
+    // The steady drift converges as the step is cut: its change at least
+    // halves from one halving to the next (measured 0.37), and the two
+    // shortest steps agree within 5 % (measured 2.8 %)...
+    assert!(drifts.iter().all(|&d| d > 0.0), "{drifts:?}");
     assert!(
-        drifts.iter().all(|&d| (d / mean - 1.0).abs() < 0.05),
+        (drifts[2] - drifts[1]).abs() < 0.5 * (drifts[1] - drifts[0]).abs(),
         "{drifts:?}"
     );
-    // ... and at least 10 % smaller with the layer held twice as fast.
+    assert!((drifts[2] / drifts[1] - 1.0).abs() < 0.05, "{drifts:?}");
+    // ... and is at least 10 % smaller with the layer held twice as fast
+    // (measured 17 %).
     assert!(tighter < 0.9 * drifts[1], "{tighter} {}", drifts[1]);
 }
 

@@ -23,6 +23,7 @@ use crate::exponents::passes_for;
 use crate::forcing::Loads;
 use crate::stage_loads::{
     hydrodynamic_loads, inner_momentum_rate, set_stage_loads, GrainLoad, StageMeasures,
+    VirtualMassReturn,
 };
 
 /// An (r, z) fluid with grains on its axis.
@@ -100,6 +101,7 @@ impl AxisymmetricCoupledSystem {
             coupling: self.coupling,
             fluid_density: self.fluid_density,
             virtual_mass: self.virtual_mass,
+            virtual_mass_return: VirtualMassReturn::for_layer(&self.immersed.layer),
         };
         for stage in 0..STAGES {
             let stage_dt = stage_fraction(stage) * dt;
