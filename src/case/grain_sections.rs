@@ -217,7 +217,9 @@ pub struct ContactSection {
     #[serde(default)]
     pub threshold: Option<f64>,
     /// cocd: "interior_point" (grainflow's, on the normal equations, 2D
-    /// and 3D; the default) or "clarabel" (the reference).
+    /// and 3D; the default), "clarabel" (the reference) or
+    /// "projected_gradient" (grainflow's first-order solver of the dual,
+    /// one rank).
     #[serde(default)]
     pub conic_solver: Option<String>,
     /// Hard: which listed pairs enter the step's program: "reachable"

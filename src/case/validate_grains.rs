@@ -461,12 +461,13 @@ impl Case {
             ));
         }
         match (c.model, c.conic_solver.as_deref()) {
-            (_, None) | (ContactModel::Cocd, Some("interior_point" | "clarabel")) => {}
+            (_, None)
+            | (ContactModel::Cocd, Some("interior_point" | "clarabel" | "projected_gradient")) => {}
             (ContactModel::Cocd, Some(other)) => {
                 return Err(invalid(
                     "contact.conic_solver",
                     other,
-                    "allowed: \"interior_point\" or \"clarabel\"",
+                    "allowed: \"interior_point\", \"clarabel\" or \"projected_gradient\"",
                 ))
             }
             (_, Some(_)) => {

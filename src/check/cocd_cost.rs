@@ -54,6 +54,8 @@ pub fn untimed_line(
     let factor = match solver {
         ConicSolver::InteriorPoint => 1.0,
         ConicSolver::Clarabel => CLARABEL_OVER_INTERIOR_POINT,
+        // No fit yet: its step is timed on the scene itself.
+        ConicSolver::ProjectedGradient => return None,
     };
     let step = factor * step_seconds(dimension, grains as f64, tolerance);
     (step > PROBE_LONGEST_STEP).then(|| {

@@ -441,9 +441,15 @@ pub fn hard_contact(case: &Case) -> Option<HardContact> {
         },
         ContactModel::Soft => return None,
     };
-    let (tolerance, iterations) = match method {
-        Method::Cocd => (1e-8, 200),
-        Method::Nscd { .. } => (1e-6, 5000),
+    let conic_solver = match c.conic_solver.as_deref() {
+        Some("clarabel") => ConicSolver::Clarabel,
+        Some("projected_gradient") => ConicSolver::ProjectedGradient,
+        _ => ConicSolver::InteriorPoint,
+    };
+    let (tolerance, iterations) = match (method, conic_solver) {
+        (Method::Cocd, ConicSolver::ProjectedGradient) => (1e-8, 20_000),
+        (Method::Cocd, _) => (1e-8, 200),
+        (Method::Nscd { .. }, _) => (1e-6, 5000),
     };
     let mut hard = HardContact::new(
         method,
@@ -451,9 +457,7 @@ pub fn hard_contact(case: &Case) -> Option<HardContact> {
         c.max_iterations.unwrap_or(iterations),
         c.threshold.unwrap_or(0.2 * case.particles_section().radius),
     );
-    if c.conic_solver.as_deref() == Some("clarabel") {
-        hard.conic_solver = ConicSolver::Clarabel;
-    }
+    hard.conic_solver = conic_solver;
     hard.whole_list = c.candidates.as_deref() == Some("listed");
     Some(hard)
 }

@@ -132,6 +132,10 @@ pub enum ConicSolver {
     InteriorPoint,
     /// Clarabel (any cone), the reference.
     Clarabel,
+    /// An accelerated projected gradient on the dual (no factor; one rank);
+    /// grainflow's interior point takes over a step it does not solve
+    /// within its iterations. See [`crate::projected_gradient`].
+    ProjectedGradient,
 }
 
 impl ConicSolver {
@@ -140,6 +144,7 @@ impl ConicSolver {
         match self {
             ConicSolver::InteriorPoint => "grainflow's interior point",
             ConicSolver::Clarabel => "Clarabel",
+            ConicSolver::ProjectedGradient => "grainflow's projected gradient",
         }
     }
 }
@@ -268,6 +273,31 @@ pub fn solve(
 ) -> Result<Solution, String> {
     let program = build(contacts, bodies, dimension, scales);
     let ((x, z, iterations, reduced_accuracy), fallback_reason) = match shared {
+        None if solver == ConicSolver::ProjectedGradient => {
+            let ranks = Ranks::alone(program.mass.len());
+            match crate::projected_gradient::solve(&program, tolerance, max_iterations, None) {
+                Ok(solution) => (solution, None),
+                Err(why) => with_fallback(
+                    ConicSolver::InteriorPoint,
+                    || {
+                        crate::interior_point::solve(
+                            &program,
+                            tolerance,
+                            INTERIOR_POINT_ITERATIONS,
+                            ranks,
+                        )
+                    },
+                    || solve_with_clarabel(&program, tolerance, INTERIOR_POINT_ITERATIONS),
+                )
+                .map(|(solution, again)| {
+                    let reason = match again {
+                        Some(again) => format!("{why}; then {again}"),
+                        None => why,
+                    };
+                    (solution, Some(reason))
+                })?,
+            }
+        }
         None => {
             let ranks = Ranks::alone(program.mass.len());
             with_fallback(
@@ -275,6 +305,13 @@ pub fn solve(
                 || crate::interior_point::solve(&program, tolerance, max_iterations, ranks),
                 || solve_with_clarabel(&program, tolerance, max_iterations),
             )?
+        }
+        Some(_) if solver == ConicSolver::ProjectedGradient => {
+            return Err(
+                "contact.conic_solver = \"projected_gradient\" runs on one rank; on several \
+                 ranks use \"interior_point\" (the program shared among the ranks)"
+                    .into(),
+            )
         }
         Some(RankShare {
             separator,
@@ -307,6 +344,11 @@ pub fn solve(
     solution.fallback_reason = fallback_reason;
     Ok(solution)
 }
+
+/// The interior point's iterations where it takes over a step the
+/// projected gradient did not solve (the case's `max_iterations` is the
+/// projected gradient's then).
+const INTERIOR_POINT_ITERATIONS: u32 = 200;
 
 /// (x, z, iterations, reduced accuracy) of a conic solve.
 type ConicSolution = (Vec<f64>, Vec<f64>, u32, bool);

@@ -39,6 +39,7 @@ mod dissection;
 pub mod interior_point;
 mod normal_factor;
 pub mod nscd;
+pub mod projected_gradient;
 pub mod second_order_cone;
 pub mod shared_program;
 pub mod sharing;

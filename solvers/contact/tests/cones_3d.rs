@@ -171,3 +171,91 @@ fn the_interior_point_solves_3d_cones_as_clarabel_does() {
         );
     }
 }
+
+/// The same programs solved through their dual by the projected gradient
+/// (`ConicSolver::ProjectedGradient`) against the interior point at
+/// ε = 1e-6: velocities within √ε V and objectives within 10 ε |U|²_M, as
+/// for the interior point against Clarabel; every iterate's impulses lie in
+/// Coulomb's cone.
+#[test]
+fn the_projected_gradient_solves_3d_cones_as_the_interior_point_does() {
+    const EPSILON: f64 = 1e-9;
+    for (friction, seed) in [(0.3, 1), (0.9, 2), (0.0, 3)] {
+        let system = heap(friction, seed);
+        let dt = 1e-3;
+        let p = &system.particles;
+        let n = p.n_owned;
+        let free: Vec<Vec3> = (0..n)
+            .map(|k| p.velocity[k] + dt * system.domain.gravity)
+            .collect();
+        let spin: Vec<Vec3> = (0..n).map(|k| p.angular_velocity[k]).collect();
+        let (contacts, bodies) = gather(&system, 0.4 * RADIUS, &free, &spin);
+        let scales = Scales::of(&bodies, dt, &system.domain.gravity);
+        let solve = |solver, iterations| {
+            cocd::solve(
+                &contacts,
+                &bodies,
+                Dimension::Three,
+                &scales,
+                EPSILON,
+                iterations,
+                solver,
+                None,
+            )
+            .unwrap()
+        };
+        let gradient = solve(ConicSolver::ProjectedGradient, 20_000);
+        let reference = solve(ConicSolver::InteriorPoint, 200);
+        assert!(
+            gradient.fallback_reason.is_none(),
+            "μ = {friction}: the interior point took over: {:?}",
+            gradient.fallback_reason
+        );
+        let speed = scales.velocity;
+        let largest = (0..bodies.len())
+            .map(|b| {
+                let dv = (gradient.velocity[b] - reference.velocity[b]).norm();
+                let dw = (gradient.spin[b] - reference.spin[b]).norm() * RADIUS;
+                dv.max(dw)
+            })
+            .fold(0.0, f64::max);
+        let outside = (0..contacts.len())
+            .map(|a| gradient.tangential_impulse[a].norm() - friction * gradient.normal_impulse[a])
+            .fold(f64::NEG_INFINITY, f64::max);
+        let objective = |solution: &cocd::Solution| -> (f64, f64) {
+            (0..bodies.len()).fold((0.0, 0.0), |(f, size), b| {
+                let m = bodies.mass[b];
+                let inertia = 1.0 / bodies.inverse_inertia[b];
+                let dv = solution.velocity[b] - bodies.free_velocity[b];
+                let dw = solution.spin[b] - bodies.free_spin[b];
+                (
+                    f + 0.5 * (m * dv.norm_squared() + inertia * dw.norm_squared()),
+                    size + m * bodies.free_velocity[b].norm_squared()
+                        + inertia * bodies.free_spin[b].norm_squared(),
+                )
+            })
+        };
+        let ((f_gradient, size), (f_reference, _)) = (objective(&gradient), objective(&reference));
+        eprintln!(
+            "μ = {friction}: {} candidates, {} iterations against the interior point's {}; velocities {:.1e} V apart, objectives {:.1e} of |U|²_M apart, Coulomb {outside:.1e}",
+            contacts.len(),
+            gradient.iterations,
+            reference.iterations,
+            largest / speed,
+            (f_gradient - f_reference).abs() / size
+        );
+        assert!(
+            (f_gradient - f_reference).abs() < 10.0 * EPSILON * size,
+            "μ = {friction}: objectives {f_gradient:e} against {f_reference:e}"
+        );
+        assert!(
+            largest < EPSILON.sqrt() * speed,
+            "μ = {friction}: velocities differ by {:e} of V",
+            largest / speed
+        );
+        assert!(
+            outside <= 1e-12 * scales.impulse(),
+            "μ = {friction}: Coulomb violated by {outside:e}"
+        );
+    }
+}
