@@ -271,11 +271,46 @@ pub fn solve(
     solver: ConicSolver,
     shared: Option<RankShare<'_>>,
 ) -> Result<Solution, String> {
+    solve_from(
+        contacts,
+        bodies,
+        dimension,
+        scales,
+        tolerance,
+        max_iterations,
+        solver,
+        shared,
+        None,
+    )
+}
+
+/// [`solve`], the projected gradient starting from the impulses `start`
+/// of each contact (normal, tangential; the last step's where the contact
+/// was there, as [`Solution`] holds them). The interior point and Clarabel
+/// start from their own point whatever `start`.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_from(
+    contacts: &ContactSet,
+    bodies: &Bodies,
+    dimension: Dimension,
+    scales: &Scales,
+    tolerance: f64,
+    max_iterations: u32,
+    solver: ConicSolver,
+    shared: Option<RankShare<'_>>,
+    start: Option<&[(f64, Vec3)]>,
+) -> Result<Solution, String> {
     let program = build(contacts, bodies, dimension, scales);
     let ((x, z, iterations, reduced_accuracy), fallback_reason) = match shared {
         None if solver == ConicSolver::ProjectedGradient => {
             let ranks = Ranks::alone(program.mass.len());
-            match crate::projected_gradient::solve(&program, tolerance, max_iterations, None) {
+            let start = start.map(|impulses| multipliers(contacts, &program, impulses));
+            match crate::projected_gradient::solve(
+                &program,
+                tolerance,
+                max_iterations,
+                start.as_deref(),
+            ) {
                 Ok(solution) => (solution, None),
                 Err(why) => with_fallback(
                     ConicSolver::InteriorPoint,
@@ -601,6 +636,34 @@ pub(crate) fn solve_with_clarabel(
         solution.iterations,
         reduced_accuracy,
     ))
+}
+
+/// The multipliers z of the program whose contacts' impulses are
+/// `impulses` (normal, tangential): the inverse of [`recover`]'s, the
+/// tangential impulse's part out of the contact's tangent plane dropped.
+fn multipliers(contacts: &ContactSet, program: &ConicProgram, impulses: &[(f64, Vec3)]) -> Vec<f64> {
+    let unit = program.scales.impulse();
+    let mut z = vec![0.0; program.b.len()];
+    for (a, &(normal, tangential)) in impulses.iter().enumerate() {
+        let r = program.first_row[a];
+        let mu = contacts.friction[a];
+        let (t1, t2) = tangents(program.dimension, &contacts.normal[a]);
+        let (normal, along) = (normal / unit, tangential / unit);
+        match program.kinds[a] {
+            Rows::Normal => z[r] = normal,
+            Rows::HalfPlanes => {
+                let across = along.dot(&t1) / mu;
+                z[r] = 0.5 * (normal + across);
+                z[r + 1] = 0.5 * (normal - across);
+            }
+            Rows::Cone => {
+                z[r] = normal;
+                z[r + 1] = along.dot(&t1) / mu;
+                z[r + 2] = along.dot(&t2) / mu;
+            }
+        }
+    }
+    z
 }
 
 /// The velocities and impulses of a solution (x, z) of the program.

@@ -82,8 +82,9 @@ pub struct HardContact {
     /// Why grainflow's interior point failed the last step Clarabel took
     /// over.
     pub last_fallback: Option<String>,
-    /// NSCD warm start: the impulses of the last step's contacts, by the
-    /// ids of their grains (u64::MAX − wall for a wall).
+    /// The warm start of NSCD and of COCD's projected gradient: the
+    /// impulses of the last step's contacts, by the ids of their grains
+    /// (u64::MAX − wall for a wall).
     previous_impulses: HashMap<(u64, u64), (f64, Vec3)>,
 }
 
@@ -408,7 +409,12 @@ impl HardContact {
                         ids: &system.particles.id,
                         communicator: &system.communicator,
                     });
-                    cocd::solve(
+                    // The projected gradient starts from the last step's
+                    // impulses (a packing at rest changes little between
+                    // steps); the interior points start from their own.
+                    let warm = self.conic_solver == ConicSolver::ProjectedGradient;
+                    let start = warm.then(|| self.last_impulses(system, contacts));
+                    let solution = cocd::solve_from(
                         contacts,
                         bodies,
                         system.dimension(),
@@ -417,23 +423,19 @@ impl HardContact {
                         self.max_iterations,
                         self.conic_solver,
                         shared,
-                    )?
+                        start.as_deref(),
+                    )?;
+                    if warm {
+                        self.keep_impulses(system, contacts, &solution);
+                    }
+                    solution
                 };
                 let reduced = solution.reduced_accuracy;
                 Ok((solution, bounds, reduced))
             }
             Method::Nscd { restitution } => {
                 let bounds = nscd::normal_bounds(contacts, bodies, dt, restitution);
-                let ids = &system.particles.id;
-                let key = |a: usize| pair_key(ids, contacts.grain[a], contacts.partner[a]);
-                let initial: Vec<(f64, Vec3)> = (0..contacts.len())
-                    .map(|a| {
-                        let (key, sign) = key(a);
-                        self.previous_impulses
-                            .get(&key)
-                            .map_or((0.0, Vec3::zeros()), |&(p_n, p_t)| (p_n, sign * p_t))
-                    })
-                    .collect();
+                let initial = self.last_impulses(system, contacts);
                 let (solution, converged) = nscd::solve(
                     contacts,
                     bodies,
@@ -444,20 +446,41 @@ impl HardContact {
                     self.max_iterations,
                     Sharing::of(system).as_ref(),
                 );
-                self.previous_impulses = (0..contacts.len())
-                    .filter(|&a| solution.normal_impulse[a] > 0.0)
-                    .map(|a| {
-                        let (key, sign) = key(a);
-                        let impulses = (
-                            solution.normal_impulse[a],
-                            sign * solution.tangential_impulse[a],
-                        );
-                        (key, impulses)
-                    })
-                    .collect();
+                self.keep_impulses(system, contacts, &solution);
                 Ok((solution, bounds, !converged))
             }
         }
+    }
+
+    /// The impulses (normal, tangential on grain i) the last step left on
+    /// each of `contacts`; zero on a new contact.
+    fn last_impulses(&self, system: &DemSystem, contacts: &ContactSet) -> Vec<(f64, Vec3)> {
+        let ids = &system.particles.id;
+        (0..contacts.len())
+            .map(|a| {
+                let (key, sign) = pair_key(ids, contacts.grain[a], contacts.partner[a]);
+                self.previous_impulses
+                    .get(&key)
+                    .map_or((0.0, Vec3::zeros()), |&(p_n, p_t)| (p_n, sign * p_t))
+            })
+            .collect()
+    }
+
+    /// Keeps the impulses of the contacts of `solution` that carry one,
+    /// for the next step's start.
+    fn keep_impulses(&mut self, system: &DemSystem, contacts: &ContactSet, solution: &Solution) {
+        let ids = &system.particles.id;
+        self.previous_impulses = (0..contacts.len())
+            .filter(|&a| solution.normal_impulse[a] > 0.0)
+            .map(|a| {
+                let (key, sign) = pair_key(ids, contacts.grain[a], contacts.partner[a]);
+                let impulses = (
+                    solution.normal_impulse[a],
+                    sign * solution.tangential_impulse[a],
+                );
+                (key, impulses)
+            })
+            .collect();
     }
 }
 

@@ -30,9 +30,9 @@ const GAUSS_SEIDEL_STATICS: f64 = 1e-15;
 /// What the closed forms are held to (relative).
 const CLOSED_FORM: f64 = 1e-10;
 
-/// The three ways a step can be solved: COCD on grainflow's interior
-/// point and on Clarabel, and NSCD (inelastic).
-fn schemes() -> [HardContact; 3] {
+/// The four ways a step can be solved: COCD on grainflow's interior
+/// point, on its projected gradient and on Clarabel, and NSCD (inelastic).
+fn schemes() -> [HardContact; 4] {
     let with = |method, solver| {
         let mut contact = HardContact::new(method, TOLERANCE, 10_000, 0.1 * RADIUS);
         contact.conic_solver = solver;
@@ -40,6 +40,7 @@ fn schemes() -> [HardContact; 3] {
     };
     [
         with(Method::Cocd, ConicSolver::InteriorPoint),
+        with(Method::Cocd, ConicSolver::ProjectedGradient),
         with(Method::Cocd, ConicSolver::Clarabel),
         with(
             Method::Nscd { restitution: 0.0 },
@@ -193,12 +194,12 @@ fn a_sphere_slides_down_a_steep_oblique_incline_by_coulombs_law() {
             p.velocity[0].norm(),
         )
     };
-    let [_, _, mut nscd] = schemes();
+    let [_, _, _, mut nscd] = schemes();
     let (v, w, separation, _) = deviation(&mut nscd, 100, 1e-3);
     println!("NSCD: velocity {v:.1e}, spin {w:.1e}, gap {separation:.1e} m");
     assert!(v < CLOSED_FORM && w < CLOSED_FORM && separation < CLOSED_FORM * RADIUS);
 
-    let [mut cocd, _, _] = schemes();
+    let [mut cocd, _, _, _] = schemes();
     let mut errors = Vec::new();
     for (steps, dt) in [(100, 1e-3), (200, 5e-4)] {
         let (v, _, separation, speed) = deviation(&mut cocd, steps, dt);
@@ -349,20 +350,33 @@ fn resting_stacks_carry_the_weights_statics_gives() {
                 "COCD on grainflow's interior point",
                 ConicSolver::InteriorPoint,
             ),
+            (
+                "COCD on grainflow's projected gradient",
+                ConicSolver::ProjectedGradient,
+            ),
             ("COCD on Clarabel", ConicSolver::Clarabel),
         ]
         .map(|(what, solver)| {
+            let iterations = match solver {
+                ConicSolver::ProjectedGradient => 100_000,
+                _ => 100,
+            };
             let solution = cocd::solve(
                 &contacts,
                 &bodies,
                 Dimension::Three,
                 &scales,
                 TOLERANCE,
-                100,
+                iterations,
                 solver,
                 None,
             )
             .unwrap();
+            assert!(
+                solution.fallback_reason.is_none(),
+                "{what}: {:?}",
+                solution.fallback_reason
+            );
             (what, solution)
         });
         let bounds: Vec<f64> = contacts.gap.iter().map(|d| -d / dt).collect();
