@@ -155,7 +155,8 @@ pub fn text(case: &Case, summary: &Value, out: &Path) -> String {
     if let Some(first) = summary["metrics"]["first_fallback"].as_str() {
         let _ = writeln!(
             text,
-            "  Clarabel took over {} step(s) grainflow's interior point failed; the first at {first}",
+            "  {} step(s) taken over where the chosen solver failed (grainflow's projected \
+             gradient by its interior point, its interior point by Clarabel); the first at {first}",
             summary["metrics"]["fallback_steps"]
         );
     }

@@ -39,9 +39,10 @@ pub struct HardRecord {
     pub extra_programs: u64,
     pub closed: u64,
     pub unconverged_steps: u64,
-    /// Steps Clarabel took over from grainflow's interior point, and the
-    /// first of them: when, and why the interior point failed (saved
-    /// apart, as `extra_programs`).
+    /// Steps another solver took over (Clarabel from grainflow's interior
+    /// point, the interior point from the projected gradient), and the
+    /// first of them: when, and why the chosen solver failed (saved apart,
+    /// as `extra_programs`).
     pub fallback_steps: u64,
     #[serde(skip)]
     pub first_fallback: Option<String>,
