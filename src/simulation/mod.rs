@@ -150,6 +150,14 @@ pub(crate) fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
     if case.domain.geometry == crate::case::Geometry::Axisymmetric {
         return refuse("an axisymmetric scene (domain.geometry = \"axisymmetric\")");
     }
+    if case.contact_section().conic_solver.as_deref() == Some("projected_gradient") {
+        return Err(RunError::Case(format!(
+            "contact.conic_solver = \"projected_gradient\" runs on one rank in this version; \
+             started on {ranks} ranks: run it without mpirun (its products use every thread), \
+             or on several ranks with contact.conic_solver = \"interior_point\" (the \
+             program shared among the ranks)"
+        )));
+    }
     Ok(())
 }
 

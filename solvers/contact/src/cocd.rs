@@ -641,7 +641,11 @@ pub(crate) fn solve_with_clarabel(
 /// The multipliers z of the program whose contacts' impulses are
 /// `impulses` (normal, tangential): the inverse of [`recover`]'s, the
 /// tangential impulse's part out of the contact's tangent plane dropped.
-fn multipliers(contacts: &ContactSet, program: &ConicProgram, impulses: &[(f64, Vec3)]) -> Vec<f64> {
+fn multipliers(
+    contacts: &ContactSet,
+    program: &ConicProgram,
+    impulses: &[(f64, Vec3)],
+) -> Vec<f64> {
     let unit = program.scales.impulse();
     let mut z = vec![0.0; program.b.len()];
     for (a, &(normal, tangential)) in impulses.iter().enumerate() {
