@@ -23,6 +23,15 @@ const SECONDS_3D: [(f64, f64); 2] = [(17_986.0, 89.3), (112_896.0, 3_370.0)];
 const TIGHT_OVER_LOOSE_3D: f64 = 105.1 / 89.3;
 const SECONDS_2D: [(f64, f64); 2] = [(50_000.0, 6.76), (100_000.0, 17.25)];
 
+/// The projected gradient's first step on the same kind of packing (the
+/// soft DEM's deposit, radii shrunk by 1.5 %), one thread, ε = 1e-5:
+/// 0.437 s at 8,748 spheres (110 iterations) and 21.8 s at 112,896 (250);
+/// at ε = 1e-8 0.74 and 39.3 s. A jammed packing takes many more
+/// iterations (the 3D static box's first step: 13,040 at 1e-5, against 250
+/// here), so this is what a step costs at the least.
+const PROJECTED_GRADIENT_3D: [(f64, f64); 2] = [(8_748.0, 0.437), (112_896.0, 21.8)];
+const PROJECTED_GRADIENT_TIGHT_OVER_LOOSE: f64 = 39.3 / 21.8;
+
 /// Clarabel on the same 3D program of 8,748 spheres took 59 times the
 /// interior point's time (2,256 s against 38.1 s, `docs/performance.md`,
 /// before faer 0.24's kernels made the interior point faster still).
@@ -42,6 +51,20 @@ pub fn step_seconds(dimension: usize, grains: f64, tolerance: f64) -> f64 {
     scale * t0 * (grains / n0).powf(exponent)
 }
 
+/// Seconds of the first COCD step of `spheres` 3D spheres with grainflow's
+/// projected gradient at `tolerance`, one thread, on a packing like the
+/// benchmark's (at the least: a jammed packing takes more).
+pub fn projected_gradient_seconds(spheres: f64, tolerance: f64) -> f64 {
+    let [(n0, t0), (n1, t1)] = PROJECTED_GRADIENT_3D;
+    let exponent = (t1 / t0).ln() / (n1 / n0).ln();
+    let scale = if tolerance < 1e-6 {
+        PROJECTED_GRADIENT_TIGHT_OVER_LOOSE
+    } else {
+        1.0
+    };
+    scale * t0 * (spheres / n0).powf(exponent)
+}
+
 /// The `check` line for a COCD scene too large to time a step of, or
 /// `None` where a step is short enough to time here.
 pub fn untimed_line(
@@ -51,19 +74,33 @@ pub fn untimed_line(
     solver: ConicSolver,
     tolerance: f64,
 ) -> Option<String> {
-    let factor = match solver {
-        ConicSolver::InteriorPoint => 1.0,
-        ConicSolver::Clarabel => CLARABEL_OVER_INTERIOR_POINT,
-        // No fit yet: its step is timed on the scene itself.
+    let step = match solver {
+        ConicSolver::InteriorPoint => step_seconds(dimension, grains as f64, tolerance),
+        ConicSolver::Clarabel => {
+            CLARABEL_OVER_INTERIOR_POINT * step_seconds(dimension, grains as f64, tolerance)
+        }
+        ConicSolver::ProjectedGradient if dimension == 3 => {
+            projected_gradient_seconds(grains as f64, tolerance)
+        }
+        // No 2D fit: its step is timed on the scene itself.
         ConicSolver::ProjectedGradient => return None,
     };
-    let step = factor * step_seconds(dimension, grains as f64, tolerance);
+    // Where the interior point's factor sets a long step, what the
+    // projected gradient's would cost.
+    let other = match solver {
+        ConicSolver::InteriorPoint if dimension == 3 => format!(
+            "; contact.conic_solver = \"projected_gradient\" (one rank, no factor) takes about \
+             {} a step on such a packing, more on a jammed one",
+            clock(projected_gradient_seconds(grains as f64, tolerance))
+        ),
+        _ => String::new(),
+    };
     (step > PROBE_LONGEST_STEP).then(|| {
         format!(
             "estimated wall time: not timed here: a COCD step of {grains} grains at rest takes \
              about {} with {} on one thread of a 2-core machine (fitted on packings of up to {} \
              grains, docs/performance.md), {steps:.0} steps about {}; a loose flow is cheaper, \
-             more threads or ranks share it",
+             more threads or ranks share it{other}",
             clock(step),
             solver.name(),
             if dimension == 3 { "112,896" } else { "100,000" },
@@ -93,6 +130,14 @@ mod tests {
         // The paper's 122,932 spheres: about 1.2 hours a step at 1e-8.
         let line = untimed_line(3, 122_932, 10.0, ours, 1e-8).unwrap();
         assert!(line.contains("about 1:1"), "{line}");
+        assert!(line.contains("\"projected_gradient\""), "{line}");
+        // The projected gradient through its measured points, and timed up
+        // to a few 10⁵ spheres.
+        assert!((projected_gradient_seconds(112_896.0, 1e-5) / 21.8 - 1.0).abs() < 1e-12);
+        assert!((projected_gradient_seconds(8_748.0, 1e-8) / 0.788 - 1.0).abs() < 0.01);
+        let gradient = ConicSolver::ProjectedGradient;
+        assert!(untimed_line(3, 122_932, 10.0, gradient, 1e-5).is_none());
+        assert!(untimed_line(3, 1_000_000, 10.0, gradient, 1e-5).is_some());
         // Clarabel is not timed on 10,000 spheres.
         assert!(untimed_line(3, 10_000, 10.0, ConicSolver::Clarabel, 1e-8).is_some());
     }
