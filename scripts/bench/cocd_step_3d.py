@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """One COCD step on a 3D packing of spheres at rest: grainflow's interior
-point on 1 and 2 threads, at each tolerance, and optionally Clarabel (the
-in-process reference, contact.conic_solver = "clarabel") on the same
-program.
+point (and, with --solvers, its projected gradient) on 1 and 2 threads, at
+each tolerance, and optionally Clarabel (the in-process reference,
+contact.conic_solver = "clarabel") on the same program.
 
 The packing: spheres of d = 1 mm +- 10 % (rho = 2500 kg/m3) on a jittered
 lattice in a square box (side chosen for --spheres), packed by the soft DEM
@@ -21,7 +21,8 @@ JSON.
 
 usage: scripts/bench/cocd_step_3d.py [--spheres 10000] [--tolerances 1e-8,1e-5]
          [--threads 1,2] [--ranks 1] [--repeats 2] [--settle-steps 10]
-         [--clarabel] [--work DIR] [--json FILE]
+         [--solvers interior_point,projected_gradient] [--clarabel]
+         [--work DIR] [--json FILE]
 """
 import argparse, csv, json, math, os, subprocess, sys
 
@@ -147,6 +148,8 @@ def main():
     ap.add_argument("--ranks", default="1", help="MPI ranks, e.g. 1,2")
     ap.add_argument("--settle-steps", type=int, default=10,
                     help="hard steps of 1 ms before the timed one (0: from the shrunk deposit)")
+    ap.add_argument("--solvers", default="interior_point",
+                    help="interior_point and/or projected_gradient, e.g. interior_point,projected_gradient")
     ap.add_argument("--clarabel", action="store_true")
     ap.add_argument("--work", default="/tmp/grainflow_cocd3d_bench")
     ap.add_argument("--binary", default="target/release/grainflow")
@@ -160,8 +163,10 @@ def main():
         box = json.load(f)
     case = os.path.join(work, "step.toml")
     write(case, step_case(box["side"], box["height"], rest, "end = 1.0e-3\ndt = 1.0e-3"))
-    configs = [("interior_point", t, float(e), r) for e in a.tolerances.split(",")
-               for r in map(int, a.ranks.split(","))
+    # The projected gradient runs on one rank.
+    configs = [(solver, t, float(e), r) for solver in a.solvers.split(",")
+               for e in a.tolerances.split(",")
+               for r in map(int, a.ranks.split(",")) if r == 1 or solver == "interior_point"
                for t in (map(int, a.threads.split(",")) if r == 1 else [1])]
     if a.clarabel:
         configs += [("clarabel", 2, float(e), 1) for e in a.tolerances.split(",")]
@@ -173,13 +178,14 @@ def main():
                     f'contact.conic_solver="{solver}"', threads=threads, ranks=ranks)
             results[c].append(s["metrics"])
     table = []
-    print(f"{'solver':15} {'ranks':>5} {'threads':>7} {'eps':>7} {'s per step':>22} {'iterations':>10} {'candidates':>10}")
+    print(f"{'solver':18} {'ranks':>5} {'threads':>7} {'eps':>7} {'s per step':>22} {'iterations':>10} {'candidates':>10}")
     for (solver, threads, tol, ranks), ms in results.items():
         times = [m["seconds_per_solve"] for m in ms]
-        print(f"{solver:15} {ranks:5d} {threads:7d} {tol:7.0e} {', '.join(f'{t:.1f}' for t in times):>22} "
+        print(f"{solver:18} {ranks:5d} {threads:7d} {tol:7.0e} {', '.join(f'{t:.1f}' for t in times):>22} "
               f"{ms[0]['mean_iterations']:10.0f} {ms[0]['mean_candidates']:10.0f}")
         table.append({"solver": solver, "ranks": ranks, "threads": threads, "tolerance": tol,
                       "seconds_per_solve": times, "iterations": ms[0]["mean_iterations"],
+                      "fallback_steps": max(m.get("fallback_steps", 0) for m in ms),
                       "candidates": ms[0]["mean_candidates"],
                       "max_penetration": max(m["max_penetration"] for m in ms),
                       "max_coulomb_violation": max(m["max_coulomb_violation"] for m in ms)})
