@@ -256,40 +256,16 @@ pub struct RankShare<'a> {
 }
 
 /// Solves the step's conic program with `solver` (Clarabel taking over a
-/// step grainflow's interior point fails). `tolerance`: the relative gap and feasibility
+/// step grainflow's interior point fails, the interior point one its
+/// projected gradient fails). `tolerance`: the relative gap and feasibility
 /// tolerances (ε of section 3.2). `shared`: on several ranks, this rank's
 /// part of the program (collective): grainflow's interior point solves it
-/// shared, Clarabel the whole program gathered on every rank.
+/// shared, Clarabel the whole program gathered on every rank. `start`: the
+/// impulses (normal, tangential) each contact starts from, the last step's
+/// where it was there, as [`Solution`] holds them; the projected gradient
+/// alone reads them (the interior points start from their own point).
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
-    contacts: &ContactSet,
-    bodies: &Bodies,
-    dimension: Dimension,
-    scales: &Scales,
-    tolerance: f64,
-    max_iterations: u32,
-    solver: ConicSolver,
-    shared: Option<RankShare<'_>>,
-) -> Result<Solution, String> {
-    solve_from(
-        contacts,
-        bodies,
-        dimension,
-        scales,
-        tolerance,
-        max_iterations,
-        solver,
-        shared,
-        None,
-    )
-}
-
-/// [`solve`], the projected gradient starting from the impulses `start`
-/// of each contact (normal, tangential; the last step's where the contact
-/// was there, as [`Solution`] holds them). The interior point and Clarabel
-/// start from their own point whatever `start`.
-#[allow(clippy::too_many_arguments)]
-pub fn solve_from(
     contacts: &ContactSet,
     bodies: &Bodies,
     dimension: Dimension,

@@ -60,24 +60,7 @@ impl NormalPattern {
     /// unknowns (not where the ranks share the separator, which stays last).
     fn new(a: &CscMatrix<f64>, scale: f64, columns: usize, reorder: bool) -> Self {
         let rows = a.m;
-        let mut row_start = vec![0usize; rows + 1];
-        for &r in &a.rowval {
-            row_start[r + 1] += 1;
-        }
-        for r in 0..rows {
-            row_start[r + 1] += row_start[r];
-        }
-        let mut fill = row_start.clone();
-        let mut row_column = vec![0usize; a.rowval.len()];
-        let mut row_value = vec![0.0; a.rowval.len()];
-        for c in 0..a.n {
-            for k in a.colptr[c]..a.colptr[c + 1] {
-                let r = a.rowval[k];
-                row_column[fill[r]] = c;
-                row_value[fill[r]] = a.nzval[k] / scale;
-                fill[r] += 1;
-            }
-        }
+        let (row_start, mut row_column, row_value) = crate::csc::scaled_rows(a, scale);
         // The unknowns renumbered by a fill-reducing ordering (AMD) of the
         // normal matrix's graph, once per step: the factor then takes the
         // matrix as assembled, with no permutation at each iteration.

@@ -40,7 +40,7 @@ const POWER_ITERATIONS: usize = 30;
 const LIPSCHITZ_MARGIN: f64 = 1.1;
 /// Iterations between two stopping tests (each costs a product pair).
 const TEST_EVERY: u32 = 10;
-/// Rows below which the products run on one thread.
+/// Outputs shorter than this are summed on one thread.
 const PARALLEL_ROWS: usize = 20_000;
 
 /// A in compressed rows and columns, scaled by 1/κ (as the interior point
@@ -60,24 +60,7 @@ impl Operator {
     fn new(program: &ConicProgram, scale: f64) -> Self {
         let a = &program.a_matrix;
         let (rows, columns) = (a.m, a.n);
-        let mut row_start = vec![0usize; rows + 1];
-        for &r in &a.rowval {
-            row_start[r + 1] += 1;
-        }
-        for r in 0..rows {
-            row_start[r + 1] += row_start[r];
-        }
-        let mut fill = row_start.clone();
-        let mut row_column = vec![0usize; a.rowval.len()];
-        let mut row_value = vec![0.0; a.rowval.len()];
-        for c in 0..columns {
-            for k in a.colptr[c]..a.colptr[c + 1] {
-                let r = a.rowval[k];
-                row_column[fill[r]] = c;
-                row_value[fill[r]] = a.nzval[k] / scale;
-                fill[r] += 1;
-            }
-        }
+        let (row_start, row_column, row_value) = crate::csc::scaled_rows(a, scale);
         Operator {
             rows,
             columns,
@@ -92,36 +75,36 @@ impl Operator {
 
     /// out = A x.
     fn times(&self, x: &[f64], out: &mut [f64]) {
-        let row = |r: usize| -> f64 {
-            (self.row_start[r]..self.row_start[r + 1])
-                .map(|k| self.row_value[k] * x[self.row_column[k]])
-                .sum()
-        };
-        if self.rows < PARALLEL_ROWS {
-            out.iter_mut().enumerate().for_each(|(r, o)| *o = row(r));
-        } else {
-            out.par_iter_mut()
-                .enumerate()
-                .with_min_len(1024)
-                .for_each(|(r, o)| *o = row(r));
-        }
+        sums(&self.row_start, &self.row_column, &self.row_value, x, out);
     }
 
     /// out = Aᵀ z.
     fn transpose_times(&self, z: &[f64], out: &mut [f64]) {
-        let column = |c: usize| -> f64 {
-            (self.column_start[c]..self.column_start[c + 1])
-                .map(|k| self.column_value[k] * z[self.column_row[k]])
-                .sum()
-        };
-        if self.rows < PARALLEL_ROWS {
-            out.iter_mut().enumerate().for_each(|(c, o)| *o = column(c));
-        } else {
-            out.par_iter_mut()
-                .enumerate()
-                .with_min_len(512)
-                .for_each(|(c, o)| *o = column(c));
-        }
+        sums(
+            &self.column_start,
+            &self.column_row,
+            &self.column_value,
+            z,
+            out,
+        );
+    }
+}
+
+/// `out[i] = Σ_k value[k] v[index[k]]` over `k` in `start[i]..start[i + 1]`,
+/// each sum in that order (on threads for long outputs: the same bits).
+fn sums(start: &[usize], index: &[usize], value: &[f64], v: &[f64], out: &mut [f64]) {
+    let sum = |i: usize| -> f64 {
+        (start[i]..start[i + 1])
+            .map(|k| value[k] * v[index[k]])
+            .sum()
+    };
+    if out.len() < PARALLEL_ROWS {
+        out.iter_mut().enumerate().for_each(|(i, o)| *o = sum(i));
+    } else {
+        out.par_iter_mut()
+            .enumerate()
+            .with_min_len(512)
+            .for_each(|(i, o)| *o = sum(i));
     }
 }
 

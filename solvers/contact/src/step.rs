@@ -414,7 +414,7 @@ impl HardContact {
                     // steps); the interior points start from their own.
                     let warm = self.conic_solver == ConicSolver::ProjectedGradient;
                     let start = warm.then(|| self.last_impulses(system, contacts));
-                    let solution = cocd::solve_from(
+                    let solution = cocd::solve(
                         contacts,
                         bodies,
                         system.dimension(),

@@ -237,6 +237,7 @@ fn grain_on_two_glued_grains_is_held_by_the_statics_forces() {
         100,
         ConicSolver::Clarabel,
         None,
+        None,
     )
     .unwrap();
     let bounds: Vec<f64> = contacts.gap.iter().map(|d| -d / dt).collect();

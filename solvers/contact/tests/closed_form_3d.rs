@@ -370,6 +370,7 @@ fn resting_stacks_carry_the_weights_statics_gives() {
                 iterations,
                 solver,
                 None,
+                None,
             )
             .unwrap();
             assert!(
