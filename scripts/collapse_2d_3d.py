@@ -62,6 +62,8 @@ SCENES = {
 # The fine scene's 3D column; a scene of radius r rains (4 mm / r)^3 times
 # as many grains, for the same column.
 FINE_COLUMN_GRAINS = 11930
+# Where the 3D rain's glued bed ends (m): under the column only.
+RAIN_BED = 0.21
 FIELDS = [
     "dimension", "model", "slope", "member", "dt", "status", "column_grains", "initial_length",
     "initial_height", "aspect_ratio", "front_0.4", "front_1.0", "runout", "front_max_speed",
@@ -78,7 +80,7 @@ def fill_sets(scene):
         return []
     r = scene["radius"]
     count = round(FINE_COLUMN_GRAINS * (SCENES["fine"]["radius"] / r) ** 3)
-    return bed_sets_3d(r, 0.25, 0.21) + [f"particles.block[1].count={count}",
+    return bed_sets_3d(r, 0.25, RAIN_BED) + [f"particles.block[1].count={count}",
                                          f"contact.contact_time={scene['contact_time']}"]
 
 
@@ -114,6 +116,63 @@ def fill_3d(binary, work, scene, threads):
     return deposit
 
 
+def vtp_arrays(path, names):
+    """The named point arrays (and "position") of a particle file grainflow
+    wrote (raw appended data, UInt64 headers), as lists of tuples."""
+    import re
+    import struct
+    with open(path, "rb") as f:
+        data = f.read()
+    head, raw = data.split(b'<AppendedData encoding="raw">', 1)
+    raw = raw[raw.index(b"_") + 1:]
+    kinds = {"Float64": "d", "UInt64": "Q", "UInt8": "B", "Int64": "q"}
+    out = {}
+    for m in re.finditer(rb'<DataArray type="(\w+)" Name="(\w+)" NumberOfComponents="(\d+)" '
+                         rb'format="appended" offset="(\d+)"', head):
+        kind, name, components, offset = (m.group(1).decode(), m.group(2).decode(),
+                                          int(m.group(3)), int(m.group(4)))
+        if name not in names:
+            continue
+        size = struct.unpack_from("<Q", raw, offset)[0]
+        code = kinds[kind]
+        count = size // struct.calcsize(code)
+        values = struct.unpack_from(f"<{count}{code}", raw, offset + 8)
+        out[name] = [tuple(values[i:i + components]) for i in range(0, count, components)]
+    return out
+
+
+def glued_of_rain(work):
+    """The glued grains under the rained 3D column, as the rain drew their
+    radii (its first particle file), as `x,y,z,radius,group` in WORK. The
+    release's lattice over the rest of the channel draws other radii for
+    the same sites: a rained grain sitting on a small glued one would
+    overlap the larger one drawn there."""
+    glued = os.path.join(work, "glued_3d.csv")
+    if not os.path.exists(glued):
+        first = os.path.join(work, "fill_3d", "particles", "particles_000000.vtp")
+        arrays = vtp_arrays(first, {"position", "radius", "fixed"})
+        with open(glued, "w") as f:
+            f.write("x,y,z,radius,group\n")
+            for (x, y, z), (r,), (fixed,) in zip(arrays["position"], arrays["radius"], arrays["fixed"]):
+                if fixed:
+                    f.write(f"{x:.9g},{y:.9g},{z:.9g},{r:.9g},0\n")
+    return glued
+
+
+def rained_release_case(work, scene, glued):
+    """The 3D release case of a scene rained into WORK: the rain's glued
+    grains kept as they were drawn (a fixed `file` block), the glued lattice
+    continued beyond them to the channel's end."""
+    case = os.path.join(work, "channel_collapse_3d_rained.toml")
+    with open(os.path.join(CASES, "channel_collapse_3d.toml")) as f:
+        text = f.read()
+    marker = "[contact]"
+    block = f'[[particles.block]]\nkind = "file"\npath = "{os.path.abspath(glued)}"\nfixed = true\n\n'
+    with open(case, "w") as f:
+        f.write(text.replace(marker, block + marker, 1))
+    return case
+
+
 def gravity(dimension, slope, member):
     """Gravity tilted by `slope` degrees; member k of an ensemble adds
     k x 1e-7 m/s^2 along the slope (a single run of a collapse is one
@@ -134,8 +193,10 @@ def front_at(rows, time):
 
 
 def scene_sets(scene, dimension):
-    """The --set of the coarse scene's grain size, lattice and channel
-    (none for the fine scene, the cases' own)."""
+    """The --set of the coarse and paper scenes' grain size, lattice and
+    channel (none for the fine scene, the cases' own). A scene rained into
+    the work folder (the paper's) continues the glued lattice beyond the
+    rain's, whose grains its case keeps (`rained_release_case`)."""
     if scene["radius"] == SCENES["fine"]["radius"]:
         return []
     r, length = scene["radius"], scene["length_3d"]
@@ -143,7 +204,14 @@ def scene_sets(scene, dimension):
         spacing = 2.2 * r
         return [f"particles.radius={r}", f"particles.block[0].spacing={spacing}",
                 f"particles.block[0].upper=[2.5,{spacing}]"]
-    return bed_sets_3d(r, length, length) + [f"walls[2].point=[{length},0.0,0.0]"]
+    sets = bed_sets_3d(r, length, length) + [f"walls[2].point=[{length},0.0,0.0]"]
+    if scene["deposit_3d"] is None:
+        # The rain's lattice: sites at 1.1 r + (i + 1/2) 2.2 r below RAIN_BED.
+        spacing = 2.2 * r
+        sites = math.floor((RAIN_BED - 1.1 * r) / spacing + 1e-9)
+        lower = f"particles.block[0].lower=[{1.1 * r + sites * spacing},0.0,0.0]"
+        sets = [lower if s.startswith("particles.block[0].lower=") else s for s in sets]
+    return sets
 
 
 def hard_contact_3d(work, deposit):
@@ -168,6 +236,8 @@ def release(binary, work, scene, dimension, model, slope, member, deposit, end, 
     out = os.path.join(work, f"run_{dimension}d_{model}_{slope:g}deg_{member}")
     if dimension == 2:
         case = os.path.join(CASES, "erodible_bed_2d.toml")
+    elif model == "soft" and scene["deposit_3d"] is None:
+        case = rained_release_case(work, scene, glued_of_rain(work))
     elif model == "soft":
         case = os.path.join(CASES, "channel_collapse_3d.toml")
     else:
