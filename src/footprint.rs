@@ -166,7 +166,7 @@ impl Footprint {
             .as_ref()
             .filter(|c| c.model == ContactModel::Cocd);
         let contact_bytes = match cocd {
-            Some(c) if c.conic_solver.as_deref() == Some("projected_gradient") => {
+            Some(c) if c.conic_solver() == grainflow_contact::ConicSolver::ProjectedGradient => {
                 projected_gradient_step_bytes(dim, total_grains)
             }
             Some(_) => cocd_step_bytes(dim, total_grains),

@@ -236,6 +236,17 @@ impl ContactSection {
         self.model.is_hard()
     }
 
+    /// The COCD program's solver `conic_solver` names (validated:
+    /// "interior_point", the default, "clarabel" or "projected_gradient").
+    pub fn conic_solver(&self) -> grainflow_contact::ConicSolver {
+        use grainflow_contact::ConicSolver;
+        match self.conic_solver.as_deref() {
+            Some("clarabel") => ConicSolver::Clarabel,
+            Some("projected_gradient") => ConicSolver::ProjectedGradient,
+            _ => ConicSolver::InteriorPoint,
+        }
+    }
+
     pub fn calibration(&self) -> &str {
         self.calibration.as_deref().unwrap_or("exact")
     }

@@ -441,11 +441,7 @@ pub fn hard_contact(case: &Case) -> Option<HardContact> {
         },
         ContactModel::Soft => return None,
     };
-    let conic_solver = match c.conic_solver.as_deref() {
-        Some("clarabel") => ConicSolver::Clarabel,
-        Some("projected_gradient") => ConicSolver::ProjectedGradient,
-        _ => ConicSolver::InteriorPoint,
-    };
+    let conic_solver = c.conic_solver();
     let (tolerance, iterations) = match (method, conic_solver) {
         (Method::Cocd, ConicSolver::ProjectedGradient) => (1e-8, 20_000),
         (Method::Cocd, _) => (1e-8, 200),

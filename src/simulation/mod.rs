@@ -150,11 +150,8 @@ pub(crate) fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
     if case.domain.geometry == crate::case::Geometry::Axisymmetric {
         return refuse("an axisymmetric scene (domain.geometry = \"axisymmetric\")");
     }
-    let solver = case
-        .contact
-        .as_ref()
-        .and_then(|c| c.conic_solver.as_deref());
-    if solver == Some("projected_gradient") {
+    let solver = case.contact.as_ref().map(|c| c.conic_solver());
+    if solver == Some(grainflow_contact::ConicSolver::ProjectedGradient) {
         return Err(RunError::Case(format!(
             "contact.conic_solver = \"projected_gradient\" runs on one rank in this version; \
              started on {ranks} ranks: run it without mpirun (its products use every thread), \

@@ -295,11 +295,14 @@ pub fn solve(
             let mut projected = slack.clone();
             cones.project(&mut projected);
             let gap = dot(&projected, &z).abs();
-            operator.times(&gradient.x, &mut ax);
-            let px: Vec<f64> = gradient.x.iter().zip(mass).map(|(x, p)| x * p).collect();
-            let quadratic = 0.5 * dot(&gradient.x, &px);
+            // A x(z) = b − s(z), and φ(z) = ½ xᵀPx + bᵀz: no product again.
+            for r in 0..m {
+                ax[r] = b[r] - slack[r];
+            }
+            let bz = dot(&b, &z);
+            let quadratic = value - bz;
             let primal = quadratic + dot(&q, &gradient.x);
-            let dual = -quadratic - dot(&b, &z);
+            let dual = -quadratic - bz;
             let primal_ok = distance
                 <= tolerance
                     * (1.0
