@@ -146,28 +146,46 @@ fn the_projected_gradient_keeps_grains_at_rest_a_decade_tighter_than_the_interio
     assert_eq!(metric(&summary, "fallback_steps"), 0.0);
 }
 
-/// The projected gradient runs on one rank: `check --ranks 2` refuses it,
-/// naming the key and what runs on several ranks.
+/// `check --ranks 2` reports the projected gradient's separator as the
+/// interior point's (the same program, shared alike): its unknowns, and
+/// that it exchanges them at every iteration instead of factorising Σ,
+/// which sets no memory beside each rank's share of the scene.
 #[test]
-fn the_projected_gradient_is_refused_on_several_ranks() {
-    let output = std::process::Command::new(env!("CARGO_BIN_EXE_grainflow"))
-        .args([
-            "check",
-            common::case_path("static_box_3d.toml").to_str().unwrap(),
-            "--ranks",
-            "2",
-            "--set",
-            "contact.conic_solver=\"projected_gradient\"",
-        ])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(!output.status.success(), "{stderr}");
+fn check_reports_the_projected_gradients_separator_on_several_ranks() {
+    let check = |solver: &str| {
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_grainflow"))
+            .args([
+                "check",
+                common::case_path("static_box_3d.toml").to_str().unwrap(),
+                "--ranks",
+                "2",
+                "--set",
+                &format!("contact.conic_solver=\"{solver}\""),
+            ])
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&output.stdout).to_string();
+        assert!(
+            output.status.success(),
+            "{solver}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        stdout
+    };
+    let separator = |report: &str| -> String {
+        let from = report
+            .find("the contact program's separator:")
+            .expect(report);
+        let line = &report[from..];
+        line[..line.find(" unknowns").expect(report)].to_string()
+    };
+    let (gradient, interior) = (check("projected_gradient"), check("interior_point"));
+    assert_eq!(separator(&gradient), separator(&interior));
     assert!(
-        stderr.contains("contact.conic_solver = \"projected_gradient\" runs on one rank")
-            && stderr.contains("\"interior_point\""),
-        "{stderr}"
+        gradient.contains("the projected gradient factorises nothing"),
+        "{gradient}"
     );
+    assert!(!interior.contains("factorises nothing"), "{interior}");
 }
 
 /// The first 0.1 s of the 2D column collapse

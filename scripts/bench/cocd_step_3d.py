@@ -15,8 +15,9 @@ one step of 1 ms is timed per configuration (`seconds_per_solve`, the
 conic solve with its assembly), --repeats times, alternating the
 configurations. With --ranks 1,2 each configuration also runs on that
 many MPI ranks (mpirun, one thread each beyond one rank; the binary built
-with --features mpi): the program shared among them, its separator's
-Schur complement factorised together. Prints the table and writes it as
+with --features mpi): the program shared among them, the interior point's
+separator's Schur complement factorised together, the projected
+gradient's Aᵀz on the separator summed over the ranks each iteration. Prints the table and writes it as
 JSON.
 
 usage: scripts/bench/cocd_step_3d.py [--spheres 10000] [--tolerances 1e-8,1e-5]
@@ -163,10 +164,9 @@ def main():
         box = json.load(f)
     case = os.path.join(work, "step.toml")
     write(case, step_case(box["side"], box["height"], rest, "end = 1.0e-3\ndt = 1.0e-3"))
-    # The projected gradient runs on one rank.
     configs = [(solver, t, float(e), r) for solver in a.solvers.split(",")
                for e in a.tolerances.split(",")
-               for r in map(int, a.ranks.split(",")) if r == 1 or solver == "interior_point"
+               for r in map(int, a.ranks.split(","))
                for t in (map(int, a.threads.split(",")) if r == 1 else [1])]
     if a.clarabel:
         configs += [("clarabel", 2, float(e), 1) for e in a.tolerances.split(",")]

@@ -61,10 +61,31 @@ fn cocd_separator(case: &Case, ranks: usize) -> Result<String, RunError> {
     let Some((separator, grid)) = sharing::check_separator_fits(case, ranks)? else {
         return Ok(String::new());
     };
-    let per_rank = Footprint::of(case).per_rank_bytes(ranks, separator.held_per_rank_bytes());
+    let footprint = Footprint::of(case);
+    let (per_rank, held) = if sharing::separator_factorised(case) {
+        (
+            footprint.per_rank_bytes(ranks, separator.held_per_rank_bytes()),
+            "its share of the scene, Σ and its factor's dense end",
+        )
+    } else {
+        (
+            footprint.per_rank_bytes(ranks, 0.0),
+            "its share of the scene; Σ beside it only where the interior point takes over a step",
+        )
+    };
+    let exchange = if sharing::separator_factorised(case) {
+        String::new()
+    } else {
+        format!(
+            "; the projected gradient factorises nothing: each iteration the ranks add up their \
+             parts of Aᵀz on the separator's {} unknowns ({} exchanged)",
+            separator.separator,
+            human_bytes(8.0 * separator.separator as f64),
+        )
+    };
     Ok(format!(
-        "  COCD on {ranks} ranks (process grid {} x {} x {}): {}; memory per rank about {} \
-         (its share of the scene, Σ and its factor's dense end)\n",
+        "  COCD on {ranks} ranks (process grid {} x {} x {}): {}{exchange}; memory per rank \
+         about {} ({held})\n",
         grid.ranks[0],
         grid.ranks[1],
         grid.ranks[2],

@@ -50,16 +50,29 @@ pub fn check_separator_fits(
     let separator = cocd_separator(case, ranks).map_err(crate::RunError::Case)?;
     if let Some((separator, _)) = &separator {
         let held = separator.held_per_rank_bytes();
+        let what = if separator_factorised(case) {
+            "contact.model = \"cocd\": the dense Schur complement of its separator"
+        } else {
+            "contact.model = \"cocd\": the dense Schur complement of its separator, which the \
+             interior point factorises where it takes over a step the projected gradient did \
+             not solve"
+        };
         crate::footprint::Footprint::of(case).check_fits_holding(
             ranks,
             crate::footprint::machine_memory(),
-            Some((
-                held,
-                "contact.model = \"cocd\": the dense Schur complement of its separator",
-            )),
+            Some((held, what)),
         )?;
     }
     Ok(separator)
+}
+
+/// Whether a COCD scene's solver factorises the separator's Schur
+/// complement at every iteration (the interior point): not the projected
+/// gradient, which sums the ranks' parts of Aᵀz on the separator instead
+/// (and needs Σ only where the interior point takes over a step).
+pub fn separator_factorised(case: &Case) -> bool {
+    case.contact.as_ref().map(|c| c.conic_solver())
+        != Some(grainflow_contact::ConicSolver::ProjectedGradient)
 }
 
 /// Fewer grains per rank than this and a run warns.

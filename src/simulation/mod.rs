@@ -150,15 +150,6 @@ pub(crate) fn check_ranks(case: &Case, ranks: usize) -> Result<(), RunError> {
     if case.domain.geometry == crate::case::Geometry::Axisymmetric {
         return refuse("an axisymmetric scene (domain.geometry = \"axisymmetric\")");
     }
-    let solver = case.contact.as_ref().map(|c| c.conic_solver());
-    if solver == Some(grainflow_contact::ConicSolver::ProjectedGradient) {
-        return Err(RunError::Case(format!(
-            "contact.conic_solver = \"projected_gradient\" runs on one rank in this version; \
-             started on {ranks} ranks: run it without mpirun (its products use every thread), \
-             or on several ranks with contact.conic_solver = \"interior_point\" (the \
-             program shared among the ranks)"
-        )));
-    }
     Ok(())
 }
 

@@ -259,8 +259,9 @@ pub struct RankShare<'a> {
 /// step grainflow's interior point fails, the interior point one its
 /// projected gradient fails). `tolerance`: the relative gap and feasibility
 /// tolerances (ε of section 3.2). `shared`: on several ranks, this rank's
-/// part of the program (collective): grainflow's interior point solves it
-/// shared, Clarabel the whole program gathered on every rank. `start`: the
+/// part of the program (collective): grainflow's interior point and
+/// projected gradient solve it shared, Clarabel the whole program gathered
+/// on every rank. `start`: the
 /// impulses (normal, tangential) each contact starts from, the last step's
 /// where it was there, as [`Solution`] holds them; the projected gradient
 /// alone reads them (the interior points start from their own point).
@@ -277,52 +278,19 @@ pub fn solve(
     start: Option<&[(f64, Vec3)]>,
 ) -> Result<Solution, String> {
     let program = build(contacts, bodies, dimension, scales);
+    let start = start.map(|impulses| multipliers(contacts, &program, impulses));
     let ((x, z, iterations, reduced_accuracy), fallback_reason) = match shared {
-        None if solver == ConicSolver::ProjectedGradient => {
+        None => {
             let ranks = Ranks::alone(program.mass.len());
-            let start = start.map(|impulses| multipliers(contacts, &program, impulses));
-            match crate::projected_gradient::solve(
+            solve_with_fallbacks(
+                solver,
                 &program,
                 tolerance,
                 max_iterations,
                 start.as_deref(),
-            ) {
-                Ok(solution) => (solution, None),
-                Err(why) => with_fallback(
-                    ConicSolver::InteriorPoint,
-                    || {
-                        crate::interior_point::solve(
-                            &program,
-                            tolerance,
-                            INTERIOR_POINT_ITERATIONS,
-                            ranks,
-                        )
-                    },
-                    || solve_with_clarabel(&program, tolerance, INTERIOR_POINT_ITERATIONS),
-                )
-                .map(|(solution, again)| {
-                    let reason = match again {
-                        Some(again) => format!("{why}; then {again}"),
-                        None => why,
-                    };
-                    (solution, Some(reason))
-                })?,
-            }
-        }
-        None => {
-            let ranks = Ranks::alone(program.mass.len());
-            with_fallback(
-                solver,
-                || crate::interior_point::solve(&program, tolerance, max_iterations, ranks),
-                || solve_with_clarabel(&program, tolerance, max_iterations),
+                ranks,
+                |iterations| solve_with_clarabel(&program, tolerance, iterations),
             )?
-        }
-        Some(_) if solver == ConicSolver::ProjectedGradient => {
-            return Err(
-                "contact.conic_solver = \"projected_gradient\" runs on one rank; on several \
-                 ranks use \"interior_point\" (the program shared among the ranks)"
-                    .into(),
-            )
         }
         Some(RankShare {
             separator,
@@ -335,15 +303,19 @@ pub fn solve(
                 communicator: Some(communicator),
                 interior: shared.interior,
             };
-            // The interior point's decisions are taken over all ranks: it
-            // fails on every rank alike, and every rank takes Clarabel's.
-            let ((x, z, iterations, reduced), why) = with_fallback(
+            // The solvers' decisions are taken over all ranks: one fails on
+            // every rank alike, and every rank takes the next one's.
+            let ((x, z, iterations, reduced), why) = solve_with_fallbacks(
                 solver,
-                || crate::interior_point::solve(&shared.program, tolerance, max_iterations, ranks),
-                || {
+                &shared.program,
+                tolerance,
+                max_iterations,
+                start.as_deref(),
+                ranks,
+                |iterations| {
                     let (whole, layout) = shared.gathered(communicator);
                     let (x, z, iterations, reduced) =
-                        solve_with_clarabel(&whole, tolerance, max_iterations)?;
+                        solve_with_clarabel(&whole, tolerance, iterations)?;
                     let (x, z) = layout.rank_part(&x, &z);
                     Ok((x, z, iterations, reduced))
                 },
@@ -364,21 +336,44 @@ const INTERIOR_POINT_ITERATIONS: u32 = 200;
 /// (x, z, iterations, reduced accuracy) of a conic solve.
 type ConicSolution = (Vec<f64>, Vec<f64>, u32, bool);
 
-/// The solution of `solver`: grainflow's interior point, Clarabel taking
-/// over a step it fails (and stopping the run if it fails too), with the
-/// interior point's failure; or Clarabel's on request.
-fn with_fallback(
+/// The solution of `solver` on `program` (shared among `ranks`), with why
+/// the solvers before the one that solved it failed: grainflow's projected
+/// gradient hands a step it does not solve to the interior point
+/// ([`INTERIOR_POINT_ITERATIONS`]), the interior point one it fails to
+/// `clarabel` (and the run stops if Clarabel fails too); Clarabel alone on
+/// request. `start`: the projected gradient's multipliers; `clarabel`
+/// takes its iterations (the case's, the interior point's after the
+/// projected gradient).
+fn solve_with_fallbacks(
     solver: ConicSolver,
-    interior_point: impl FnOnce() -> Result<ConicSolution, String>,
-    clarabel: impl FnOnce() -> Result<ConicSolution, String>,
+    program: &ConicProgram,
+    tolerance: f64,
+    max_iterations: u32,
+    start: Option<&[f64]>,
+    ranks: Ranks<'_>,
+    clarabel: impl FnOnce(u32) -> Result<ConicSolution, String>,
 ) -> Result<(ConicSolution, Option<String>), String> {
-    if solver == ConicSolver::Clarabel {
-        return Ok((clarabel()?, None));
-    }
-    match interior_point() {
-        Ok(solution) => Ok((solution, None)),
+    let (interior_point_iterations, earlier) = match solver {
+        ConicSolver::Clarabel => return Ok((clarabel(max_iterations)?, None)),
+        ConicSolver::InteriorPoint => (max_iterations, None),
+        ConicSolver::ProjectedGradient => {
+            match crate::projected_gradient::solve(program, tolerance, max_iterations, start, ranks)
+            {
+                Ok(solution) => return Ok((solution, None)),
+                Err(why) => (INTERIOR_POINT_ITERATIONS, Some(why)),
+            }
+        }
+    };
+    let joined = |why: String| match &earlier {
+        Some(earlier) => format!("{earlier}; then {why}"),
+        None => why,
+    };
+    match crate::interior_point::solve(program, tolerance, interior_point_iterations, ranks) {
+        Ok(solution) => Ok((solution, earlier)),
         Err(why) => {
-            let solution = clarabel().map_err(|again| format!("{why}; then {again}"))?;
+            let why = joined(why);
+            let solution = clarabel(interior_point_iterations)
+                .map_err(|again| format!("{why}; then {again}"))?;
             Ok((solution, Some(why)))
         }
     }

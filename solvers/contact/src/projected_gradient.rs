@@ -28,9 +28,19 @@
 //! the data and the objective, below ε. Each output element of a product
 //! sums its terms in one fixed order, so the iterates do not depend on the
 //! number of threads.
+//!
+//! On several ranks ([`Ranks`]) each rank holds its rows of A and the
+//! columns they reach, the separator's on every rank (see
+//! [`crate::shared_program`]): A x is the rank's own rows, Aᵀz on the
+//! separator adds the ranks' parts (one exchange of the separator's
+//! unknowns an iteration), and every sum or extreme the iteration decides
+//! by is taken over the ranks, so that every rank takes the same steps,
+//! restarts and stop. The iterates are one rank's up to the order of the
+//! sums.
 
 use crate::cocd::ConicProgram;
 use crate::second_order_cone::Cone3;
+use crate::shared_program::Ranks;
 use rayon::prelude::*;
 
 /// Power iterations for the largest eigenvalue of the scaled N.
@@ -179,6 +189,7 @@ fn project_on_cone(v: &Cone3) -> Cone3 {
 /// Work arrays of the dual's gradient.
 struct Gradient<'a> {
     operator: &'a Operator,
+    ranks: Ranks<'a>,
     mass: &'a [f64],
     q: &'a [f64],
     b: &'a [f64],
@@ -188,22 +199,30 @@ struct Gradient<'a> {
 
 impl Gradient<'_> {
     /// x(z) = −P⁻¹(q + Aᵀz) into `self.x`, s(z) = b − A x(z) into `slack`;
-    /// returns φ(z) = ½ x(z)ᵀP x(z) + bᵀz.
-    fn at(&mut self, z: &[f64], slack: &mut [f64]) -> f64 {
+    /// returns (½ x(z)ᵀP x(z), bᵀz), whose sum is φ(z), each over the
+    /// ranks where `reduce`; the rank's own parts where not (the
+    /// iterations between two tests need no φ).
+    fn at(&mut self, z: &[f64], slack: &mut [f64], reduce: bool) -> (f64, f64) {
         self.operator.transpose_times(z, &mut self.atz);
+        self.ranks.sum_separator(&mut self.atz);
         for c in 0..self.operator.columns {
             self.x[c] = -(self.q[c] + self.atz[c]) / self.mass[c];
         }
         self.operator.times(&self.x, slack);
-        let mut value = 0.0;
-        for c in 0..self.operator.columns {
-            value += 0.5 * self.mass[c] * self.x[c] * self.x[c];
-        }
         for r in 0..self.operator.rows {
-            value += self.b[r] * z[r];
             slack[r] = self.b[r] - slack[r];
         }
-        value
+        if !reduce {
+            return (0.0, 0.0);
+        }
+        let px: Vec<f64> = self.mass.iter().zip(&self.x).map(|(m, x)| m * x).collect();
+        let mut sums = [
+            0.5 * dot(&px[..self.ranks.interior], &self.x[..self.ranks.interior]),
+            dot(self.b, z),
+        ];
+        self.ranks.sum_each(&mut sums);
+        sums[0] += 0.5 * dot(&px[self.ranks.interior..], &self.x[self.ranks.interior..]);
+        (sums[0], sums[1])
     }
 }
 
@@ -217,13 +236,16 @@ fn infinity_norm(v: &[f64]) -> f64 {
 
 /// Solves `program` to the interior point's test at `tolerance` within
 /// `max_iterations`, from the multipliers `start` (in the program's units,
-/// as returned; zero where `None`). Returns (x, z, iterations, false) in
-/// the program's units, as [`crate::interior_point::solve`] does.
+/// as returned; zero where `None`), shared among `ranks` as the interior
+/// point's. Returns (x, z, iterations, false) in the program's units, as
+/// [`crate::interior_point::solve`] does; on several ranks every rank
+/// returns or fails alike.
 pub fn solve(
     program: &ConicProgram,
     tolerance: f64,
     max_iterations: u32,
     start: Option<&[f64]>,
+    ranks: Ranks<'_>,
 ) -> Result<(Vec<f64>, Vec<f64>, u32, bool), String> {
     let (n, m) = (program.mass.len(), program.b.len());
     let kappa = program.row_scale();
@@ -239,6 +261,7 @@ pub fn solve(
     let fail = |what: String| format!("the projected gradient ({m} rows, {n} unknowns): {what}");
     let mut gradient = Gradient {
         operator: &operator,
+        ranks,
         mass,
         q: &q,
         b: &b,
@@ -247,13 +270,21 @@ pub fn solve(
     };
 
     // L: the largest eigenvalue of S = D^½ A P⁻¹ Aᵀ D^½, by power iteration
-    // (w ← S w/|S w|, the estimate wᵀ S w at |w| = 1).
+    // (w ← S w/|S w|, the estimate wᵀ S w at |w| = 1), from a start that
+    // depends on each row's place in its cone alone, not on how the rows
+    // are numbered or shared among ranks.
     let lipschitz = {
-        let mut w: Vec<f64> = (0..m).map(|r| 1.0 + (r % 7) as f64 * 0.1).collect();
+        let linear = cones.linear;
+        let mut w: Vec<f64> = (0..m)
+            .map(|r| match r.checked_sub(linear) {
+                None => 1.0,
+                Some(k) => 1.0 + 0.1 * (k % 3) as f64,
+            })
+            .collect();
         let (mut u, mut atu, mut sw) = (vec![0.0; m], vec![0.0; n], vec![0.0; m]);
         let mut estimate: f64 = 0.0;
         for _ in 0..POWER_ITERATIONS {
-            let norm = dot(&w, &w).sqrt();
+            let norm = ranks.sum(dot(&w, &w)).sqrt();
             if norm == 0.0 {
                 break;
             }
@@ -262,10 +293,11 @@ pub fn solve(
                 u[r] = metric[r].sqrt() * w[r];
             }
             operator.transpose_times(&u, &mut atu);
+            ranks.sum_separator(&mut atu);
             atu.iter_mut().zip(mass).for_each(|(e, p)| *e /= p);
             operator.times(&atu, &mut sw);
             sw.iter_mut().zip(&metric).for_each(|(e, d)| *e *= d.sqrt());
-            estimate = dot(&w, &sw);
+            estimate = ranks.sum(dot(&w, &sw));
             std::mem::swap(&mut w, &mut sw);
         }
         LIPSCHITZ_MARGIN * estimate.max(f64::MIN_POSITIVE)
@@ -273,8 +305,9 @@ pub fn solve(
     let mut step = 1.0 / lipschitz;
 
     // The sizes the stopping test is relative to, as the interior point's.
-    let size = program.size();
-    let norm_b = infinity_norm(&b);
+    let weighted: Vec<f64> = mass.iter().zip(&program.free).map(|(m, u)| m * u).collect();
+    let size = ranks.dot_columns(&weighted, &program.free);
+    let norm_b = ranks.max(infinity_norm(&b));
 
     let mut z: Vec<f64> = match start {
         Some(start) => start.iter().map(|v| v * kappa).collect(),
@@ -289,26 +322,21 @@ pub fn solve(
     let mut value_at_z = f64::INFINITY;
     for iteration in 0..=max_iterations {
         if iteration % TEST_EVERY == 0 || iteration == max_iterations {
-            let value = gradient.at(&z, &mut slack);
+            let (quadratic, bz) = gradient.at(&z, &mut slack, true);
+            let value = quadratic + bz;
             // s = Π_K(s(z)) and its distance; the gap sᵀz of the projected s.
-            let distance = cones.distance(&slack);
+            let distance = ranks.max(cones.distance(&slack));
             let mut projected = slack.clone();
             cones.project(&mut projected);
-            let gap = dot(&projected, &z).abs();
             // A x(z) = b − s(z), and φ(z) = ½ xᵀPx + bᵀz: no product again.
             for r in 0..m {
                 ax[r] = b[r] - slack[r];
             }
-            let bz = dot(&b, &z);
-            let quadratic = value - bz;
-            let primal = quadratic + dot(&q, &gradient.x);
+            let gap = ranks.sum(dot(&projected, &z)).abs();
+            let primal = quadratic + ranks.dot_columns(&q, &gradient.x);
             let dual = -quadratic - bz;
-            let primal_ok = distance
-                <= tolerance
-                    * (1.0
-                        + norm_b
-                            .max(infinity_norm(&ax))
-                            .max(infinity_norm(&projected)));
+            let largest = ranks.max(infinity_norm(&ax).max(infinity_norm(&projected)));
+            let primal_ok = distance <= tolerance * (1.0 + norm_b.max(largest));
             let gap_ok = gap <= tolerance * size.max(primal.abs().min(dual.abs()));
             if primal_ok && gap_ok {
                 let z_out = z.iter().map(|v| v / kappa).collect();
@@ -330,7 +358,7 @@ pub fn solve(
             break;
         }
         // z_{k+1} = Π_K(y − t D ∇φ(y)).
-        gradient.at(&y, &mut slack);
+        gradient.at(&y, &mut slack, false);
         previous.copy_from_slice(&z);
         for r in 0..m {
             z[r] = y[r] - step * metric[r] * slack[r];
@@ -338,7 +366,7 @@ pub fn solve(
         cones.project(&mut z);
         // Restart where the step goes against the momentum (the gradient
         // scheme of O'Donoghue & Candès): (y − z_{k+1})·(z_{k+1} − z_k) > 0.
-        let against: f64 = (0..m).map(|r| (y[r] - z[r]) * (z[r] - previous[r])).sum();
+        let against = ranks.sum((0..m).map(|r| (y[r] - z[r]) * (z[r] - previous[r])).sum());
         if against > 0.0 {
             theta = 1.0;
             y.copy_from_slice(&z);

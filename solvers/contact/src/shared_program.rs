@@ -73,6 +73,13 @@ impl<'a> Ranks<'a> {
         self.sum(dot(&a[..i], &b[..i])) + dot(&a[i..], &b[i..])
     }
 
+    /// Sums over the ranks of several sums over their rows, in one exchange.
+    pub fn sum_each(&self, local: &mut [f64]) {
+        if let Some(communicator) = self.communicator {
+            communicator.sum_each(local);
+        }
+    }
+
     /// Adds up the ranks' parts of a column vector on the separator (Aᵀz
     /// from each rank's rows).
     pub fn sum_separator(&self, values: &mut [f64]) {
