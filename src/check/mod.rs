@@ -76,9 +76,18 @@ fn cocd_separator(case: &Case, ranks: usize) -> Result<String, RunError> {
     let exchange = if sharing::separator_factorised(case) {
         String::new()
     } else {
+        let fits = crate::footprint::machine_memory()
+            .is_none_or(|memory| per_rank + separator.held_per_rank_bytes() <= memory);
+        let fallback = if fits {
+            "the interior point takes over a step it does not solve"
+        } else {
+            "the interior point cannot take over a step here (Σ does not fit beside a rank's \
+             share): a step the projected gradient does not solve within \
+             contact.max_iterations stops the run"
+        };
         format!(
             "; the projected gradient factorises nothing: each iteration the ranks add up their \
-             parts of Aᵀz on the separator's {} unknowns ({} exchanged)",
+             parts of Aᵀz on the separator's {} unknowns ({} exchanged); {fallback}",
             separator.separator,
             human_bytes(8.0 * separator.separator as f64),
         )

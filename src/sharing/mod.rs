@@ -48,19 +48,14 @@ pub fn check_separator_fits(
     ranks: usize,
 ) -> Result<Option<(Separator, ProcessGrid)>, crate::RunError> {
     let separator = cocd_separator(case, ranks).map_err(crate::RunError::Case)?;
-    if let Some((separator, _)) = &separator {
-        let held = separator.held_per_rank_bytes();
-        let what = if separator_factorised(case) {
-            "contact.model = \"cocd\": the dense Schur complement of its separator"
-        } else {
-            "contact.model = \"cocd\": the dense Schur complement of its separator, which the \
-             interior point factorises where it takes over a step the projected gradient did \
-             not solve"
-        };
+    if let Some((separator, _)) = separator.as_ref().filter(|_| separator_factorised(case)) {
         crate::footprint::Footprint::of(case).check_fits_holding(
             ranks,
             crate::footprint::machine_memory(),
-            Some((held, what)),
+            Some((
+                separator.held_per_rank_bytes(),
+                "contact.model = \"cocd\": the dense Schur complement of its separator",
+            )),
         )?;
     }
     Ok(separator)
@@ -68,8 +63,10 @@ pub fn check_separator_fits(
 
 /// Whether a COCD scene's solver factorises the separator's Schur
 /// complement at every iteration (the interior point): not the projected
-/// gradient, which sums the ranks' parts of Aᵀz on the separator instead
-/// (and needs Σ only where the interior point takes over a step).
+/// gradient, which sums the ranks' parts of Aᵀz on the separator instead.
+/// Its Σ is needed only where the interior point takes over a step, and
+/// where it would not fit that step stops the run instead
+/// (`HardContact::separator_room`): `check` says so, `run` does not refuse.
 pub fn separator_factorised(case: &Case) -> bool {
     case.contact.as_ref().map(|c| c.conic_solver())
         != Some(grainflow_contact::ConicSolver::ProjectedGradient)

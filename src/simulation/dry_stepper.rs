@@ -98,8 +98,16 @@ impl DryStepper {
         system: &mut DemSystem,
     ) -> Result<(Self, f64, Option<String>), RunError> {
         match scene::hard_contact(case) {
-            Some(contact) => {
+            Some(mut contact) => {
                 contact.prepare(system);
+                let ranks = system.communicator.size();
+                if ranks > 1 && !crate::sharing::separator_factorised(case) {
+                    // What a rank's memory leaves for the interior point's
+                    // Σ where it takes over from the projected gradient.
+                    contact.separator_room = crate::footprint::machine_memory().map(|memory| {
+                        memory - crate::footprint::Footprint::of(case).per_rank_bytes(ranks, 0.0)
+                    });
+                }
                 let dt = case.time.dt.expect("validated: hard contact has time.dt");
                 let warning = scene::cocd_tolerance_warning(&contact);
                 let stepper = DryStepper::Hard {

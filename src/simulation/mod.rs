@@ -102,7 +102,7 @@ pub fn run_with(
 ) -> Result<Summary, RunError> {
     crate::footprint::Footprint::of(case)
         .check_fits(communicator.size(), crate::footprint::machine_memory())?;
-    if communicator.size() > 1 {
+    if communicator.size() > 1 && crate::sharing::separator_factorised(case) {
         check_separator_on_root(case, &communicator)?;
     }
     if rayon::current_thread_index().is_some() {

@@ -163,8 +163,7 @@ fn cocd_on_2_and_4_ranks_matches_the_serial_run() {
 ///   relative gap ε leaves the velocities within √(2ε) of the exact step
 ///   relative to the motion's size, and two runs within 2√(2ε) = 8.9e-3:
 ///   the bound. Measured: 1.1e-3 (2 ranks), 5.9e-4 (4, 2 × 2) after 3
-///   steps; the certificates
-///   below ε on every rank.
+///   steps; the certificates below ε on every rank.
 #[test]
 fn the_projected_gradient_on_2_and_4_ranks_matches_the_serial_run() {
     let dir = tempfile::tempdir().unwrap();

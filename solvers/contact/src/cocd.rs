@@ -248,12 +248,31 @@ impl ConicProgram {
 
 /// A rank's part of a program shared among ranks ([`crate::shared_program`]):
 /// `separator[b]` for the bodies whose grain another rank's pairs also
-/// reach, `ids` the local grains' ids.
+/// reach, `ids` the local grains' ids; `separator_room`: the bytes a rank
+/// can give the interior point's dense Schur complement where it takes
+/// over a step of the projected gradient (None: no bound).
 pub struct RankShare<'a> {
     pub separator: &'a [bool],
     pub ids: &'a [u64],
     pub communicator: &'a Communicator,
+    pub separator_room: Option<f64>,
 }
+
+/// `bytes` in MiB or GiB, for messages.
+fn human_bytes(bytes: f64) -> String {
+    let mib = bytes / f64::from(1 << 20);
+    if mib < 1024.0 {
+        format!("{mib:.1} MiB")
+    } else {
+        format!("{:.1} GiB", mib / 1024.0)
+    }
+}
+
+/// The dense blocks over a separator of `unknowns` a rank holds while the
+/// interior point runs shared, in units of 8 unknowns² bytes: Σ and, at
+/// most, its own factor's dense end (1.5 ns_t², ns_t ≤ ns; measured in
+/// `src/sharing/separator.rs`).
+const SEPARATOR_BLOCKS: f64 = 2.5;
 
 /// Solves the step's conic program with `solver` (Clarabel taking over a
 /// step grainflow's interior point fails, the interior point one its
@@ -289,6 +308,7 @@ pub fn solve(
                 max_iterations,
                 start.as_deref(),
                 ranks,
+                None,
                 |iterations| solve_with_clarabel(&program, tolerance, iterations),
             )?
         }
@@ -296,6 +316,7 @@ pub fn solve(
             separator,
             ids,
             communicator,
+            separator_room,
         }) => {
             let d = dofs(dimension);
             let shared = SharedProgram::new(&program, bodies, d, separator, ids, communicator)?;
@@ -303,6 +324,25 @@ pub fn solve(
                 communicator: Some(communicator),
                 interior: shared.interior,
             };
+            // Where the separator's dense blocks would not fit, the
+            // projected gradient's failure stops the run instead of the
+            // interior point running out of memory (ns is the same on
+            // every rank, and so is the verdict).
+            let unknowns = shared.program.mass.len() - shared.interior;
+            let blocks = SEPARATOR_BLOCKS * 8.0 * (unknowns as f64).powi(2);
+            let room = separator_room.unwrap_or(f64::INFINITY);
+            let refused = (solver == ConicSolver::ProjectedGradient
+                && communicator.any(blocks > room))
+            .then(|| {
+                format!(
+                    "the interior point is not tried on these ranks: its Schur complement over \
+                     the separator's {unknowns} unknowns needs about {} on every rank, {} left \
+                     beside a rank's share (raise contact.max_iterations, loosen \
+                     contact.tolerance, or run on fewer ranks)",
+                    human_bytes(blocks),
+                    human_bytes(room.max(0.0)),
+                )
+            });
             // The solvers' decisions are taken over all ranks: one fails on
             // every rank alike, and every rank takes the next one's.
             let ((x, z, iterations, reduced), why) = solve_with_fallbacks(
@@ -312,6 +352,7 @@ pub fn solve(
                 max_iterations,
                 start.as_deref(),
                 ranks,
+                refused,
                 |iterations| {
                     let (whole, layout) = shared.gathered(communicator);
                     let (x, z, iterations, reduced) =
@@ -341,9 +382,10 @@ type ConicSolution = (Vec<f64>, Vec<f64>, u32, bool);
 /// gradient hands a step it does not solve to the interior point
 /// ([`INTERIOR_POINT_ITERATIONS`]), the interior point one it fails to
 /// `clarabel` (and the run stops if Clarabel fails too); Clarabel alone on
-/// request. `start`: the projected gradient's multipliers; `clarabel`
-/// takes its iterations (the case's, the interior point's after the
-/// projected gradient).
+/// request. `start`: the projected gradient's multipliers; `refused`: why
+/// the interior point may not take over from the projected gradient (the
+/// step then fails with both reasons); `clarabel` takes its iterations
+/// (the case's, the interior point's after the projected gradient).
 fn solve_with_fallbacks(
     solver: ConicSolver,
     program: &ConicProgram,
@@ -351,6 +393,7 @@ fn solve_with_fallbacks(
     max_iterations: u32,
     start: Option<&[f64]>,
     ranks: Ranks<'_>,
+    refused: Option<String>,
     clarabel: impl FnOnce(u32) -> Result<ConicSolution, String>,
 ) -> Result<(ConicSolution, Option<String>), String> {
     let (interior_point_iterations, earlier) = match solver {
@@ -360,7 +403,10 @@ fn solve_with_fallbacks(
             match crate::projected_gradient::solve(program, tolerance, max_iterations, start, ranks)
             {
                 Ok(solution) => return Ok((solution, None)),
-                Err(why) => (INTERIOR_POINT_ITERATIONS, Some(why)),
+                Err(why) => match refused {
+                    Some(refused) => return Err(format!("{why}; {refused}")),
+                    None => (INTERIOR_POINT_ITERATIONS, Some(why)),
+                },
             }
         }
     };

@@ -75,6 +75,11 @@ pub struct HardContact {
     /// COCD: the interior-point code (Clarabel takes over a step that
     /// grainflow's fails).
     pub conic_solver: ConicSolver,
+    /// COCD's projected gradient on several ranks: the bytes a rank can
+    /// give the interior point's separator (its dense Schur complement)
+    /// where the interior point would take over a step; a step that would
+    /// need more stops the run instead (None: no bound).
+    pub separator_room: Option<f64>,
     /// Every listed pair enters the program, instead of those within reach
     /// and the left-out ones that would break their law
     /// ([`candidates`]): the reference the selection is measured against.
@@ -134,6 +139,7 @@ impl HardContact {
             max_iterations,
             threshold,
             conic_solver: ConicSolver::InteriorPoint,
+            separator_room: None,
             whole_list: false,
             last_fallback: None,
             previous_impulses: HashMap::new(),
@@ -408,6 +414,7 @@ impl HardContact {
                         separator: shared_bodies,
                         ids: &system.particles.id,
                         communicator: &system.communicator,
+                        separator_room: self.separator_room,
                     });
                     // The projected gradient starts from the last step's
                     // impulses (a packing at rest changes little between

@@ -244,3 +244,56 @@ fn the_projected_gradient_solves_3d_cones_as_the_interior_point_does() {
         );
     }
 }
+
+/// The projected gradient's fallbacks on a program shared among ranks (one
+/// process here, a tenth of the bodies marked as the separator): a step it
+/// does not solve goes to the interior point, which solves it shared;
+/// where the separator's dense blocks (2.5 × 8 ns² bytes) would not fit
+/// the room a rank has, the step fails instead, naming both reasons.
+#[test]
+fn a_shared_step_the_interior_point_cannot_take_over_fails_naming_why() {
+    let system = heap(0.3, 1);
+    let (contacts, bodies, scales) = step_of(&system);
+    let separator: Vec<bool> = (0..bodies.len()).map(|b| b % 10 == 0).collect();
+    let unknowns = 6 * separator.iter().filter(|&&s| s).count();
+    let blocks = 2.5 * 8.0 * (unknowns * unknowns) as f64;
+    let communicator = grainflow_core::Communicator::serial();
+    let shared_step = |room: f64| {
+        cocd::solve(
+            &contacts,
+            &bodies,
+            Dimension::Three,
+            &scales,
+            1e-8,
+            // Too few iterations for the projected gradient to solve it.
+            3,
+            ConicSolver::ProjectedGradient,
+            Some(cocd::RankShare {
+                separator: &separator,
+                ids: &system.particles.id,
+                communicator: &communicator,
+                separator_room: Some(room),
+            }),
+            None,
+        )
+    };
+    let taken_over = shared_step(2.0 * blocks).expect("the interior point solves it");
+    let reason = taken_over
+        .fallback_reason
+        .clone()
+        .expect("the interior point took over");
+    assert!(reason.contains("within 3 iterations"), "{reason}");
+    let reference = solved(
+        &(contacts.clone(), bodies.clone(), scales),
+        ConicSolver::InteriorPoint,
+        1e-8,
+        200,
+    );
+    let largest = largest_difference(&bodies, &taken_over, &reference);
+    assert!(largest < 1e-6 * scales.velocity, "{largest:e}");
+    let error = shared_step(0.5 * blocks).expect_err("no room for the interior point");
+    assert!(
+        error.contains("within 3 iterations") && error.contains("the interior point is not tried"),
+        "{error}"
+    );
+}
