@@ -191,9 +191,9 @@ impl Footprint {
     /// other ranks' grains it builds before keeping its own, and `held`
     /// bytes every rank holds whole (a COCD separator's Σ). One COCD step
     /// of 112,896 spheres with the projected gradient on 2 ranks
-    /// (2026-12-06): 626 MiB estimated, 710 and 794 MiB measured (the
-    /// root, which also sizes the separator, the larger); 547 MiB without
-    /// the grains built whole.
+    /// (2026-12-06): 626 MiB estimated, 725–730 and 764–813 MiB measured
+    /// (the root, which then also sized the separator on the whole scene,
+    /// the larger); 547 MiB without the grains built whole.
     pub fn per_rank_bytes(&self, ranks: usize, held: f64) -> f64 {
         let ranks = ranks as f64;
         self.bytes / ranks + self.grain_bytes * (1.0 - 1.0 / ranks) + held
