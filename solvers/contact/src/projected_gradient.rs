@@ -26,8 +26,9 @@
 //! stopping test is the interior point's: the primal residual, here the
 //! distance of s(z) from K, and the gap sᵀz, each relative to the size of
 //! the data and the objective, below ε. Each output element of a product
-//! sums its terms in one fixed order, so the iterates do not depend on the
-//! number of threads.
+//! sums its terms in one fixed order, and each sum over the rows adds the
+//! partial sums of fixed blocks of rows in order ([`ROW_BLOCK`]), so the
+//! iterates do not depend on the number of threads.
 //!
 //! On several ranks ([`Ranks`]) each rank holds its rows of A and the
 //! columns they reach, the separator's on every rank (see
@@ -52,12 +53,15 @@ const LIPSCHITZ_MARGIN: f64 = 1.1;
 const TEST_EVERY: u32 = 10;
 /// Outputs shorter than this are summed on one thread.
 const PARALLEL_ROWS: usize = 20_000;
+/// Rows of a block of the passes over the rows: a multiple of 3, so that a
+/// block of the cones' rows holds whole cones. The blocks, not the
+/// threads, set the order of a sum.
+const ROW_BLOCK: usize = 3 * 1024;
 
 /// A in compressed rows and columns, scaled by 1/κ (as the interior point
 /// scales it: s in units of V Δt, z of m̄ V).
 struct Operator {
     rows: usize,
-    columns: usize,
     row_start: Vec<usize>,
     row_column: Vec<usize>,
     row_value: Vec<f64>,
@@ -69,11 +73,10 @@ struct Operator {
 impl Operator {
     fn new(program: &ConicProgram, scale: f64) -> Self {
         let a = &program.a_matrix;
-        let (rows, columns) = (a.m, a.n);
+        let rows = a.m;
         let (row_start, row_column, row_value) = crate::csc::scaled_rows(a, scale);
         Operator {
             rows,
-            columns,
             row_start,
             row_column,
             row_value,
@@ -205,13 +208,11 @@ impl Gradient<'_> {
     fn at(&mut self, z: &[f64], slack: &mut [f64], reduce: bool) -> (f64, f64) {
         self.operator.transpose_times(z, &mut self.atz);
         self.ranks.sum_separator(&mut self.atz);
-        for c in 0..self.operator.columns {
-            self.x[c] = -(self.q[c] + self.atz[c]) / self.mass[c];
-        }
+        let (q, atz, mass) = (self.q, &self.atz, self.mass);
+        each(&mut self.x, |c, x| *x = -(q[c] + atz[c]) / mass[c]);
         self.operator.times(&self.x, slack);
-        for r in 0..self.operator.rows {
-            slack[r] = self.b[r] - slack[r];
-        }
+        let b = self.b;
+        each(slack, |r, s| *s = b[r] - *s);
         if !reduce {
             return (0.0, 0.0);
         }
@@ -228,6 +229,71 @@ impl Gradient<'_> {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `set(i, &mut v[i])` for every element, on threads for long vectors.
+fn each(v: &mut [f64], set: impl Fn(usize, &mut f64) + Sync) {
+    if v.len() < PARALLEL_ROWS {
+        v.iter_mut().enumerate().for_each(|(i, e)| set(i, e));
+    } else {
+        v.par_iter_mut()
+            .enumerate()
+            .with_min_len(4096)
+            .for_each(|(i, e)| set(i, e));
+    }
+}
+
+/// One accelerated step over the rows, z ← Π_K(y − t D s) with the last
+/// z kept in `previous`, in blocks of [`ROW_BLOCK`] rows (on threads for
+/// many rows); returns the rank's (y − z)·(z − previous), the blocks'
+/// sums added in order.
+fn project_step(
+    cones: Cones,
+    step: f64,
+    (metric, slack, y): (&[f64], &[f64], &[f64]),
+    z: &mut [f64],
+    previous: &mut [f64],
+) -> f64 {
+    let linear = cones.linear;
+    let (z_linear, z_cones) = z.split_at_mut(linear);
+    let (previous_linear, previous_cones) = previous.split_at_mut(linear);
+    let block = |z: &mut [f64], previous: &mut [f64], from: usize, is_cone: bool| -> f64 {
+        previous.copy_from_slice(z);
+        for (k, e) in z.iter_mut().enumerate() {
+            let r = from + k;
+            *e = y[r] - step * metric[r] * slack[r];
+        }
+        if is_cone {
+            for cone in z.chunks_exact_mut(3) {
+                let projected = project_on_cone(&[cone[0], cone[1], cone[2]]);
+                cone.copy_from_slice(&projected);
+            }
+        } else {
+            z.iter_mut().for_each(|e| *e = e.max(0.0));
+        }
+        z.iter()
+            .zip(previous.iter())
+            .enumerate()
+            .map(|(k, (z, p))| (y[from + k] - z) * (z - p))
+            .sum()
+    };
+    let blocks = |z: &mut [f64], previous: &mut [f64], offset: usize, is_cone: bool| -> f64 {
+        let partials: Vec<f64> = if z.len() < PARALLEL_ROWS {
+            z.chunks_mut(ROW_BLOCK)
+                .zip(previous.chunks_mut(ROW_BLOCK))
+                .enumerate()
+                .map(|(k, (z, p))| block(z, p, offset + k * ROW_BLOCK, is_cone))
+                .collect()
+        } else {
+            z.par_chunks_mut(ROW_BLOCK)
+                .zip(previous.par_chunks_mut(ROW_BLOCK))
+                .enumerate()
+                .map(|(k, (z, p))| block(z, p, offset + k * ROW_BLOCK, is_cone))
+                .collect()
+        };
+        partials.iter().sum()
+    };
+    blocks(z_linear, previous_linear, 0, false) + blocks(z_cones, previous_cones, linear, true)
 }
 
 fn infinity_norm(v: &[f64]) -> f64 {
@@ -357,16 +423,17 @@ pub fn solve(
         if iteration == max_iterations {
             break;
         }
-        // z_{k+1} = Π_K(y − t D ∇φ(y)).
+        // z_{k+1} = Π_K(y − t D ∇φ(y)), and the restart where the step
+        // goes against the momentum (the gradient scheme of O'Donoghue &
+        // Candès): (y − z_{k+1})·(z_{k+1} − z_k) > 0.
         gradient.at(&y, &mut slack, false);
-        previous.copy_from_slice(&z);
-        for r in 0..m {
-            z[r] = y[r] - step * metric[r] * slack[r];
-        }
-        cones.project(&mut z);
-        // Restart where the step goes against the momentum (the gradient
-        // scheme of O'Donoghue & Candès): (y − z_{k+1})·(z_{k+1} − z_k) > 0.
-        let against = ranks.sum((0..m).map(|r| (y[r] - z[r]) * (z[r] - previous[r])).sum());
+        let against = ranks.sum(project_step(
+            cones,
+            step,
+            (&metric, &slack, &y),
+            &mut z,
+            &mut previous,
+        ));
         if against > 0.0 {
             theta = 1.0;
             y.copy_from_slice(&z);
@@ -375,9 +442,8 @@ pub fn solve(
         let next = 0.5 * (-theta * theta + theta * (theta * theta + 4.0).sqrt());
         let beta = theta * (1.0 - theta) / (theta * theta + next);
         theta = next;
-        for r in 0..m {
-            y[r] = z[r] + beta * (z[r] - previous[r]);
-        }
+        let (z, previous) = (&z, &previous);
+        each(&mut y, |r, y| *y = z[r] + beta * (z[r] - previous[r]));
     }
     Err(fail(format!(
         "no solution to ε = {tolerance:.1e} within {max_iterations} iterations"
