@@ -25,12 +25,13 @@ const SECONDS_2D: [(f64, f64); 2] = [(50_000.0, 6.76), (100_000.0, 17.25)];
 
 /// The projected gradient's first step on the same kind of packing (the
 /// soft DEM's deposit, radii shrunk by 1.5 %), one thread, ε = 1e-5:
-/// 0.437 s at 8,748 spheres (110 iterations) and 21.8 s at 112,896 (250);
-/// at ε = 1e-8 0.74 and 39.3 s. A jammed packing takes many more
+/// 0.405, 0.413 s at 8,748 spheres (110 iterations) and 17.33–17.37 s at
+/// 112,896 (250); at ε = 1e-8 0.680, 0.682 s and 31.43 s (2026-12-06, the
+/// build with 32-bit indices, `docs/performance.md`). A jammed packing takes many more
 /// iterations (the 3D static box's first step: 13,040 at 1e-5, against 250
 /// here), so this is what a step costs at the least.
-const PROJECTED_GRADIENT_3D: [(f64, f64); 2] = [(8_748.0, 0.437), (112_896.0, 21.8)];
-const PROJECTED_GRADIENT_TIGHT_OVER_LOOSE: f64 = 39.3 / 21.8;
+const PROJECTED_GRADIENT_3D: [(f64, f64); 2] = [(8_748.0, 0.409), (112_896.0, 17.35)];
+const PROJECTED_GRADIENT_TIGHT_OVER_LOOSE: f64 = 31.43 / 17.35;
 
 /// Clarabel on the same 3D program of 8,748 spheres took 59 times the
 /// interior point's time (2,256 s against 38.1 s, `docs/performance.md`,
@@ -133,8 +134,8 @@ mod tests {
         assert!(line.contains("\"projected_gradient\""), "{line}");
         // The projected gradient through its measured points, and timed up
         // to a few 10⁵ spheres.
-        assert!((projected_gradient_seconds(112_896.0, 1e-5) / 21.8 - 1.0).abs() < 1e-12);
-        assert!((projected_gradient_seconds(8_748.0, 1e-8) / 0.788 - 1.0).abs() < 0.01);
+        assert!((projected_gradient_seconds(112_896.0, 1e-5) / 17.35 - 1.0).abs() < 1e-12);
+        assert!((projected_gradient_seconds(8_748.0, 1e-8) / 0.741 - 1.0).abs() < 0.01);
         let gradient = ConicSolver::ProjectedGradient;
         assert!(untimed_line(3, 122_932, 10.0, gradient, 1e-5).is_none());
         assert!(untimed_line(3, 1_000_000, 10.0, gradient, 1e-5).is_some());

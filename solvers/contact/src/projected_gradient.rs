@@ -59,14 +59,16 @@ const PARALLEL_ROWS: usize = 20_000;
 const ROW_BLOCK: usize = 3 * 1024;
 
 /// A in compressed rows and columns, scaled by 1/κ (as the interior point
-/// scales it: s in units of V Δt, z of m̄ V).
+/// scales it: s in units of V Δt, z of m̄ V). Indices of 32 bits: the
+/// products stream every entry with its index each iteration, and a
+/// quarter of the bytes less is a quarter less of their memory traffic.
 struct Operator {
     rows: usize,
     row_start: Vec<usize>,
-    row_column: Vec<usize>,
+    row_column: Vec<u32>,
     row_value: Vec<f64>,
     column_start: Vec<usize>,
-    column_row: Vec<usize>,
+    column_row: Vec<u32>,
     column_value: Vec<f64>,
 }
 
@@ -75,13 +77,16 @@ impl Operator {
         let a = &program.a_matrix;
         let rows = a.m;
         let (row_start, row_column, row_value) = crate::csc::scaled_rows(a, scale);
+        // Both counts below 2^32 (checked by `solve`).
+        let narrow = |indices: &[usize]| indices.iter().map(|&i| i as u32).collect();
+        let row_column = narrow(&row_column);
         Operator {
             rows,
             row_start,
             row_column,
             row_value,
             column_start: a.colptr.clone(),
-            column_row: a.rowval.clone(),
+            column_row: narrow(&a.rowval),
             column_value: a.nzval.iter().map(|v| v / scale).collect(),
         }
     }
@@ -105,10 +110,10 @@ impl Operator {
 
 /// `out[i] = Σ_k value[k] v[index[k]]` over `k` in `start[i]..start[i + 1]`,
 /// each sum in that order (on threads for long outputs: the same bits).
-fn sums(start: &[usize], index: &[usize], value: &[f64], v: &[f64], out: &mut [f64]) {
+fn sums(start: &[usize], index: &[u32], value: &[f64], v: &[f64], out: &mut [f64]) {
     let sum = |i: usize| -> f64 {
         (start[i]..start[i + 1])
-            .map(|k| value[k] * v[index[k]])
+            .map(|k| value[k] * v[index[k] as usize])
             .sum()
     };
     if out.len() < PARALLEL_ROWS {
@@ -158,7 +163,7 @@ impl Cones {
         let diagonal: Vec<f64> = (0..operator.rows)
             .map(|r| {
                 (operator.row_start[r]..operator.row_start[r + 1])
-                    .map(|k| operator.row_value[k].powi(2) / mass[operator.row_column[k]])
+                    .map(|k| operator.row_value[k].powi(2) / mass[operator.row_column[k] as usize])
                     .sum()
             })
             .collect();
@@ -314,6 +319,13 @@ pub fn solve(
     ranks: Ranks<'_>,
 ) -> Result<(Vec<f64>, Vec<f64>, u32, bool), String> {
     let (n, m) = (program.mass.len(), program.b.len());
+    if n.max(m) > u32::MAX as usize {
+        return Err(format!(
+            "the projected gradient: {m} rows and {n} unknowns, more than its 32-bit indices \
+             hold ({}); share the scene among ranks",
+            u32::MAX
+        ));
+    }
     let kappa = program.row_scale();
     let operator = Operator::new(program, kappa);
     let cones = Cones {
