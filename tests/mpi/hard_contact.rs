@@ -133,8 +133,7 @@ fn cocd_on_2_and_4_ranks_matches_the_serial_run() {
         let deviations = deviations_on_ranks(
             dir.path(),
             name,
-            grains,
-            radius,
+            (grains, radius),
             &settings,
             &grids,
             None,
@@ -204,8 +203,7 @@ fn the_projected_gradient_on_2_and_4_ranks_matches_the_serial_run() {
         let deviations = deviations_on_ranks(
             dir.path(),
             name,
-            grains,
-            radius,
+            (grains, radius),
             settings,
             &grids,
             tolerance,
@@ -230,8 +228,7 @@ fn the_projected_gradient_on_2_and_4_ranks_matches_the_serial_run() {
 fn deviations_on_ranks(
     dir: &Path,
     name: &str,
-    grains: usize,
-    radius: f64,
+    (grains, radius): (usize, f64),
     settings: &[&str],
     grids: &[(usize, &str)],
     tolerance: Option<f64>,

@@ -304,8 +304,7 @@ pub fn solve(
             solve_with_fallbacks(
                 solver,
                 &program,
-                tolerance,
-                max_iterations,
+                (tolerance, max_iterations),
                 start.as_deref(),
                 ranks,
                 None,
@@ -348,8 +347,7 @@ pub fn solve(
             let ((x, z, iterations, reduced), why) = solve_with_fallbacks(
                 solver,
                 &shared.program,
-                tolerance,
-                max_iterations,
+                (tolerance, max_iterations),
                 start.as_deref(),
                 ranks,
                 refused,
@@ -382,15 +380,15 @@ type ConicSolution = (Vec<f64>, Vec<f64>, u32, bool);
 /// gradient hands a step it does not solve to the interior point
 /// ([`INTERIOR_POINT_ITERATIONS`]), the interior point one it fails to
 /// `clarabel` (and the run stops if Clarabel fails too); Clarabel alone on
-/// request. `start`: the projected gradient's multipliers; `refused`: why
-/// the interior point may not take over from the projected gradient (the
-/// step then fails with both reasons); `clarabel` takes its iterations
-/// (the case's, the interior point's after the projected gradient).
+/// request. `asked`: ε and the iterations; `start`: the projected
+/// gradient's multipliers; `refused`: why the interior point may not take
+/// over from the projected gradient (the step then fails with both
+/// reasons); `clarabel` takes its iterations (the case's, the interior
+/// point's after the projected gradient).
 fn solve_with_fallbacks(
     solver: ConicSolver,
     program: &ConicProgram,
-    tolerance: f64,
-    max_iterations: u32,
+    (tolerance, max_iterations): (f64, u32),
     start: Option<&[f64]>,
     ranks: Ranks<'_>,
     refused: Option<String>,
