@@ -67,7 +67,7 @@ def main():
             t = runs[0][0][:length]
             ys = [y[:length] for _, y in runs]
             mean = [sum(v) / len(v) for v in zip(*ys)]
-            top.plot(t, mean, color=colour, linestyle=line, label=f"{label} ({len(runs)} runs)")
+            top.plot(t, mean, color=colour, linestyle=line, label=f"{label} ({len(runs)} run{'s' if len(runs) > 1 else ''})")
             if len(runs) > 1:
                 top.fill_between(t, [min(v) for v in zip(*ys)], [max(v) for v in zip(*ys)],
                                  color=colour, alpha=0.15)
