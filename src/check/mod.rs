@@ -62,20 +62,14 @@ fn cocd_separator(case: &Case, ranks: usize) -> Result<String, RunError> {
         return Ok(String::new());
     };
     let footprint = Footprint::of(case);
-    let (per_rank, held) = if sharing::separator_factorised(case) {
+    let (per_rank, held, exchange) = if sharing::separator_factorised(case) {
         (
             footprint.per_rank_bytes(ranks, separator.held_per_rank_bytes()),
             "its share of the scene, Σ and its factor's dense end",
+            String::new(),
         )
     } else {
-        (
-            footprint.per_rank_bytes(ranks, 0.0),
-            "its share of the scene; Σ beside it only where the interior point takes over a step",
-        )
-    };
-    let exchange = if sharing::separator_factorised(case) {
-        String::new()
-    } else {
+        let per_rank = footprint.per_rank_bytes(ranks, 0.0);
         let fits = crate::footprint::machine_memory()
             .is_none_or(|memory| per_rank + separator.held_per_rank_bytes() <= memory);
         let fallback = if fits {
@@ -85,11 +79,15 @@ fn cocd_separator(case: &Case, ranks: usize) -> Result<String, RunError> {
              share): a step the projected gradient does not solve within \
              contact.max_iterations stops the run"
         };
-        format!(
-            "; the projected gradient factorises nothing: each iteration the ranks add up their \
-             parts of Aᵀz on the separator's {} unknowns ({} exchanged); {fallback}",
-            separator.separator,
-            human_bytes(8.0 * separator.separator as f64),
+        (
+            per_rank,
+            "its share of the scene; Σ beside it only where the interior point takes over a step",
+            format!(
+                "; the projected gradient factorises nothing: each iteration the ranks add up \
+                 their parts of Aᵀz on the separator's {} unknowns ({} exchanged); {fallback}",
+                separator.separator,
+                human_bytes(8.0 * separator.separator as f64),
+            ),
         )
     };
     Ok(format!(

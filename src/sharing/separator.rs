@@ -16,28 +16,10 @@
 //! which the ranks share by column blocks. That size, not the ranks'
 //! interiors, sets what several ranks can gain.
 
+use grainflow_contact::shared_program::SEPARATOR_BLOCK_OVER_SQUARE;
 use grainflow_contact::{contacts, Partner};
 use grainflow_core::ProcessGrid;
 use grainflow_dem::DemSystem;
-
-/// The dense end of a rank's factor over the ns_t separator unknowns its
-/// pairs reach, in units of ns_t² numbers: what the most loaded rank's
-/// peak resident memory holds beyond its share of the scene (the whole
-/// scene's estimate over the ranks) and Σ, one COCD step on packings at
-/// rest, ε = 1e-5, one thread a rank (2026-12-05):
-///
-/// | spheres | ranks | ns | ns_t | measured | estimate |
-/// | --- | --- | --- | --- | --- | --- |
-/// | 8,748 | 2 | 2,172 | 2,172 | 401 MiB | 365 MiB (−9 %) |
-/// | 8,748 | 3 | 4,308 | 4,308 | 571 MiB | 537 MiB (−6 %) |
-/// | 8,748 | 4 (2 × 2) | 4,236 | 2,208 | 362 MiB | 330 MiB (−9 %) |
-/// | 17,986 | 2 | 3,522 | 3,522 | 954 MiB | 942 MiB (−1 %) |
-/// | 17,986 | 3 | 7,032 | 7,032 | 1,282 MiB | 1,414 MiB (+10 %) |
-/// | 17,986 | 4 (2 × 2) | 6,954 | 3,588 | 870 MiB | 869 MiB (0 %) |
-///
-/// The measured excess spans 1.15–2.52 ns_t², the larger at the smaller
-/// packing.
-pub const SEPARATOR_BLOCK_OVER_SQUARE: f64 = 1.5;
 
 /// The program's unknowns as shared among ranks.
 #[derive(Clone, Debug, PartialEq)]

@@ -187,6 +187,18 @@ impl ConicProgram {
             .sum()
     }
 
+    /// [`ConicProgram::size`] of a program shared among `ranks`: the
+    /// ranks' interiors summed over the ranks, the separator once.
+    pub fn size_over(&self, ranks: Ranks<'_>) -> f64 {
+        let weighted: Vec<f64> = self
+            .mass
+            .iter()
+            .zip(&self.free)
+            .map(|(m, u)| m * u)
+            .collect();
+        ranks.dot_columns(&weighted, &self.free)
+    }
+
     /// κ = VΔt/L, the factor of every row of A.
     pub fn row_scale(&self) -> f64 {
         self.scales.gap_per_velocity()
@@ -258,22 +270,6 @@ pub struct RankShare<'a> {
     pub separator_room: Option<f64>,
 }
 
-/// `bytes` in MiB or GiB, for messages.
-fn human_bytes(bytes: f64) -> String {
-    let mib = bytes / f64::from(1 << 20);
-    if mib < 1024.0 {
-        format!("{mib:.1} MiB")
-    } else {
-        format!("{:.1} GiB", mib / 1024.0)
-    }
-}
-
-/// The dense blocks over a separator of `unknowns` a rank holds while the
-/// interior point runs shared, in units of 8 unknowns² bytes: Σ and, at
-/// most, its own factor's dense end (1.5 ns_t², ns_t ≤ ns; measured in
-/// `src/sharing/separator.rs`).
-const SEPARATOR_BLOCKS: f64 = 2.5;
-
 /// Solves the step's conic program with `solver` (Clarabel taking over a
 /// step grainflow's interior point fails, the interior point one its
 /// projected gradient fails). `tolerance`: the relative gap and feasibility
@@ -328,7 +324,7 @@ pub fn solve(
             // interior point running out of memory (ns is the same on
             // every rank, and so is the verdict).
             let unknowns = shared.program.mass.len() - shared.interior;
-            let blocks = SEPARATOR_BLOCKS * 8.0 * (unknowns as f64).powi(2);
+            let blocks = crate::shared_program::separator_block_bytes(unknowns);
             let room = separator_room.unwrap_or(f64::INFINITY);
             let refused = (solver == ConicSolver::ProjectedGradient
                 && communicator.any(blocks > room))
@@ -338,8 +334,8 @@ pub fn solve(
                      the separator's {unknowns} unknowns needs about {} on every rank, {} left \
                      beside a rank's share (raise contact.max_iterations, loosen \
                      contact.tolerance, or run on fewer ranks)",
-                    human_bytes(blocks),
-                    human_bytes(room.max(0.0)),
+                    grainflow_core::human_bytes(blocks),
+                    grainflow_core::human_bytes(room.max(0.0)),
                 )
             });
             // The solvers' decisions are taken over all ranks: one fails on

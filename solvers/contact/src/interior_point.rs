@@ -423,13 +423,7 @@ pub fn solve(
     shift_inside(&mut z, linear, cones, &ranks);
 
     // ŨᵀM̃Ũ, the size of the objective.
-    let weighted: Vec<f64> = program
-        .mass
-        .iter()
-        .zip(&program.free)
-        .map(|(m, u)| m * u)
-        .collect();
-    let size = ranks.dot_columns(&weighted, &program.free);
+    let size = program.size_over(ranks);
     let norm_b = ranks.max(infinity_norm(&b));
     let norm_q = ranks.max(infinity_norm(&q));
     let (mut r_p, mut r_d, mut px, mut atz) =

@@ -136,11 +136,9 @@ struct Cones {
 impl Cones {
     /// Projects `v` onto K in place.
     fn project(&self, v: &mut [f64]) {
-        v[..self.linear].iter_mut().for_each(|e| *e = e.max(0.0));
-        for cone in v[self.linear..].chunks_exact_mut(3) {
-            let projected = project_on_cone(&[cone[0], cone[1], cone[2]]);
-            cone.copy_from_slice(&projected);
-        }
+        let (linear, cones) = v.split_at_mut(self.linear);
+        project_linear(linear);
+        project_cones(cones);
     }
 
     /// The largest distance of a cone's (or a row's) `v` from K.
@@ -178,6 +176,19 @@ impl Cones {
             .into_iter()
             .map(|d| if d > 0.0 { 1.0 / d } else { 1.0 })
             .collect()
+    }
+}
+
+/// Projects nonnegative rows onto their half-line.
+fn project_linear(v: &mut [f64]) {
+    v.iter_mut().for_each(|e| *e = e.max(0.0));
+}
+
+/// Projects consecutive cones of three rows onto theirs.
+fn project_cones(v: &mut [f64]) {
+    for cone in v.chunks_exact_mut(3) {
+        let projected = project_on_cone(&[cone[0], cone[1], cone[2]]);
+        cone.copy_from_slice(&projected);
     }
 }
 
@@ -221,13 +232,16 @@ impl Gradient<'_> {
         if !reduce {
             return (0.0, 0.0);
         }
-        let px: Vec<f64> = self.mass.iter().zip(&self.x).map(|(m, x)| m * x).collect();
-        let mut sums = [
-            0.5 * dot(&px[..self.ranks.interior], &self.x[..self.ranks.interior]),
-            dot(self.b, z),
-        ];
+        // ½ xᵀPx: the rank's interior summed over the ranks, the separator
+        // once.
+        let (mass, x) = (self.mass, &self.x);
+        let quadratic = |columns: std::ops::Range<usize>| -> f64 {
+            columns.map(|c| mass[c] * x[c] * x[c]).sum()
+        };
+        let interior = self.ranks.interior;
+        let mut sums = [0.5 * quadratic(0..interior), dot(self.b, z)];
         self.ranks.sum_each(&mut sums);
-        sums[0] += 0.5 * dot(&px[self.ranks.interior..], &self.x[self.ranks.interior..]);
+        sums[0] += 0.5 * quadratic(interior..x.len());
         (sums[0], sums[1])
     }
 }
@@ -269,12 +283,9 @@ fn project_step(
             *e = y[r] - step * metric[r] * slack[r];
         }
         if is_cone {
-            for cone in z.chunks_exact_mut(3) {
-                let projected = project_on_cone(&[cone[0], cone[1], cone[2]]);
-                cone.copy_from_slice(&projected);
-            }
+            project_cones(z);
         } else {
-            z.iter_mut().for_each(|e| *e = e.max(0.0));
+            project_linear(z);
         }
         z.iter()
             .zip(previous.iter())
@@ -383,8 +394,7 @@ pub fn solve(
     let mut step = 1.0 / lipschitz;
 
     // The sizes the stopping test is relative to, as the interior point's.
-    let weighted: Vec<f64> = mass.iter().zip(&program.free).map(|(m, u)| m * u).collect();
-    let size = ranks.dot_columns(&weighted, &program.free);
+    let size = program.size_over(ranks);
     let norm_b = ranks.max(infinity_norm(&b));
 
     let mut z: Vec<f64> = match start {
@@ -396,7 +406,6 @@ pub fn solve(
     let mut previous = z.clone();
     let mut slack = vec![0.0; m];
     let mut theta: f64 = 1.0;
-    let mut ax = vec![0.0; m];
     let mut value_at_z = f64::INFINITY;
     for iteration in 0..=max_iterations {
         if iteration % TEST_EVERY == 0 || iteration == max_iterations {
@@ -406,14 +415,15 @@ pub fn solve(
             let distance = ranks.max(cones.distance(&slack));
             let mut projected = slack.clone();
             cones.project(&mut projected);
-            // A x(z) = b − s(z), and φ(z) = ½ xᵀPx + bᵀz: no product again.
-            for r in 0..m {
-                ax[r] = b[r] - slack[r];
-            }
             let gap = ranks.sum(dot(&projected, &z)).abs();
             let primal = quadratic + ranks.dot_columns(&q, &gradient.x);
             let dual = -quadratic - bz;
-            let largest = ranks.max(infinity_norm(&ax).max(infinity_norm(&projected)));
+            // |A x(z)| = |b − s(z)|, and φ(z) = ½ xᵀPx + bᵀz: no product again.
+            let ax = b
+                .iter()
+                .zip(&slack)
+                .fold(0.0_f64, |m, (b, s)| m.max((b - s).abs()));
+            let largest = ranks.max(ax.max(infinity_norm(&projected)));
             let primal_ok = distance <= tolerance * (1.0 + norm_b.max(largest));
             let gap_ok = gap <= tolerance * size.max(primal.abs().min(dual.abs()));
             if primal_ok && gap_ok {

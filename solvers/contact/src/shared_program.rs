@@ -30,6 +30,32 @@ use crate::contacts::Bodies;
 use clarabel::algebra::CscMatrix;
 use grainflow_core::Communicator;
 
+/// The dense end of a rank's factor over the ns_t separator unknowns its
+/// pairs reach, in units of ns_t² numbers: what the most loaded rank's
+/// peak resident memory holds beyond its share of the scene (the whole
+/// scene's estimate over the ranks) and Σ, one COCD step on packings at
+/// rest, ε = 1e-5, one thread a rank (2026-12-05):
+///
+/// | spheres | ranks | ns | ns_t | measured | estimate |
+/// | --- | --- | --- | --- | --- | --- |
+/// | 8,748 | 2 | 2,172 | 2,172 | 401 MiB | 365 MiB (−9 %) |
+/// | 8,748 | 3 | 4,308 | 4,308 | 571 MiB | 537 MiB (−6 %) |
+/// | 8,748 | 4 (2 × 2) | 4,236 | 2,208 | 362 MiB | 330 MiB (−9 %) |
+/// | 17,986 | 2 | 3,522 | 3,522 | 954 MiB | 942 MiB (−1 %) |
+/// | 17,986 | 3 | 7,032 | 7,032 | 1,282 MiB | 1,414 MiB (+10 %) |
+/// | 17,986 | 4 (2 × 2) | 6,954 | 3,588 | 870 MiB | 869 MiB (0 %) |
+///
+/// The measured excess spans 1.15–2.52 ns_t², the larger at the smaller
+/// packing.
+pub const SEPARATOR_BLOCK_OVER_SQUARE: f64 = 1.5;
+
+/// The bytes a rank holds for the interior point's dense blocks over a
+/// separator of `unknowns`: Σ, and at most its own factor's dense end
+/// (ns_t ≤ ns).
+pub fn separator_block_bytes(unknowns: usize) -> f64 {
+    (1.0 + SEPARATOR_BLOCK_OVER_SQUARE) * 8.0 * (unknowns as f64).powi(2)
+}
+
 /// How the interior point's unknowns are shared among ranks: the first
 /// `interior` columns are the rank's own, the rest the separator held on
 /// every rank (none on one rank).

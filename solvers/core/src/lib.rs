@@ -11,6 +11,7 @@ pub mod domain;
 pub mod process_grid;
 pub mod shared;
 pub mod state;
+pub mod units;
 
 pub use communicator::Communicator;
 pub use domain::{
@@ -22,6 +23,7 @@ pub use process_grid::{
 };
 pub use shared::SharedArray;
 pub use state::{State, StateError};
+pub use units::human_bytes;
 
 /// Three-component vector of `f64`. 2D scenes live in the (x, y) plane with
 /// z = 0, rotations about z only.
