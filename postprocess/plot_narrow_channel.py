@@ -1,0 +1,70 @@
+#!/usr/bin/env python3
+"""Chart of scripts/narrow_channel_3d.py (Martin et al. 2022, section 5.2):
+for each preparation (column/layer: compact/compact, compact/loose,
+loose/loose), the front x_f against time (left), the front speed against
+the front's position with the paper's figures marked (middle: the largest
+speed, about 75 cm/s near x = 16 cm; the end of the deceleration at
+x = 26.5 cm; the slow propagation near 15 cm/s), and the final deposit's
+thickness h(x) (right). x from the back wall, as the paper's.
+
+    postprocess/plot_narrow_channel.py docs/validation/narrow_channel_3d.csv \
+        docs/validation/narrow_channel_3d.png
+"""
+import csv
+import sys
+from collections import defaultdict
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+STYLE = {"cc": ("black", "compact / compact"), "cl": ("tab:blue", "compact / loose"),
+         "ll": ("tab:red", "loose / loose")}
+
+
+def columns(path, x, y):
+    """{preparation: ([x], [y])} from a table of the script."""
+    table = defaultdict(lambda: ([], []))
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            xs, ys = table[r["preparation"]]
+            xs.append(x(r))
+            ys.append(y(r))
+    return table
+
+
+def main():
+    table, out = sys.argv[1], sys.argv[2]
+    fronts = table.replace(".csv", "_fronts.csv")
+    profiles = table.replace(".csv", "_profiles.csv")
+    with open(table) as f:
+        rows = list(csv.DictReader(f))
+    diameter = float(rows[0]["diameter"]) * 1e3
+    fig, (a, b, c) = plt.subplots(1, 3, figsize=(14, 4.2))
+    position = columns(fronts, lambda r: float(r["time"]), lambda r: 100 * float(r["front"]))
+    speed = columns(fronts, lambda r: 100 * float(r["front"]), lambda r: 100 * float(r["front_speed"]))
+    deposit = columns(profiles, lambda r: 100 * float(r["x"]), lambda r: 1000 * float(r["h"]))
+    for name, (colour, label) in STYLE.items():
+        if name in position:
+            a.plot(*position[name], color=colour, label=label)
+            b.plot(*speed[name], color=colour, label=label)
+            c.plot(*deposit[name], color=colour, label=label)
+    b.plot([16], [75], "o", color="grey", label="paper: largest speed")
+    b.axvline(26.5, color="grey", ls=":", label="paper: end of deceleration")
+    b.axhline(15, color="grey", ls="--", label="paper: slow phase")
+    a.set(xlabel="t after the release (s)", ylabel="front x_f (cm)")
+    b.set(xlabel="front x_f (cm)", ylabel="front speed (cm/s)", ylim=(0, None))
+    c.set(xlabel="x (cm)", ylabel="final thickness h (mm)", xlim=(0, None))
+    for axis in (a, b, c):
+        axis.grid(alpha=0.3)
+    a.legend(fontsize=8)
+    b.legend(fontsize=7)
+    fig.suptitle(f"Narrow channel, W = 0.8 cm, 22°, h_i = 5 mm, d = {diameter:g} mm, soft DEM "
+                 f"(paper: d = 1 mm, COCD)")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+if __name__ == "__main__":
+    main()
