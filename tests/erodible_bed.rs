@@ -66,6 +66,9 @@ fn a_release_on_an_erodible_layer_keeps_its_certificates_groups_and_deposit() {
         let groups = final_groups(dir.path());
         let column_grains = metric(summary, "column_grains");
         assert_eq!(groups, [column_grains as usize, bed_grains as usize]);
+        // The front is the released mass's: it never runs ahead of the
+        // grains that carry it (a layer flowing on its own would).
+        assert_eq!(metric(summary, "front_jumps"), 0.0);
         if deposit.contains("no_layer") {
             assert_eq!((layer, bed_grains), (0.0, 0.0));
         } else {
