@@ -29,6 +29,7 @@ kept, and one that was stopped goes on from its newest checkpoint.
 import argparse
 import concurrent.futures
 import csv
+import json
 import math
 import os
 import sys
@@ -142,11 +143,9 @@ def release(binary, work, radius, name, path, slope, end, threads):
         f"domain.gravity=[{9.81 * math.sin(theta)},0.0,{-9.81 * math.cos(theta)}]"]
     if threads:
         sets.append(f"parallel.threads={threads}")
-    summary, refusal = None, None
     if os.path.exists(os.path.join(out, "summary.json")):
-        import json
         with open(os.path.join(out, "summary.json")) as f:
-            summary = json.load(f)
+            summary, refusal = json.load(f), None
     else:
         summary, refusal = run_case(binary, os.path.join(CASES, "narrow_channel_3d.toml"), out, sets,
                                     resume=True)

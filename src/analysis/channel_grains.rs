@@ -57,6 +57,15 @@ impl Grains {
         self.centre[k][self.normal] - self.floor
     }
 
+    /// The largest down-slope velocity of a mobile grain (zero where none
+    /// moves down the slope).
+    pub(super) fn fastest_down_slope(&self) -> f64 {
+        (0..self.centre.len())
+            .filter(|&k| !self.fixed[k])
+            .map(|k| self.velocity_x[k])
+            .fold(0.0, f64::max)
+    }
+
     /// Mean solid volume of the mobile grains per unit span.
     pub(super) fn mean_volume_per_span(&self) -> f64 {
         let mobile: Vec<usize> = (0..self.centre.len()).filter(|&k| !self.fixed[k]).collect();

@@ -177,16 +177,12 @@ impl ErodibleBed {
             let front = raised_front(&bins, &heights, &release.initial_heights, &flowing, volume)
                 .map_or(reached, |x| x.max(reached));
             let (bed_kinetic, bed_potential) = bed_energies(system, &release.bed_ids);
-            let fastest = (0..grains.centre.len())
-                .filter(|&k| !grains.fixed[k])
-                .map(|k| grains.velocity_x[k])
-                .fold(0.0, f64::max);
             self.samples.push(Sample {
                 time: after,
                 front: front - self.back,
                 bed_kinetic,
                 bed_potential,
-                fastest,
+                fastest: grains.fastest_down_slope(),
             });
             self.next_sample = after + self.settings.sample_interval;
         }
@@ -388,7 +384,7 @@ fn front_jumps(samples: &[Sample], length: f64) -> (usize, Option<f64>) {
     for pair in samples.windows(2) {
         let (before, after) = (&pair[0], &pair[1]);
         let fastest = before.fastest.max(after.fastest);
-        if before.fastest == 0.0 && after.fastest == 0.0 && after.front > before.front {
+        if fastest == 0.0 {
             continue;
         }
         let reach = 2.0 * fastest * (after.time - before.time) + 0.5 * length;
