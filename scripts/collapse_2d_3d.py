@@ -35,14 +35,13 @@ releases side by side, one thread each; --threads N gives each run N.
 import argparse
 import concurrent.futures
 import csv
-import json
 import math
 import os
 import shutil
 import sys
 
 import shrink_deposit
-from grainflow_run import run_case
+from grainflow_run import finished_summary, run_case
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CASES = os.path.join(HERE, "..", "cases")
@@ -255,11 +254,8 @@ def release(binary, work, scene, dimension, model, slope, member, deposit, end, 
             sets.append("time.dt_over_contact_time=0.05")
     if threads:
         sets.append(f"parallel.threads={threads}")
-    finished = os.path.join(out, "summary.json")
-    if os.path.exists(finished):
-        with open(finished) as f:
-            summary, refusal = json.load(f), None
-    else:
+    summary, refusal = finished_summary(out), None
+    if summary is None:
         summary, refusal = run_case(binary, case, out, sets, resume=dimension == 3)
     row = {"dimension": dimension, "model": model, "slope": slope, "member": member, "dt": dt}
     if summary is None:

@@ -24,3 +24,16 @@ def run_case(binary, case, out, sets, resume=False):
         return None, lines[-1] if lines else "failed"
     with open(summary_path) as f:
         return json.load(f), None
+
+
+def finished_summary(out):
+    """The summary.json of a run in `out` that ended (at its end time, at
+    rest, refused mid-run or unstable), or None: no run there yet, or one
+    stopped by a signal or a wall-clock limit, which `run_case` with
+    `resume` takes on from its newest checkpoint."""
+    path = os.path.join(out, "summary.json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        summary = json.load(f)
+    return None if summary.get("status") == "stopped" else summary

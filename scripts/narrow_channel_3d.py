@@ -29,13 +29,12 @@ kept, and one that was stopped goes on from its newest checkpoint.
 import argparse
 import concurrent.futures
 import csv
-import json
 import math
 import os
 import sys
 
 from collapse_2d_3d import vtp_arrays
-from grainflow_run import run_case
+from grainflow_run import finished_summary, run_case
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CASES = os.path.join(HERE, "..", "cases")
@@ -84,7 +83,7 @@ def rain(binary, work, radius, preparation, threads):
                  f"particles.block[2].lower=[{GATE},0.0,{3.5 * radius}]"]
     if threads:
         sets.append(f"parallel.threads={threads}")
-    if not os.path.exists(os.path.join(out, "summary.json")):
+    if finished_summary(out) is None:
         summary, refusal = run_case(binary, os.path.join(CASES, "narrow_channel_fill_3d.toml"), out, sets,
                                     resume=True)
         if summary is None:
@@ -143,10 +142,8 @@ def release(binary, work, radius, name, path, slope, end, threads):
         f"domain.gravity=[{9.81 * math.sin(theta)},0.0,{-9.81 * math.cos(theta)}]"]
     if threads:
         sets.append(f"parallel.threads={threads}")
-    if os.path.exists(os.path.join(out, "summary.json")):
-        with open(os.path.join(out, "summary.json")) as f:
-            summary, refusal = json.load(f), None
-    else:
+    summary, refusal = finished_summary(out), None
+    if summary is None:
         summary, refusal = run_case(binary, os.path.join(CASES, "narrow_channel_3d.toml"), out, sets,
                                     resume=True)
     row = {"preparation": name, "slope": slope, "diameter": 2 * radius}
