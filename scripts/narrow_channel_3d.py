@@ -18,8 +18,11 @@ same glued bed, drawn from the same seed), then releases it with
 `cases/narrow_channel_3d.toml` (the soft DEM). --diameter sets the mean
 grain (default 2 mm; the paper's is 1 mm): the counts grow as d^-3 and
 the contact time with d (the overlaps stay the same fraction of a grain).
-Writes one row per run (the front's phases, where they happen, the
-runout, the deposit's thickness upslope, the cost) and the fronts and
+--rolling-friction gives the releases a rolling resistance (the paper's
+spheres have none; a layer on this slope stops only with one, see
+scripts/chute_layer_arrest.py). Writes one row per run (the front's
+phases, where they happen, the runout, the deposit's thickness upslope,
+the cost) and the fronts and
 final profiles beside it (`_fronts.csv`, `_profiles.csv`).
 
 The same command run again resumes: rains and releases that finished are
@@ -48,7 +51,7 @@ RUNS = {"cc": ("compact", "compact"), "cl": ("compact", "loose"), "ll": ("loose"
 # Upslope: the deposit's thickness is averaged over x in [0, UPSLOPE].
 UPSLOPE = 0.02
 FIELDS = [
-    "preparation", "slope", "diameter", "status", "column_grains", "bed_grains", "initial_height",
+    "preparation", "slope", "diameter", "rolling_friction", "status", "column_grains", "bed_grains", "initial_height",
     "aspect_ratio", "front_max_speed", "front_max_speed_time", "front_max_speed_x",
     "deceleration_end_time", "deceleration_end_x", "slow_phase", "slow_phase_speed",
     "final_front", "runout_x", "upslope_thickness", "steps", "simulated_time", "wall_seconds",
@@ -134,19 +137,21 @@ def final_profile(folder, radius):
     return [((k + 0.5) * width, v / (width * WIDTH)) for k, v in sorted(volume.items())]
 
 
-def release(binary, work, radius, name, path, slope, end, threads):
-    out = os.path.join(work, f"run_{name}_{slope:g}deg")
+def release(binary, work, radius, name, path, slope, end, threads, rolling=0.0):
+    out = os.path.join(work, f"run_{name}_{slope:g}deg" + (f"_mr{rolling:g}" if rolling else ""))
     theta = math.radians(slope)
     sets = grain_sets(radius) + [
         f'particles.block[1].path="{os.path.abspath(path)}"', f"time.end={end}",
         f"domain.gravity=[{9.81 * math.sin(theta)},0.0,{-9.81 * math.cos(theta)}]"]
     if threads:
         sets.append(f"parallel.threads={threads}")
+    if rolling:
+        sets.append(f"contact.rolling_friction={rolling}")
     summary, refusal = finished_summary(out), None
     if summary is None:
         summary, refusal = run_case(binary, os.path.join(CASES, "narrow_channel_3d.toml"), out, sets,
                                     resume=True)
-    row = {"preparation": name, "slope": slope, "diameter": 2 * radius}
+    row = {"preparation": name, "slope": slope, "diameter": 2 * radius, "rolling_friction": rolling}
     if summary is None:
         row.update(status="refused", stop_reason=refusal)
         return row, [], []
@@ -161,10 +166,12 @@ def release(binary, work, radius, name, path, slope, end, threads):
     profile = final_profile(out, radius)
     upslope = [h for x, h in profile if x < UPSLOPE]
     row["upslope_thickness"] = sum(upslope) / len(upslope) if upslope else None
-    series = [{"preparation": name, "slope": slope, "time": r["time_after_release"], "front": r["front"],
+    series = [{"preparation": name, "slope": slope, "rolling_friction": rolling, "time": r["time_after_release"],
+               "front": r["front"],
                "front_speed": r["front_speed"], "bed_kinetic_to_potential": r["bed_kinetic_to_potential"]}
               for r in fronts]
-    profiles = [{"preparation": name, "slope": slope, "x": x, "h": h} for x, h in profile]
+    profiles = [{"preparation": name, "slope": slope, "rolling_friction": rolling, "x": x, "h": h}
+                for x, h in profile]
     return row, series, profiles
 
 
@@ -177,6 +184,8 @@ def main():
     parser.add_argument("--preparations", nargs="+", choices=sorted(RUNS), default=["cc", "cl", "ll"])
     parser.add_argument("--slope", type=float, default=22.0)
     parser.add_argument("--end", type=float, default=6.0, help="simulated time after the release (s)")
+    parser.add_argument("--rolling-friction", type=float, default=0.0,
+                        help="rolling resistance mu_r of the releases (the paper's spheres have none)")
     parser.add_argument("--threads", type=int, help="threads of each run (one with --jobs 2)")
     parser.add_argument("--jobs", type=int, default=1)
     args = parser.parse_args()
@@ -195,11 +204,13 @@ def main():
                 for name in args.preparations}
 
     def run(name):
-        return release(args.binary, args.work, radius, name, deposits[name], args.slope, args.end, threads)
+        return release(args.binary, args.work, radius, name, deposits[name], args.slope, args.end, threads,
+                       args.rolling_friction)
 
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         results = list(pool.map(run, args.preparations))
-    first = os.path.join(args.work, f"run_{args.preparations[0]}_{args.slope:g}deg")
+    first = os.path.join(args.work, f"run_{args.preparations[0]}_{args.slope:g}deg"
+                         + (f"_mr{args.rolling_friction:g}" if args.rolling_friction else ""))
     if glued(first) != beds[0]:
         sys.exit("the release's glued bed differs from the rain's")
     rows = [r for r, _, _ in results]
