@@ -6,10 +6,12 @@ the front's position with the paper's figures marked (middle, cut at
 1.6 m/s: where a loose layer flows on its own the front jumps; the largest
 speed, about 75 cm/s near x = 16 cm; the end of the deceleration at
 x = 26.5 cm; the slow propagation near 15 cm/s), and the final deposit's
-thickness h(x) (right). x from the back wall, as the paper's.
+thickness h(x) (right). x from the back wall, as the paper's. Tables
+given after the chart's path add their runs with a rolling resistance
+(`scripts/narrow_channel_3d.py --rolling-friction`), drawn in greens.
 
     postprocess/plot_narrow_channel.py docs/validation/narrow_channel_3d.csv \
-        docs/validation/narrow_channel_3d.png
+        docs/validation/narrow_channel_3d.png [docs/validation/narrow_channel_3d_rolling.csv]
 """
 import csv
 import sys
@@ -22,6 +24,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 STYLE = {"cc": ("black", "compact / compact"), "cl": ("tab:blue", "compact / loose"),
          "ll": ("tab:red", "loose / loose")}
+ROLLING_COLOURS = ["tab:green", "darkgreen", "yellowgreen"]
+
+
+def run_key(r):
+    """A run's preparation, with its rolling resistance where it has one."""
+    rolling = float(r.get("rolling_friction") or 0.0)
+    return r["preparation"] if rolling == 0.0 else f"{r['preparation']}, mu_r = {rolling:g}"
 
 
 def columns(path, x, y):
@@ -29,24 +38,30 @@ def columns(path, x, y):
     table = defaultdict(lambda: ([], []))
     with open(path) as f:
         for r in csv.DictReader(f):
-            xs, ys = table[r["preparation"]]
+            xs, ys = table[run_key(r)]
             xs.append(x(r))
             ys.append(y(r))
     return table
 
 
 def main():
-    table, out = sys.argv[1], sys.argv[2]
-    fronts = table.replace(".csv", "_fronts.csv")
-    profiles = table.replace(".csv", "_profiles.csv")
+    table, out, extra = sys.argv[1], sys.argv[2], sys.argv[3:]
     with open(table) as f:
         rows = list(csv.DictReader(f))
     diameter = float(rows[0]["diameter"]) * 1e3
     fig, (a, b, c) = plt.subplots(1, 3, figsize=(14, 4.2))
-    position = columns(fronts, lambda r: float(r["time"]), lambda r: 100 * float(r["front"]))
-    speed = columns(fronts, lambda r: 100 * float(r["front"]), lambda r: 100 * float(r["front_speed"]))
-    deposit = columns(profiles, lambda r: 100 * float(r["x"]), lambda r: 1000 * float(r["h"]))
-    for name, (colour, label) in STYLE.items():
+    position, speed, deposit = {}, {}, {}
+    for path in [table] + extra:
+        fronts = path.replace(".csv", "_fronts.csv")
+        profiles = path.replace(".csv", "_profiles.csv")
+        position.update(columns(fronts, lambda r: float(r["time"]), lambda r: 100 * float(r["front"])))
+        speed.update(columns(fronts, lambda r: 100 * float(r["front"]), lambda r: 100 * float(r["front_speed"])))
+        deposit.update(columns(profiles, lambda r: 100 * float(r["x"]), lambda r: 1000 * float(r["h"])))
+    style = dict(STYLE)
+    rolling = sorted(k for k in position if k not in STYLE)
+    for k, colour in zip(rolling, ROLLING_COLOURS):
+        style[k] = (colour, k.replace("cc", "compact / compact").replace("mu_r", "μ_r"))
+    for name, (colour, label) in style.items():
         if name in position:
             a.plot(*position[name], color=colour, label=label)
             b.plot(*speed[name], color=colour, label=label)

@@ -23,20 +23,20 @@ another of its chaotic paths, for the spread of single runs.
 run before (the deposit is rained again to the same bits).
 
 The same command run again resumes: deposits already in --work are kept,
-and so are runs that finished (their summary.json). --jobs 2 runs two
-releases side by side, each on one thread: on two cores a sweep's
-throughput, since a small scene gains little from a second thread.
+and so are runs that finished; a run stopped by a signal goes on from
+the checkpoint it wrote. --jobs 2 runs two releases side by side, each
+on one thread: on two cores a sweep's throughput, since a small scene
+gains little from a second thread.
 """
 import argparse
 import concurrent.futures
 import csv
-import json
 import math
 import os
 import shutil
 import sys
 
-from grainflow_run import run_case
+from grainflow_run import finished_summary, run_case
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CASES = os.path.join(HERE, "..", "cases")
@@ -125,12 +125,10 @@ def release(binary, work, deposit, radius, length, thickness, slope, model, dt, 
         f"time.dt={dt}",
         f"time.end={end}",
     ] + extra
-    finished = os.path.join(out, "summary.json")
-    if os.path.exists(finished):
-        with open(finished) as f:
-            summary, refusal = json.load(f), None
-    else:
-        summary, refusal = run_case(binary, os.path.join(CASES, "erodible_bed_2d.toml"), out, sets)
+    summary, refusal = finished_summary(out), None
+    if summary is None:
+        summary, refusal = run_case(binary, os.path.join(CASES, "erodible_bed_2d.toml"), out, sets,
+                                    resume=True)
     row = {"thickness_diameters": thickness / d, "slope": slope, "model": model, "dt": dt,
            "member": member}
     if summary is None:
