@@ -24,13 +24,15 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 STYLE = {"cc": ("black", "compact / compact"), "cl": ("tab:blue", "compact / loose"),
          "ll": ("tab:red", "loose / loose")}
-ROLLING_COLOURS = ["tab:green", "darkgreen", "yellowgreen"]
+# Runs with a rolling resistance: a green per mu_r, a line per preparation.
+ROLLING_COLOURS = ["yellowgreen", "tab:green", "darkgreen", "darkolivegreen"]
+LINES = {"cc": "-", "cl": "--", "ll": ":"}
 
 
 def run_key(r):
     """A run's preparation, with its rolling resistance where it has one."""
     rolling = float(r.get("rolling_friction") or 0.0)
-    return r["preparation"] if rolling == 0.0 else f"{r['preparation']}, mu_r = {rolling:g}"
+    return r["preparation"] if rolling == 0.0 else (r["preparation"], rolling)
 
 
 def columns(path, x, y):
@@ -57,15 +59,16 @@ def main():
         position.update(columns(fronts, lambda r: float(r["time"]), lambda r: 100 * float(r["front"])))
         speed.update(columns(fronts, lambda r: 100 * float(r["front"]), lambda r: 100 * float(r["front_speed"])))
         deposit.update(columns(profiles, lambda r: 100 * float(r["x"]), lambda r: 1000 * float(r["h"])))
-    style = dict(STYLE)
-    rolling = sorted(k for k in position if k not in STYLE)
-    for k, colour in zip(rolling, ROLLING_COLOURS):
-        style[k] = (colour, k.replace("cc", "compact / compact").replace("mu_r", "μ_r"))
-    for name, (colour, label) in style.items():
+    style = {k: (colour, "-", label) for k, (colour, label) in STYLE.items()}
+    resistances = sorted({k[1] for k in position if isinstance(k, tuple)})
+    for k in sorted(k for k in position if isinstance(k, tuple)):
+        colour = ROLLING_COLOURS[resistances.index(k[1]) % len(ROLLING_COLOURS)]
+        style[k] = (colour, LINES[k[0]], f"{STYLE[k[0]][1]}, μ_r = {k[1]:g}")
+    for name, (colour, line, label) in style.items():
         if name in position:
-            a.plot(*position[name], color=colour, label=label)
-            b.plot(*speed[name], color=colour, label=label)
-            c.plot(*deposit[name], color=colour, label=label)
+            a.plot(*position[name], color=colour, ls=line, label=label)
+            b.plot(*speed[name], color=colour, ls=line, label=label)
+            c.plot(*deposit[name], color=colour, ls=line, label=label)
     b.plot([16], [75], "o", color="grey", label="paper: largest speed")
     b.axvline(26.5, color="grey", ls=":", label="paper: end of deceleration")
     b.axhline(15, color="grey", ls="--", label="paper: slow phase")
@@ -78,8 +81,8 @@ def main():
     c.set(xlabel="x (cm)", ylabel="final thickness h (mm)", xlim=(0, None))
     for axis in (a, b, c):
         axis.grid(alpha=0.3)
-    a.legend(fontsize=8)
-    b.legend(fontsize=7)
+    a.legend(fontsize=7)
+    b.legend(fontsize=6)
     fig.suptitle(f"Narrow channel, W = 0.8 cm, 22°, h_i = 5 mm, d = {diameter:g} mm, soft DEM "
                  f"(paper: d = 1 mm, COCD)")
     fig.tight_layout()
