@@ -252,10 +252,15 @@ def main():
     if not lammps:
         print("lmp not on the PATH: the LAMMPS rows are left out", file=sys.stderr)
     rows = []
+    layers = {}
     for run in RUNS:
         model, law, mu, mu_r, dt, thicknesses = run
         for thickness in thicknesses:
-            deposit = layer(args.work, fill, thickness, 0.995 if model == "cocd" else 1.0)
+            # Each layer is cut from the rain once and shared by its runs.
+            shrink = 0.995 if model == "cocd" else 1.0
+            if (thickness, shrink) not in layers:
+                layers[thickness, shrink] = layer(args.work, fill, thickness, shrink)
+            deposit = layers[thickness, shrink]
             row = {"model": model, "law": law, "friction": mu, "rolling_friction": mu_r,
                    "dt": dt or STEP, "thickness": thickness, "grains": deposit[1],
                    "solid_thickness": round(deposit[2], 3)}

@@ -137,8 +137,13 @@ def final_profile(folder, radius):
     return [((k + 0.5) * width, v / (width * WIDTH)) for k, v in sorted(volume.items())]
 
 
+def release_folder(work, name, slope, rolling):
+    """The folder of a release: its preparation, slope and rolling resistance."""
+    return os.path.join(work, f"run_{name}_{slope:g}deg" + (f"_mr{rolling:g}" if rolling else ""))
+
+
 def release(binary, work, radius, name, path, slope, end, threads, rolling=0.0):
-    out = os.path.join(work, f"run_{name}_{slope:g}deg" + (f"_mr{rolling:g}" if rolling else ""))
+    out = release_folder(work, name, slope, rolling)
     theta = math.radians(slope)
     sets = grain_sets(radius) + [
         f'particles.block[1].path="{os.path.abspath(path)}"', f"time.end={end}",
@@ -209,8 +214,7 @@ def main():
 
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         results = list(pool.map(run, args.preparations))
-    first = os.path.join(args.work, f"run_{args.preparations[0]}_{args.slope:g}deg"
-                         + (f"_mr{args.rolling_friction:g}" if args.rolling_friction else ""))
+    first = release_folder(args.work, args.preparations[0], args.slope, args.rolling_friction)
     if glued(first) != beds[0]:
         sys.exit("the release's glued bed differs from the rain's")
     rows = [r for r, _, _ in results]

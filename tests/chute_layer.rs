@@ -11,6 +11,7 @@ mod common;
 
 use common::{case_path, load, run};
 use grainflow::case::Case;
+use grainflow::scene::contact_law;
 use grainflow::simulation;
 
 const DENSITY: f64 = 2500.0;
@@ -18,26 +19,18 @@ const DENSITY: f64 = 2500.0;
 /// The case with its law (restitution 0.5, contact time 0.1 ms, k_n and
 /// γ_n set per pair from its reduced mass) replaced by the same law at the
 /// pair of mean grains for every pair: a constant k_n and γ_n, as LAMMPS's
-/// `hooke` runs it (grainflow's calibration: the damping rate
-/// β = −ln e / t_c and the frequency of a force-clamped contact,
-/// ω t_c = π − 2 atan(β/ω)), at the case's step.
+/// `hooke` runs it, taken from the case's own calibration
+/// (`grainflow::scene::contact_law`), at the case's step.
 fn with_mean_pair_law(mut case: Case) -> Case {
-    let (restitution, contact_time) = (0.5_f64, 1e-4);
-    let beta = -restitution.ln() / contact_time;
-    let mut omega = std::f64::consts::PI / contact_time;
-    for _ in 0..200 {
-        omega = (std::f64::consts::PI - 2.0 * (beta / omega).atan()) / contact_time;
-    }
     let reduced_mass = 0.5 * DENSITY * std::f64::consts::PI / 6.0 * 0.002_f64.powi(3);
+    let (stiffness, damping) = contact_law(&case).normal.coefficients(reduced_mass);
     let contact = case.contact.as_mut().unwrap();
-    assert_eq!(
-        (contact.restitution, contact.contact_time),
-        (Some(restitution), Some(contact_time))
-    );
+    let contact_time = contact.contact_time.unwrap();
+    assert_eq!((contact.restitution, contact_time), (Some(0.5), 1e-4));
     contact.restitution = None;
     contact.contact_time = None;
-    contact.stiffness = Some(reduced_mass * (omega * omega + beta * beta));
-    contact.damping = Some(2.0 * reduced_mass * beta);
+    contact.stiffness = Some(stiffness);
+    contact.damping = Some(damping);
     case.time.dt_over_contact_time = None;
     case.time.dt = Some(0.05 * contact_time);
     case
