@@ -223,13 +223,22 @@ impl NormalFactor {
     }
 }
 
+/// Where a whole factor turns supernodal: from about 14 multiply–adds per
+/// entry of the factor, 0.35 of faer's default (40). The supernodal
+/// factor's dense kernels (AVX-512 since faer 0.24) win from there; faer's
+/// default kept every 2D packing simplicial. Whole runs, the two kinds
+/// alternated (docs/performance.md, *The whole factor's kind*): a 2D box
+/// of 400 discs at rest (16.5 per entry) 1.21 times faster supernodal, the
+/// 4 mm erodible bed (4,700 discs, 22.9) 1.27; a 2D column of 410 discs
+/// (12.8) 1.04, the 8 mm erodible bed (11.7) 0.92, both left simplicial.
+const SUPERNODAL_FROM: SupernodalThreshold = SupernodalThreshold(0.35);
+
 /// One sparse Cholesky of the whole matrix, in the order given (the
 /// interior point numbers its unknowns by AMD) or by nested dissection:
 /// symbolic analysis once,
 /// numeric factorisations per iteration, on the threads of the pool it
-/// is built in. faer picks simplicial or
-/// supernodal by the factor's density; on a 2D packing of 2,000 discs
-/// forcing supernodal doubled the step.
+/// is built in. Supernodal or simplicial by the factor's multiply–adds
+/// per entry ([`SUPERNODAL_FROM`]).
 pub(crate) struct WholeFactor {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
@@ -264,7 +273,10 @@ impl WholeFactor {
             symbolic_pattern(matrix),
             Side::Upper,
             ordering,
-            CholeskySymbolicParams::default(),
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: SUPERNODAL_FROM,
+                ..Default::default()
+            },
         )
         .map_err(|e| format!("symbolic factorisation: {e:?}"))?;
         // faer runs the dense blocks of a supernodal factor on the threads

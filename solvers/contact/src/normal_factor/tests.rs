@@ -254,6 +254,18 @@ fn the_whole_supernodal_factor_is_the_same_on_any_number_of_threads() {
     assert!(same_bits(&one, &solved_on(2, &matrix, &b, usize::MAX)));
 }
 
+/// A 2D packing's factor, which faer alone would make simplicial, is
+/// supernodal too (faster, docs/performance.md) and keeps its bits on
+/// any number of threads.
+#[test]
+fn a_2d_packings_whole_factor_is_supernodal_and_the_same_on_any_number_of_threads() {
+    let matrix = grid_normal_matrix(30, 20);
+    let b: Vec<f64> = (0..matrix.n).map(|k| (0.3 * k as f64).sin()).collect();
+    let one = solved_on(1, &matrix, &b, usize::MAX);
+    assert!(backward_error(&matrix, &one, &b) < 1e-14);
+    assert!(same_bits(&one, &solved_on(2, &matrix, &b, usize::MAX)));
+}
+
 /// K's block on `rows` × `columns`, dense, from its upper triangle.
 fn dense_block(matrix: &CscMatrix<f64>, rows: &[usize], columns: &[usize]) -> Mat<f64> {
     let position = |of: &[usize]| {

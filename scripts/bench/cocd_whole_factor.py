@@ -1,0 +1,89 @@
+#!/usr/bin/env python3
+"""Hard-contact runs whose normal matrix is factorised whole (below
+20,000 unknowns: 2D packings up to about 6,600 discs, 3D up to about
+3,300 spheres), with two builds of grainflow alternated run by run in one
+command, so that a host whose load drifts weighs on both alike.
+
+Each scene is a whole run (`grainflow run`, its wall time from
+summary.json) and its result (a metric the scene's analysis writes), so
+that a change of the factor shows both what it saves and that the run
+ends where it did, to the interior point's tolerance.
+
+usage: scripts/bench/cocd_whole_factor.py BEFORE AFTER [--repeats 3]
+         [--threads 1] [--scene NAME=CASE:END ...] [--json FILE]
+(BEFORE and AFTER: two grainflow binaries, for example the last stop's
+build copied aside and target/release/grainflow. --scene adds a case,
+run to t = END, for example a deposit of the erodible-bed study.)
+"""
+import argparse, json, os, statistics, subprocess, tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+CASES = os.path.join(HERE, "..", "..", "cases")
+# name: (case, end time, the metric that says where the run ended)
+SCENES = {
+    "2D box at rest, 400 discs": ("static_box.toml", 0.2, "max_kinetic_to_potential"),
+    "2D column collapse, 410 discs": ("column_collapse_cocd_2d.toml", 0.4, "runout"),
+    "2D erodible bed, 8 mm": ("erodible_bed_2d.toml", 0.2, "runout"),
+    "3D column collapse, 2,100 spheres": ("column_collapse_cocd_3d.toml", 0.01, "runout"),
+}
+
+
+def run(binary, case, end, threads, out):
+    command = [binary, "run", case, "--threads", str(threads), "--out", out,
+               "--set", f"time.end={end}"]
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(os.path.join(out, "summary.json")) as f:
+        return json.load(f)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("before")
+    parser.add_argument("after")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--scene", action="append", default=[],
+                        help="NAME=CASE:END, reporting the runout")
+    parser.add_argument("--json")
+    args = parser.parse_args()
+    scenes = {name: (os.path.join(CASES, case), end, metric)
+              for name, (case, end, metric) in SCENES.items()}
+    for extra in args.scene:
+        name, rest = extra.split("=", 1)
+        case, end = rest.rsplit(":", 1)
+        scenes[name] = (case, float(end), "runout")
+    table = []
+    with tempfile.TemporaryDirectory() as work:
+        for name, (case, end, metric) in scenes.items():
+            runs = {"before": [], "after": []}
+            for repeat in range(args.repeats):
+                for label in ("before", "after"):
+                    binary = getattr(args, label)
+                    summary = run(binary, case, end, args.threads,
+                                  os.path.join(work, f"{label}_{repeat}"))
+                    runs[label].append({
+                        "wall_seconds": summary["wall_seconds"],
+                        "metric": summary["metrics"][metric],
+                        "mean_iterations": summary["metrics"]["mean_iterations"],
+                        "seconds_per_solve": summary["metrics"]["seconds_per_solve"],
+                        "peak_memory_bytes": summary["peak_memory_bytes"],
+                    })
+            median = {label: statistics.median(r["wall_seconds"] for r in rs)
+                      for label, rs in runs.items()}
+            row = {"scene": name, "case": case, "end": end, "threads": args.threads,
+                   "metric": metric, "runs": runs,
+                   "speed_up": median["before"] / median["after"]}
+            table.append(row)
+            walls = {label: ", ".join(f"{r['wall_seconds']:.2f}" for r in rs)
+                     for label, rs in runs.items()}
+            print(f"{name}: before {walls['before']} s; after {walls['after']} s; "
+                  f"speed-up {row['speed_up']:.2f}; {metric} "
+                  f"{runs['before'][0]['metric']:.6g} / {runs['after'][0]['metric']:.6g}",
+                  flush=True)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"before": args.before, "after": args.after, "scenes": table}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
