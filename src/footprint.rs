@@ -47,7 +47,7 @@ pub fn immersed_bytes_per_cell(dimension: usize) -> usize {
 ///   (`N^1.23`) fell 15 % short at 112,896.
 /// - 2D discs: 91, 175, 398, 707 MB at 12,500, 25,000, 50,000, 100,000;
 ///   least squares in logarithms (1.00, 1.04, 0.92, 1.04 times): about
-///   linear, the matrix split in two above 7,000 discs.
+///   linear, the matrix split in two above 1,000 discs.
 const COCD_BYTES_2D: (f64, f64) = (7015.3, 1.0042);
 const COCD_BYTES_3D: (f64, f64) = (3683.9, 1.3152);
 

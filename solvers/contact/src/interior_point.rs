@@ -58,7 +58,13 @@ struct NormalPattern {
 impl NormalPattern {
     /// `reorder`: whether a factor of the whole matrix may renumber the
     /// unknowns (not where the ranks share the separator, which stays last).
-    fn new(a: &CscMatrix<f64>, scale: f64, columns: usize, reorder: bool) -> Self {
+    fn new(
+        a: &CscMatrix<f64>,
+        scale: f64,
+        columns: usize,
+        reorder: bool,
+        three_dimensional: bool,
+    ) -> Self {
         let rows = a.m;
         let (row_start, mut row_column, row_value) = crate::csc::scaled_rows(a, scale);
         // The unknowns renumbered by a fill-reducing ordering (AMD) of the
@@ -67,7 +73,7 @@ impl NormalPattern {
         // A split factor orders each half itself: the unknowns keep their
         // numbers.
         let (mut colptr, mut rowval) = upper_pattern(&row_start, &row_column, columns);
-        let ordered = reorder && is_factorised_whole(columns);
+        let ordered = reorder && is_factorised_whole(columns, three_dimensional);
         let order = if ordered {
             let order = minimum_degree_order(&colptr, &rowval, columns);
             let mut label = vec![0usize; columns];
@@ -362,7 +368,13 @@ pub fn solve(
     let kappa = program.row_scale();
     let b: Vec<f64> = program.b.iter().map(|v| v / kappa).collect();
     let shared = ranks.shared();
-    let mut pattern = NormalPattern::new(&program.a_matrix, kappa, n, shared.is_none());
+    let mut pattern = NormalPattern::new(
+        &program.a_matrix,
+        kappa,
+        n,
+        shared.is_none(),
+        program.is_three_dimensional(),
+    );
     let fail = |what: String| format!("the interior point ({m} rows, {n} unknowns): {what}");
     for c in 0..cones {
         let r = linear + 3 * c;
@@ -385,7 +397,12 @@ pub fn solve(
     pattern.assemble(&mass, &vec![1.0; linear]);
     pattern.add_cone_blocks(linear, &vec![unit; cones]);
     let mut factor = match shared {
-        None => NormalFactor::new(&pattern.matrix, pattern.ordered, &program.column_position),
+        None => NormalFactor::new(
+            &pattern.matrix,
+            pattern.ordered,
+            &program.column_position,
+            program.is_three_dimensional(),
+        ),
         Some(communicator) => {
             // Planes cut a 3D interior well; a 2D one fills less in AMD's
             // order (docs/performance.md).

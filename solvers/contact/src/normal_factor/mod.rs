@@ -59,13 +59,33 @@ use split::SplitFactor;
 
 /// Unknowns from which a matrix is split in two. On two threads the split
 /// took a 2D packing's step from 0.45 to 0.32 s at 24,000 unknowns and
-/// from 6.0 to 3.9 s at 150,000; on one thread it costs 7–10 % more than
-/// the whole factor. A matrix this large that is not split (a 3D packing)
-/// is ordered by nested dissection: from about this size it fills less
-/// than AMD (a 16³ lattice of spheres, 24,576 unknowns: 22.3e6 entries
-/// against 41.4e6; a spread 3D heap of 16,200 unknowns: 9.6e6 against
-/// AMD's 7.5e6).
+/// from 6.0 to 3.9 s at 150,000. A matrix this large that is not split (a
+/// 3D packing) is ordered by nested dissection: from about this size it
+/// fills less than AMD (a 16³ lattice of spheres, 24,576 unknowns: 22.3e6
+/// entries against 41.4e6; a spread 3D heap of 16,200 unknowns: 9.6e6
+/// against AMD's 7.5e6).
 const SPLIT_FROM_UNKNOWNS: usize = 20_000;
+
+/// In 2D the split is faster on one thread too from a few thousand
+/// unknowns: its halves, each in AMD's order, fill less than the whole in
+/// it. On one thread, split against whole (supernodal): a step of the
+/// compact 2D packings of `scripts/bench/cocd_step.py` at rest 1.08,
+/// 1.10, 1.14 and 1.10 times faster at 2,000, 5,000, 8,000 and 20,000
+/// discs; whole runs of the 8 mm and 4 mm erodible beds (3,960 and 14,088
+/// unknowns, long strips) 1.13 and 1.18; but a box of 400 discs and a
+/// column of 410 (1,200 unknowns) 0.91 and 0.87. In 3D the whole factor
+/// stays ahead below [`SPLIT_FROM_UNKNOWNS`] (the static box of 1,600
+/// spheres and a column of 2,100: 0.96 split).
+const SPLIT_FROM_UNKNOWNS_2D: usize = 3_000;
+
+/// Unknowns from which a matrix of a 2D or 3D program is split.
+fn split_from(three_dimensional: bool) -> usize {
+    if three_dimensional {
+        SPLIT_FROM_UNKNOWNS
+    } else {
+        SPLIT_FROM_UNKNOWNS_2D
+    }
+}
 
 /// Largest separator worth splitting at, as a fraction of the unknowns
 /// and in unknowns: its dense Schur complement costs about ns³ flops per
@@ -77,8 +97,8 @@ const LARGEST_SEPARATOR: usize = 1_500;
 /// Whether a normal matrix of `unknowns` is factorised whole, so that the
 /// interior point assembles it in a fill-reducing order once per step
 /// (larger ones are split, and each half orders its own interior).
-pub(crate) fn is_factorised_whole(unknowns: usize) -> bool {
-    unknowns < SPLIT_FROM_UNKNOWNS
+pub(crate) fn is_factorised_whole(unknowns: usize, three_dimensional: bool) -> bool {
+    unknowns < split_from(three_dimensional)
 }
 
 /// faer's view of the upper-triangle pattern of a CSC matrix.
@@ -162,8 +182,10 @@ impl NormalFactor {
         matrix: &CscMatrix<f64>,
         ordered: bool,
         positions: &[[f64; 3]],
+        three_dimensional: bool,
     ) -> Result<Self, String> {
-        Self::with_split_from(matrix, SPLIT_FROM_UNKNOWNS, ordered, positions)
+        let split_from = split_from(three_dimensional);
+        Self::with_split_from(matrix, split_from, ordered, positions)
     }
 
     /// As `new`, splitting matrices of at least `split_from` unknowns.

@@ -1,16 +1,17 @@
 #!/usr/bin/env python3
-"""Hard-contact runs whose normal matrix is factorised whole (below
-20,000 unknowns: 2D packings up to about 6,600 discs, 3D up to about
-3,300 spheres), with two builds of grainflow alternated run by run in one
-command, so that a host whose load drifts weighs on both alike.
+"""Hard-contact runs of moderate size, where the normal matrix's factor
+is whole or split in two by its size (2D packings of a few hundred to a
+few thousand discs, 3D up to about 3,300 spheres), with two builds of
+grainflow alternated run by run in one command, so that a host whose load
+drifts weighs on both alike.
 
 Each scene is a whole run (`grainflow run`, its wall time from
 summary.json) and its result (a metric the scene's analysis writes), so
 that a change of the factor shows both what it saves and that the run
 ends where it did, to the interior point's tolerance.
 
-usage: scripts/bench/cocd_whole_factor.py BEFORE AFTER [--repeats 3]
-         [--threads 1] [--scene NAME=CASE:END ...] [--json FILE]
+usage: scripts/bench/cocd_moderate_factor.py BEFORE AFTER [--repeats 3]
+         [--threads 1] [--scene NAME=CASE:END[:METRIC] ...] [--json FILE]
 (BEFORE and AFTER: two grainflow binaries, for example the last stop's
 build copied aside and target/release/grainflow. --scene adds a case,
 run to t = END, for example a deposit of the erodible-bed study.)
@@ -43,15 +44,15 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--scene", action="append", default=[],
-                        help="NAME=CASE:END, reporting the runout")
+                        help="NAME=CASE:END[:METRIC], reporting the metric (runout by default)")
     parser.add_argument("--json")
     args = parser.parse_args()
     scenes = {name: (os.path.join(CASES, case), end, metric)
               for name, (case, end, metric) in SCENES.items()}
     for extra in args.scene:
         name, rest = extra.split("=", 1)
-        case, end = rest.rsplit(":", 1)
-        scenes[name] = (case, float(end), "runout")
+        case, end, *metric = rest.split(":")
+        scenes[name] = (case, float(end), metric[0] if metric else "runout")
     table = []
     with tempfile.TemporaryDirectory() as work:
         for name, (case, end, metric) in scenes.items():
