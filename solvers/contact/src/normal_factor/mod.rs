@@ -184,8 +184,7 @@ impl NormalFactor {
         positions: &[[f64; 3]],
         three_dimensional: bool,
     ) -> Result<Self, String> {
-        let split_from = split_from(three_dimensional);
-        Self::with_split_from(matrix, split_from, ordered, positions)
+        Self::with_split_from(matrix, split_from(three_dimensional), ordered, positions)
     }
 
     /// As `new`, splitting matrices of at least `split_from` unknowns.
@@ -246,13 +245,15 @@ impl NormalFactor {
 }
 
 /// Where a whole factor turns supernodal: from about 14 multiply–adds per
-/// entry of the factor, 0.35 of faer's default (40). The supernodal
-/// factor's dense kernels (AVX-512 since faer 0.24) win from there; faer's
-/// default kept every 2D packing simplicial. Whole runs, the two kinds
-/// alternated (docs/performance.md, *The whole factor's kind*): a 2D box
-/// of 400 discs at rest (16.5 per entry) 1.21 times faster supernodal, the
-/// 4 mm erodible bed (4,700 discs, 22.9) 1.27; a 2D column of 410 discs
-/// (12.8) 1.04, the 8 mm erodible bed (11.7) 0.92, both left simplicial.
+/// entry of the factor, 0.35 of faer's default (40), which kept every 2D
+/// packing simplicial; the supernodal factor's dense kernels (AVX-512
+/// since faer 0.24) win from there. Whole runs on one thread, the two
+/// kinds alternated (docs/performance.md, *Moderate 2D packings*): a box
+/// of 400 discs at rest (16.5 an entry) 1.28 times faster supernodal, the
+/// 4 mm erodible bed factorised whole (22.9) 1.33, but the 8 mm bed whole
+/// (11.7) 0.92. Whole factors are now 2D packings below
+/// [`SPLIT_FROM_UNKNOWNS_2D`] and 3D ones (hundreds of multiply–adds an
+/// entry: supernodal either way).
 const SUPERNODAL_FROM: SupernodalThreshold = SupernodalThreshold(0.35);
 
 /// One sparse Cholesky of the whole matrix, in the order given (the
