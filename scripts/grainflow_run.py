@@ -5,14 +5,16 @@ import os
 import subprocess
 
 
-def run_case(binary, case, out, sets, resume=False):
+def run_case(binary, case, out, sets, resume=False, threads=None):
     """`binary run case --out out --set s ...`. Returns the parsed
     summary.json and None, or None and the last line grainflow wrote to
     stderr when the case was refused (nothing written). With `resume`, a
     run stopped before its end (a session or a job limit) goes on from
     its newest checkpoint in `out` (`--restart auto`; the case needs a
-    `[checkpoint]` section)."""
+    `[checkpoint]` section). `threads`: `--threads`, when given."""
     command = [binary, "run", case, "--out", out]
+    if threads is not None:
+        command += ["--threads", str(threads)]
     if resume:
         command += ["--restart", "auto"]
     for s in sets:

@@ -89,8 +89,9 @@ fn a_release_on_an_erodible_layer_keeps_its_certificates_groups_and_deposit() {
 /// it runs several times farther. Measured on this scene: runouts over
 /// four runs each (gravity perturbed by 1e-7) 0.76–0.95 R0 at 0° and
 /// 4.5–6.7 R0 at 2 s at 22°; the front at rest at 0.61 s at 0° and still
-/// moving at 22° in the study's run (docs/validation/erodible_bed_2d.csv). Asserted: at rest before 1 s and no slow phase at 0°; at 22°
-/// not at rest at 2 s, and a runout at least four times the flat one
+/// moving at 22° in the study's run (docs/validation/erodible_bed_2d.csv).
+/// Asserted: at rest before 1 s and no slow phase at 0°; at 22° not at
+/// rest at 2 s, and a runout at least four times the flat one
 /// (the closest pair of runs measured: 4.7 times).
 #[test]
 fn on_the_flat_the_column_stops_without_a_slow_phase_and_at_22_degrees_runs_on_four_times_farther()

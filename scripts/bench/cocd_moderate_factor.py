@@ -16,9 +16,12 @@ usage: scripts/bench/cocd_moderate_factor.py BEFORE AFTER [--repeats 3]
 build copied aside and target/release/grainflow. --scene adds a case,
 run to t = END, for example a deposit of the erodible-bed study.)
 """
-import argparse, json, os, statistics, subprocess, tempfile
+import argparse, json, os, statistics, sys, tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, ".."))
+from grainflow_run import run_case  # noqa: E402
+
 CASES = os.path.join(HERE, "..", "..", "cases")
 # name: (case, end time, the metric that says where the run ended)
 SCENES = {
@@ -30,11 +33,10 @@ SCENES = {
 
 
 def run(binary, case, end, threads, out):
-    command = [binary, "run", case, "--threads", str(threads), "--out", out,
-               "--set", f"time.end={end}"]
-    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    with open(os.path.join(out, "summary.json")) as f:
-        return json.load(f)
+    summary, refused = run_case(binary, case, out, [f"time.end={end}"], threads=threads)
+    if summary is None:
+        sys.exit(f"{case}: {refused}")
+    return summary
 
 
 def main():
