@@ -77,7 +77,7 @@ impl Body {
     /// `∫ α u dV` and `∫ r × α u dV` over the body's faces of the face
     /// field `velocity`, cells of volume `volume`.
     pub(crate) fn inner_momentum(&self, velocity: &[Vec<f64>], volume: f64) -> (Vec3, Vec3) {
-        let (momentum, angular) = self.moments(|component, _, row| {
+        let (momentum, angular) = self.moments(&[velocity], |component, _, row| {
             let velocity = &velocity[component][row.faces()];
             let (mut sum, mut along) = (0.0, 0.0);
             for (i, (alpha, v)) in row.alpha.iter().zip(velocity).enumerate() {
@@ -138,15 +138,22 @@ impl Body {
     /// `(Σ q, Σ r × q)` over the body's faces of every component, `q` the
     /// vector along the component whose row sums `(Σ_i q_i, Σ_i i q_i)`
     /// are `row_sums(component, faces, row)`: the force and torque of a
-    /// face field on the body.
+    /// face field on the body. `reads` are the face fields (one vector a
+    /// component) that `row_sums` reads, at most two: the pass asks for
+    /// their rows ahead.
     pub(crate) fn moments(
         &self,
+        reads: &[&[Vec<f64>]],
         mut row_sums: impl FnMut(usize, &FaceRows, &Row) -> (f64, f64),
     ) -> (Vec3, Vec3) {
         let mut force = Vec3::zeros();
         let mut torque = Vec3::zeros();
         for (component, faces) in self.faces.iter().enumerate() {
-            let (sum, moment) = faces.moments(|row| row_sums(component, faces, row));
+            let mut fields: [&[f64]; 2] = [&[], &[]];
+            for (field, read) in fields.iter_mut().zip(reads) {
+                *field = &read[component];
+            }
+            let (sum, moment) = faces.moments(&fields, |row| row_sums(component, faces, row));
             force[component] += sum;
             // Σ r × (q e_c) = (Σ q r) × e_c.
             let mut axis = Vec3::zeros();

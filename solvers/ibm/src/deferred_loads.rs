@@ -21,6 +21,7 @@ use rayon::prelude::*;
 
 use crate::body::Body;
 use crate::face_sums::touched_block;
+use crate::faces::{prefetch, PREFETCH_ROWS};
 use crate::forcing::{Bodies, ImmersedBoundaries, Loads};
 
 impl ImmersedBoundaries {
@@ -97,7 +98,12 @@ impl Body {
         for (component, faces) in self.faces.iter().enumerate() {
             let mut plain = [0.0; 2];
             let mut moment = [Vec3::zeros(); 2];
+            let mut ahead = faces.faces_ahead(PREFETCH_ROWS);
             for row in faces.rows() {
+                if let Some(later) = ahead.next() {
+                    prefetch(&predicted[component], &later);
+                    prefetch(&velocity[component], &later);
+                }
                 let (base, slope) = self.rigid_along(&row, component, faces.step);
                 let before = &predicted[component][row.faces()];
                 let after = &velocity[component][row.faces()];

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::body::Body;
 use crate::exponents::{forced_fraction, Exponents};
-use crate::faces::Row;
+use crate::faces::{prefetch, Row, PREFETCH_ROWS};
 use crate::forcing::{Bodies, ImmersedBoundaries};
 
 impl ImmersedBoundaries {
@@ -90,7 +90,7 @@ impl ImmersedBoundaries {
 fn add_body_sums<'a>(
     body: &Body,
     component: usize,
-    rows: impl Iterator<Item = Row<'a>>,
+    rows: impl Iterator<Item = Row<'a>> + Clone,
     exponents: &Exponents,
     total: &mut [f64],
     target: &mut [f64],
@@ -98,7 +98,13 @@ fn add_body_sums<'a>(
 ) {
     let exponent = exponents.of(body.particle);
     let step = body.faces[component].step;
+    let mut ahead = rows.clone().skip(PREFETCH_ROWS);
     for row in rows {
+        if let Some(later) = ahead.next() {
+            let later = later.first - first..later.first - first + later.len();
+            prefetch(total, &later);
+            prefetch(target, &later);
+        }
         let (base, slope) = body.rigid_along(&row, component, step);
         let at = row.first - first..row.first - first + row.len();
         let sums = total[at.clone()].iter_mut().zip(&mut target[at]);

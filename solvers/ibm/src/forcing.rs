@@ -301,7 +301,11 @@ impl ImmersedBoundaries {
             .par_iter()
             .map(|body| {
                 let exponent = exponents.of(body.particle);
-                let (force, torque) = body.moments(|component, faces, row| {
+                let reads: &[&[Vec<f64>]] = match made_before_shares {
+                    true => &[velocity],
+                    false => &[velocity, total],
+                };
+                let (force, torque) = body.moments(reads, |component, faces, row| {
                     let (base, slope) = body.rigid_along(row, component, faces.step);
                     let (alpha, faces) = (row.alpha, row.faces());
                     let velocity = &velocity[component][faces.clone()];
