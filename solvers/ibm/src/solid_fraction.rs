@@ -73,16 +73,16 @@ fn fraction_at(squared: f64, l1: f64, radius: f64, width: f64) -> f64 {
 }
 
 /// `a b + c`, in one rounding where the target fuses it (an FMA
-/// instruction): a chain of them is half as long as multiplications and
-/// additions apart. Without FMA, `mul_add` would be a call, so the two
-/// operations are kept.
+/// instruction; every 64-bit ARM has one): a chain of them is half as long
+/// as multiplications and additions apart. Without FMA, `mul_add` would be
+/// a call, so the two operations are kept.
 #[inline(always)]
 fn fused(a: f64, b: f64, c: f64) -> f64 {
-    #[cfg(target_feature = "fma")]
+    #[cfg(any(target_feature = "fma", target_arch = "aarch64"))]
     {
         a.mul_add(b, c)
     }
-    #[cfg(not(target_feature = "fma"))]
+    #[cfg(not(any(target_feature = "fma", target_arch = "aarch64")))]
     {
         a * b + c
     }
