@@ -203,8 +203,8 @@ impl FaceRows {
                         let across_l1 = y.abs() + z.abs();
                         let row = made..made + len;
                         made += len;
-                        let faces = squared[row.clone()].iter_mut().zip(&mut l1[row]);
-                        for ((squared, l1), &d) in faces.zip(along) {
+                        let offsets = squared[row.clone()].iter_mut().zip(&mut l1[row]);
+                        for ((squared, l1), &d) in offsets.zip(along) {
                             let x = first_x + d;
                             *squared = x * x + across_squared;
                             *l1 = x.abs() + across_l1;
@@ -393,6 +393,7 @@ impl FaceRows {
         let mut fractions = 0.0;
         let mut start = 0;
         for r in 0..self.rows.len() {
+            // `faces_ahead` would borrow the fractions this pass rewrites.
             if let Some(later) = self.rows.get(r + PREFETCH_ROWS) {
                 let first = self.first(later);
                 let later = first..first + later.len as usize;
