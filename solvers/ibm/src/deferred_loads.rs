@@ -101,8 +101,7 @@ impl Body {
             let mut ahead = faces.faces_ahead(PREFETCH_ROWS);
             for row in faces.rows() {
                 if let Some(later) = ahead.next() {
-                    prefetch(&predicted[component], &later);
-                    prefetch(&velocity[component], &later);
+                    prefetch(&[&predicted[component], &velocity[component]], &later);
                 }
                 let (base, slope) = self.rigid_along(&row, component, faces.step);
                 let before = &predicted[component][row.faces()];

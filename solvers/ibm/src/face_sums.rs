@@ -102,8 +102,7 @@ fn add_body_sums<'a>(
     for row in rows {
         if let Some(later) = ahead.next() {
             let later = later.first - first..later.first - first + later.len();
-            prefetch(total, &later);
-            prefetch(target, &later);
+            prefetch(&[total, target], &later);
         }
         let (base, slope) = body.rigid_along(&row, component, step);
         let at = row.first - first..row.first - first + row.len();
