@@ -238,26 +238,28 @@ impl CoupledSystem {
             // Eq. 7 in one pass reads the faces for its loads after the
             // projection, with the inner momentum (`deferred_loads.rs`).
             let deferred = passes == 1 && forced.forcing_sums_made();
-            // Each pass but the last is projected here, the last below.
-            let mut forcing = Loads::zeros(self.dem.particles.len());
             let mut clock = clock;
-            for pass in 0..passes {
-                if pass > 0 {
+            let mut forcing = if deferred {
+                let (grid, velocity) = (&self.flow.grid, &mut self.flow.velocity);
+                self.immersed
+                    .force_keeping_prediction(grid, velocity, forced);
+                Loads::zeros(self.dem.particles.len())
+            } else {
+                // Each pass but the last is projected here, the last below
+                // (`forcing_passes.rs`).
+                self.immersed
+                    .begin_forcing(&self.flow.grid, forced, &exponents);
+                for _ in 1..passes {
+                    let (grid, velocity) = (&self.flow.grid, &mut self.flow.velocity);
+                    self.immersed.force_pass(grid, velocity, forced);
                     clock = self.lap(clock, Part::Forcing);
                     max_divergence = max_divergence.max(self.flow.project(stage, dt));
                     clock = self.lap(clock, Part::Flow);
                 }
                 let (grid, velocity) = (&self.flow.grid, &mut self.flow.velocity);
-                if deferred {
-                    self.immersed
-                        .force_keeping_prediction(grid, velocity, forced);
-                } else {
-                    let loads = self
-                        .immersed
-                        .apply(grid, velocity, forced, stage_dt, &exponents);
-                    forcing.add(&loads);
-                }
-            }
+                self.immersed
+                    .last_pass(grid, velocity, forced, stage_dt, &exponents, passes)
+            };
             let clock = self.lap(clock, Part::Forcing);
             max_divergence = max_divergence.max(self.flow.project(stage, dt));
             let clock = self.lap(clock, Part::Flow);

@@ -140,7 +140,7 @@ impl Body {
 
 /// Zero on the faces of `block` of the face field `field`, the planes of
 /// the slowest axis shared among threads.
-fn clear_block(grid: &Grid, block: &Block, field: &mut [f64]) {
+pub(crate) fn clear_block(grid: &Grid, block: &Block, field: &mut [f64]) {
     let slow = grid.dim() - 1;
     let plane = grid.stride(slow);
     let mut inner = *block;

@@ -7,6 +7,7 @@
 use grainflow_core::Communicator;
 use rayon::prelude::*;
 
+use crate::fast_math::{exp, ln_one_minus};
 use crate::forcing::Bodies;
 
 /// The exponent `e` of each grain's forcing `1 − (1 − α)^e` in a stage.
@@ -80,12 +81,27 @@ pub(crate) fn passes_for(largest: f64) -> usize {
 
 /// The fraction `1 − (1 − α)^exponent` of the way to the rigid velocity
 /// that a stage moves a face of solid fraction `α` (eq. 7 at exponent 1).
-#[inline]
+#[inline(always)]
 pub(crate) fn forced_fraction(alpha: f64, exponent: f64) -> f64 {
-    if exponent == 1.0 || alpha >= 1.0 {
+    if exponent == 1.0 {
         alpha.min(1.0)
     } else {
-        -(exponent * (-alpha).ln_1p()).exp_m1()
+        raise(alpha, exponent)
+    }
+}
+
+/// `1 − (1 − α)^exponent`, and 1 inside the grain (`α = 1`) at any
+/// exponent: without branches or calls, so that a loop over a body's
+/// faces runs on vector instructions. `1 − e^z` for `z = e ln(1 − α)`,
+/// within two units in the last place of 1: a face's forcing to round-off
+/// of the velocities it mixes.
+#[inline(always)]
+pub(crate) fn raise(alpha: f64, exponent: f64) -> f64 {
+    let raised = 1.0 - exp(exponent * ln_one_minus(alpha));
+    if alpha >= 1.0 {
+        1.0
+    } else {
+        raised
     }
 }
 
@@ -102,11 +118,12 @@ impl Bodies {
             .map(|body| {
                 let exponent = exponents.of(body.particle);
                 let mut raised = body.clone_without_faces();
-                raised.faces = body
-                    .faces
-                    .iter()
-                    .map(|faces| faces.mapped(|alpha| forced_fraction(alpha, exponent)))
-                    .collect();
+                raised.faces = if exponent == 1.0 {
+                    body.faces.clone()
+                } else {
+                    let raise = move |alpha| raise(alpha, exponent);
+                    body.faces.iter().map(|faces| faces.mapped(raise)).collect()
+                };
                 raised
             })
             .collect();
@@ -115,5 +132,30 @@ impl Bodies {
             list,
             forcing_sums_made: false,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fraction without calls is libm's `−expm1(e ln1p(−α))` to two
+    /// units in the last place of 1, over a layer's fractions and the exponents
+    /// a pass takes (a renewal's slip-weak 0.01 to a pass's 1), and exact
+    /// inside the grain and under eq. 7.
+    #[test]
+    fn the_forced_fraction_is_libms_to_round_off() {
+        let mut worst: f64 = 0.0;
+        for exponent in [0.01, 0.05, 0.3, 0.5, 0.81, 0.999] {
+            for n in 0..=20_000 {
+                let alpha = n as f64 / 20_000.0;
+                let libm = -(exponent * (-alpha).ln_1p()).exp_m1();
+                worst = worst.max((forced_fraction(alpha, exponent) - libm).abs());
+            }
+            assert_eq!(forced_fraction(1.0, exponent), 1.0);
+            assert_eq!(forced_fraction(0.0, exponent), 0.0);
+        }
+        assert!(worst <= 2.0 * f64::EPSILON, "{worst:e}");
+        assert_eq!(forced_fraction(0.3, 1.0), 0.3);
     }
 }

@@ -51,7 +51,6 @@ use grainflow_fluid::{Block, Grid, Location};
 use rayon::prelude::*;
 
 use crate::body::Body;
-use crate::exponents::forced_fraction;
 pub use crate::exponents::Exponents;
 use crate::faces::{FaceRows, FaceScratch};
 use crate::layer_forcing::{LayerForcing, SLIP_SUMS};
@@ -101,6 +100,10 @@ pub struct ImmersedBoundaries {
     pub(crate) total_fraction: Vec<Vec<f64>>,
     /// `Σ_p α_p U_p` on the faces of each component.
     pub(crate) solid_velocity: Vec<Vec<f64>>,
+    /// `Σ V*` over the passes of a stage forced in several, `V*` the
+    /// velocity before each pass's forcing (`forcing_passes.rs`); empty
+    /// until a stage takes two passes.
+    pub(crate) velocity_before_passes: Vec<Vec<f64>>,
     /// Whether the two sums above hold a stage's forcing until `apply`.
     forcing_sums_pending: bool,
 }
@@ -123,6 +126,7 @@ impl ImmersedBoundaries {
             dimension: grid.dimension,
             total_fraction: (0..dim).map(|_| grid.zeros()).collect(),
             solid_velocity: (0..dim).map(|_| grid.zeros()).collect(),
+            velocity_before_passes: Vec::new(),
             forcing_sums_pending: false,
         }
     }
@@ -281,65 +285,8 @@ impl ImmersedBoundaries {
         stage_dt: f64,
         exponents: &Exponents,
     ) -> Loads {
-        let volume = grid.cell_volume();
-
-        // 1. Σ β_p and Σ β_p U_p on the faces, unless the bodies were
-        // made with them (eq. 7: β = α, summed before the shares).
-        if !bodies.forcing_sums_made {
-            self.add_forcing_sums(grid, bodies, exponents);
-        }
-
-        // 2. Loads, from the velocity before the forcing: the particle
-        // receives −f, the opposite of what it gives, `w_p (U_p − V)` on
-        // each face with `w_p = β_p / max(1, Σ_q β_q)`; with the sums made
-        // before the shares, `α_p` is that share already.
-        let total = &self.total_fraction;
-        let made_before_shares = bodies.forcing_sums_made;
-        let scale = -volume / stage_dt;
-        let per_body: Vec<(Vec3, Vec3)> = bodies
-            .list
-            .par_iter()
-            .map(|body| {
-                let exponent = exponents.of(body.particle);
-                let reads: &[&[Vec<f64>]] = match made_before_shares {
-                    true => &[velocity],
-                    false => &[velocity, total],
-                };
-                let (force, torque) = body.moments(reads, |component, faces, row| {
-                    let (base, slope) = body.rigid_along(row, component, faces.step);
-                    let (alpha, faces) = (row.alpha, row.faces());
-                    let velocity = &velocity[component][faces.clone()];
-                    let load = |i: usize, weight: f64, v: f64| -> (f64, f64) {
-                        let q = weight * (base + i as f64 * slope - v);
-                        (q, i as f64 * q)
-                    };
-                    let (mut sum, mut along) = (0.0, 0.0);
-                    if made_before_shares {
-                        for (i, (alpha, v)) in alpha.iter().zip(velocity).enumerate() {
-                            let (q, moment) = load(i, *alpha, *v);
-                            sum += q;
-                            along += moment;
-                        }
-                    } else {
-                        let total = &total[component][faces];
-                        let faces = alpha.iter().zip(velocity.iter().zip(total));
-                        for (i, (alpha, (v, total))) in faces.enumerate() {
-                            let weight = forced_fraction(*alpha, exponent) / total.max(1.0);
-                            let (q, moment) = load(i, weight, *v);
-                            sum += q;
-                            along += moment;
-                        }
-                    }
-                    (sum, along)
-                });
-                (force * scale, torque * scale)
-            })
-            .collect();
-
-        // 3. The forcing, V += Σ w_p (U_p − V), and the scratch cleared.
-        self.force_touched::<false>(grid, velocity, bodies);
-        self.forcing_sums_pending = false;
-        self.gather(bodies, &per_body)
+        self.begin_forcing(grid, bodies, exponents);
+        self.last_pass(grid, velocity, bodies, stage_dt, exponents, 1)
     }
 
     /// `Σ_p α_p` capped at 1 at every owned cell centre, in the order of

@@ -11,6 +11,8 @@
 //! cells are seen edge-on, so that it spans about three cells in every
 //! direction.
 
+use crate::fast_math::{exp, fused};
+
 /// `λ σ` is largest, 0.4634, at `λ = 1.527`: the transition never spreads
 /// further than this times `Δ` per unit of the tanh argument.
 const WIDEST_LAMBDA_SIGMA: f64 = 0.4635;
@@ -50,7 +52,7 @@ pub fn face_fractions(squared: &[f64], l1: &[f64], radius: f64, width: f64) -> V
 /// Eq. 8–10 at the squared distance `squared` from the centre, `l1` the
 /// offset's `|x| + |y| + |z|`. Without branches, so that
 /// [`face_fractions`] runs on vector instructions, and with one division
-/// before the last: with `d` the distance, `λ = l1/d` and `σ = (0.455 d² − 0.065 l1²)/d²`, so
+/// before the last ([`exp`] and [`fused`] from [`crate::fast_math`]): with `d` the distance, `λ = l1/d` and `σ = (0.455 d² − 0.065 l1²)/d²`, so
 ///
 /// ```text
 /// (d − R)/(λ σ Δ) = (d − R) d³ / (Δ l1 (0.455 d² − 0.065 l1²)).
@@ -71,74 +73,6 @@ fn fraction_at(squared: f64, l1: f64, radius: f64, width: f64) -> f64 {
         alpha
     }
 }
-
-/// `a b + c`, in one rounding where the target fuses it (an FMA
-/// instruction; every 64-bit ARM has one): a chain of them is half as long
-/// as multiplications and additions apart. Without FMA, `mul_add` would be
-/// a call, so the two operations are kept.
-#[inline(always)]
-fn fused(a: f64, b: f64, c: f64) -> f64 {
-    #[cfg(any(target_feature = "fma", target_arch = "aarch64"))]
-    {
-        a.mul_add(b, c)
-    }
-    #[cfg(not(any(target_feature = "fma", target_arch = "aarch64")))]
-    {
-        a * b + c
-    }
-}
-
-/// `e^x` to a few units in the last place for `|x| ≤ 700`, without
-/// branches or calls (libm's `exp` is a call, which keeps the loop of
-/// [`face_fractions`] on scalars): `x = k ln 2 + r` with `|r| ≤ ln 2 / 2`,
-/// `e^r` by its Taylor series to `r^13` (remainder below 1e-17), times
-/// `2^k` made from its bits.
-///
-/// The series is summed by Estrin's scheme, pairs of terms joined by
-/// `r²`, `r⁴` and `r⁸`, rather than by Horner's: the same operations
-/// nearly, but a chain of four fused steps instead of thirteen. The
-/// fractions' loop waits on that chain, not on the arithmetic units.
-#[inline(always)]
-fn exp(x: f64) -> f64 {
-    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
-    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
-    // 1.5 × 2^52: adding it rounds to an integer, held in the low bits.
-    const SHIFT: f64 = 6_755_399_441_055_744.0;
-    const C: [f64; 14] = INVERSE_FACTORIALS;
-    let x = x.clamp(-700.0, 700.0);
-    let shifted = x * std::f64::consts::LOG2_E + SHIFT;
-    let k = shifted - SHIFT;
-    let r = fused(-k, LN2_LO, fused(-k, LN2_HI, x));
-    let r2 = r * r;
-    let r4 = r2 * r2;
-    let r8 = r4 * r4;
-    let pair = |n: usize| fused(C[n + 1], r, C[n]);
-    let low = fused(fused(pair(6), r2, pair(4)), r4, fused(pair(2), r2, pair(0)));
-    let high = fused(fused(pair(12), r2, pair(10)), r2, pair(8));
-    let p = fused(high, r8, low);
-    // 2^k: k + 1023 in the exponent's bits (k is in the low bits of
-    // `shifted`, two's complement).
-    let scale = f64::from_bits(shifted.to_bits().wrapping_add(1023) << 52);
-    p * scale
-}
-
-/// `1/n!` for n = 0 to 13.
-const INVERSE_FACTORIALS: [f64; 14] = [
-    1.0,
-    1.0,
-    1.0 / 2.0,
-    1.0 / 6.0,
-    1.0 / 24.0,
-    1.0 / 120.0,
-    1.0 / 720.0,
-    1.0 / 5_040.0,
-    1.0 / 40_320.0,
-    1.0 / 362_880.0,
-    1.0 / 3_628_800.0,
-    1.0 / 39_916_800.0,
-    1.0 / 479_001_600.0,
-    1.0 / 6_227_020_800.0,
-];
 
 /// Distance from the centre beyond which [`solid_fraction`] is dropped.
 pub fn support(radius: f64, width: f64) -> f64 {
@@ -174,18 +108,6 @@ mod tests {
             assert!(solid_fraction(at(support(r, w)), r, w) < 1.2e-7);
         }
         assert_eq!(solid_fraction([0.0; 3], r, w), 1.0);
-    }
-
-    /// The exponential without branches agrees with libm's to a few ulp.
-    #[test]
-    fn exponential_to_round_off() {
-        let mut worst: f64 = 0.0;
-        for n in 0..=200_000 {
-            let x = -120.0 + 140.0 * n as f64 / 200_000.0;
-            let (ours, libm) = (exp(x), x.exp());
-            worst = worst.max(((ours - libm) / libm).abs());
-        }
-        assert!(worst < 4.0 * f64::EPSILON, "{worst:e}");
     }
 
     /// The form for many faces equals the face-by-face form to round-off.
