@@ -10,7 +10,9 @@ inner momentum), the flow `seconds_flow` (prediction and projection), the
 DEM `seconds_dem`. The figure to read is their ratio within one run.
 
 usage: scripts/bench/immersed_split.py BEFORE AFTER [--repeats 3]
-         [--json FILE]
+         [--json FILE] [--set KEY=VALUE ...]
+(--set: a case setting for every run, for example
+ --set coupling.layer_forcing='"renewal"' --set time.cfl=1.)
 (BEFORE and AFTER: two grainflow binaries, for example the last stop's
 build copied aside and target/release/grainflow.)
 Chart: postprocess/plot_immersed_split.py FILE OUT.png
@@ -23,8 +25,10 @@ SCENES = [
 ]
 
 
-def run(binary, arguments, threads, out):
+def run(binary, arguments, threads, out, settings=()):
     command = [binary, "run", *arguments, "--threads", str(threads), "--out", out]
+    for setting in settings:
+        command += ["--set", setting]
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
@@ -47,6 +51,7 @@ def main():
     ap.add_argument("after")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--json")
+    ap.add_argument("--set", action="append", default=[], dest="settings")
     args = ap.parse_args()
     builds = {"before": args.before, "after": args.after}
     results = []
@@ -56,7 +61,7 @@ def main():
                 for threads in (1, 2):
                     for build, binary in builds.items():
                         out = os.path.join(scratch, f"{build}-{repeat}")
-                        row = run(binary, arguments, threads, out)
+                        row = run(binary, arguments, threads, out, args.settings)
                         row.update(scene=scene, threads=threads, build=build, repeat=repeat)
                         results.append(row)
                         print(
@@ -67,7 +72,7 @@ def main():
                         )
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"builds": builds, "runs": results}, f, indent=1)
+            json.dump({"builds": builds, "settings": args.settings, "runs": results}, f, indent=1)
 
 
 if __name__ == "__main__":
