@@ -21,6 +21,7 @@ pub fn report(case: &Case, memory_line: &str) -> Result<String, RunError> {
     let density_warning = coupled_simulation::check_density_ratio(
         system.smallest_density_ratio(),
         system.coupling,
+        system.immersed.layer,
         3,
     )?;
     let f = case.fluid_section();

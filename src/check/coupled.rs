@@ -19,6 +19,7 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
     let density_warning = coupled_simulation::check_density_ratio(
         system.smallest_density_ratio(),
         system.coupling,
+        system.immersed.layer,
         system.flow.grid.dim(),
     )?;
     let f = case.fluid_section();

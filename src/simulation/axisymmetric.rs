@@ -41,6 +41,7 @@ impl AxisymmetricModel {
         warnings.extend(check_density_ratio(
             system.smallest_density_ratio(),
             system.coupling,
+            system.immersed.layer,
             3,
         )?);
         let dt = case

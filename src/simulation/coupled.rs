@@ -13,8 +13,8 @@ use grainflow_core::{Communicator, State, StateError};
 use grainflow_fluid::time_step_for_cfl_rates;
 use grainflow_ibm::forcing::WallLayer;
 use grainflow_ibm::{
-    CoupledReport, CoupledSystem, Coupling, LayerForcing, Timings, RIGID_INNER_FLUID_FAILS_BELOW,
-    RIGID_INNER_FLUID_WARNS_BELOW,
+    rigid_inner_fluid_limits, CoupledReport, CoupledSystem, Coupling, LayerForcing,
+    RigidInnerFluidLimits, Timings,
 };
 use serde_json::{json, Map, Value};
 
@@ -187,15 +187,16 @@ pub fn forcing_step_warning(cfl: f64) -> Option<String> {
 /// `run` warn.
 pub const INNER_FLUID_MOMENTUM_TESTED_DOWN_TO: [f64; 2] = [1.05, 0.5];
 
-/// Refuses the paper's rigid-inner-fluid load where it fails (density
-/// ratio below [`RIGID_INNER_FLUID_FAILS_BELOW`]); returns a warning
-/// close to it, and for the load from the inner fluid momentum below the
-/// ratios it was tested at ([`INNER_FLUID_MOMENTUM_TESTED_DOWN_TO`]).
-/// `ratio` is the smallest `ρ_p/ρ` of the scene's moving grains, `dim` its
-/// dimension.
+/// Refuses the paper's rigid-inner-fluid load where it fails under the
+/// scene's forcing of the transition layer `layer` (density ratio below
+/// its [`rigid_inner_fluid_limits`]); returns a warning close to it, and
+/// for the load from the inner fluid momentum below the ratios it was
+/// tested at ([`INNER_FLUID_MOMENTUM_TESTED_DOWN_TO`]). `ratio` is the
+/// smallest `ρ_p/ρ` of the scene's moving grains, `dim` its dimension.
 pub fn check_density_ratio(
     ratio: f64,
     coupling: Coupling,
+    layer: LayerForcing,
     dim: usize,
 ) -> Result<Option<String>, RunError> {
     if coupling == Coupling::InnerFluidMomentum {
@@ -209,21 +210,29 @@ pub fn check_density_ratio(
             )
         }));
     }
-    if ratio < RIGID_INNER_FLUID_FAILS_BELOW {
+    let RigidInnerFluidLimits {
+        fails_below,
+        warns_below,
+    } = rigid_inner_fluid_limits(layer);
+    let forcing = match layer {
+        LayerForcing::Renewal => "with coupling.layer_forcing = \"renewal\"",
+        _ => "with the layer forced as eq. 7",
+    };
+    if ratio < fails_below {
         return Err(RunError::Case(format!(
             "coupling.formulation = \"rigid_inner_fluid\" fails at density ratio rho_p/rho = \
-             {ratio:.4}: it blows up below {RIGID_INNER_FLUID_FAILS_BELOW}; allowed: \
+             {ratio:.4}: {forcing} it blows up below {fails_below}; allowed: \
              \"inner_fluid_momentum\" (tested down to {} in 3D, {} in 2D), or grains denser \
-             than {RIGID_INNER_FLUID_FAILS_BELOW} times the fluid",
+             than {fails_below} times the fluid",
             INNER_FLUID_MOMENTUM_TESTED_DOWN_TO[1], INNER_FLUID_MOMENTUM_TESTED_DOWN_TO[0]
         )));
     }
-    Ok((ratio < RIGID_INNER_FLUID_WARNS_BELOW).then(|| {
+    Ok((ratio < warns_below).then(|| {
         format!(
-            "warning: density ratio {ratio:.4} is below {RIGID_INNER_FLUID_WARNS_BELOW}, where \
-             \"rigid_inner_fluid\" lets a grain's spin overshoot and oscillate after a \
-             collision (it fails below {RIGID_INNER_FLUID_FAILS_BELOW}); \"inner_fluid_momentum\" \
-             holds further down"
+            "warning: density ratio {ratio:.4} is below {warns_below}, where \
+             \"rigid_inner_fluid\" {forcing} lets a grain's spin overshoot and oscillate after \
+             a collision (it fails below {fails_below}); \"inner_fluid_momentum\" holds further \
+             down"
         )
     }))
 }
@@ -332,6 +341,7 @@ impl CoupledModel {
         warnings.extend(check_density_ratio(
             system.smallest_density_ratio(),
             system.coupling,
+            system.immersed.layer,
             system.flow.grid.dim(),
         )?);
         let dt = case

@@ -71,7 +71,7 @@ use std::f64::consts::PI;
 use std::time::Instant;
 
 use crate::forcing::{vectors_on_owners, Bodies, Exponents, ImmersedBoundaries, Loads};
-use crate::layer_forcing::{renewal_exponent, slip_from_sums, SLIP_SUMS};
+use crate::layer_forcing::{renewal_exponent, slip_from_sums, LayerForcing, SLIP_SUMS};
 use crate::stage_loads::{
     hydrodynamic_loads, inner_momentum_rate, set_stage_loads, GrainLoad, StageMeasures,
     VirtualMassReturn,
@@ -89,6 +89,37 @@ pub const RIGID_INNER_FLUID_FAILS_BELOW: f64 = 1.8;
 /// grain's spin overshoots and oscillates (it reverses in one step at 2.0,
 /// decays monotonically from 2.8): runs warn.
 pub const RIGID_INNER_FLUID_WARNS_BELOW: f64 = 2.8;
+
+/// Where the paper's rigid-inner-fluid load holds, under a forcing of the
+/// transition layer: below `fails_below` runs refuse it, below
+/// `warns_below` they warn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RigidInnerFluidLimits {
+    pub fails_below: f64,
+    pub warns_below: f64,
+}
+
+/// [`RigidInnerFluidLimits`] under `layer`. Eq. 7 at every stage, and a
+/// held layer (eq. 7 at its own step): [`RIGID_INNER_FLUID_FAILS_BELOW`]
+/// and [`RIGID_INNER_FLUID_WARNS_BELOW`]. The layer relaxed at its renewal
+/// rate takes less of the grain's motion into its fluid at a stage, and
+/// the load holds further down (tests
+/// `rigid_inner_fluid_holds_further_down_under_the_renewal_forcing` and
+/// `under_the_renewal_forcing_a_rigid_inner_fluid_spin_decays_further_down`,
+/// D/Δx = 8): in translation from 1.25 (it blows up at 1.2), in rotation
+/// monotonically from 1.6, overshooting at 1.3–1.5, blowing up at 1.2.
+pub fn rigid_inner_fluid_limits(layer: LayerForcing) -> RigidInnerFluidLimits {
+    match layer {
+        LayerForcing::Renewal => RigidInnerFluidLimits {
+            fails_below: 1.3,
+            warns_below: 1.6,
+        },
+        LayerForcing::EveryStage | LayerForcing::Held { .. } => RigidInnerFluidLimits {
+            fails_below: RIGID_INNER_FLUID_FAILS_BELOW,
+            warns_below: RIGID_INNER_FLUID_WARNS_BELOW,
+        },
+    }
+}
 
 /// How the hydrodynamic load on a particle is formed from the forcing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -37,8 +37,8 @@ mod stage_loads;
 mod wall_layer;
 
 pub use coupled::{
-    particle_volume, CoupledReport, CoupledSystem, Coupling, Timings,
-    RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
+    particle_volume, rigid_inner_fluid_limits, CoupledReport, CoupledSystem, Coupling,
+    RigidInnerFluidLimits, Timings, RIGID_INNER_FLUID_FAILS_BELOW, RIGID_INNER_FLUID_WARNS_BELOW,
 };
 pub use forcing::{Bodies, ImmersedBoundaries, Loads};
 pub use layer_forcing::LayerForcing;

@@ -7,7 +7,7 @@ use grainflow_dem::particles::NewParticle;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness};
 use grainflow_fluid::{Boundaries, BoundaryCondition, FlowSolver, Grid};
 use grainflow_ibm::settling::early_acceleration;
-use grainflow_ibm::{CoupledSystem, Coupling, LayerForcing};
+use grainflow_ibm::{rigid_inner_fluid_limits, CoupledSystem, Coupling, LayerForcing};
 
 /// A sphere of diameter 1 and density `density_ratio` (fluid density 1,
 /// g = 1 downwards) at rest 2.5 D below the top of a free-slip box, the
@@ -140,7 +140,19 @@ fn initial_acceleration_matches_added_mass_and_depends_on_the_step() {
 /// returns its final vertical velocity, or None when the run failed (a
 /// step refused for its CFL number, or a velocity not finite).
 fn settle(density_ratio: f64, coupling: Coupling, dt: f64, steps: usize) -> Option<f64> {
+    settle_with(density_ratio, coupling, LayerForcing::EveryStage, dt, steps)
+}
+
+/// [`settle`] with the transition layer relaxed by `layer`.
+fn settle_with(
+    density_ratio: f64,
+    coupling: Coupling,
+    layer: LayerForcing,
+    dt: f64,
+    steps: usize,
+) -> Option<f64> {
     let mut system = settling_sphere(8, [3.0, 3.0, 6.0], density_ratio, 100.0, coupling);
+    system.immersed.layer = layer;
     for _ in 0..steps {
         system.step(dt).ok()?;
         let v = system.dem.particles.velocity[0];
@@ -197,6 +209,37 @@ fn density_ratio_map() {
             "rigid inner fluid expected to fail at {ratio}, got {velocity:?}"
         );
     }
+}
+
+/// The paper's rigid inner fluid in translation with the layer relaxed at
+/// its renewal rate (`coupling.layer_forcing = "renewal"`), where runs
+/// refuse it ([`rigid_inner_fluid_limits`]). Measured (the map of
+/// [`density_ratio_map`], two time units): it holds from 2.0 down to 1.25
+/// (w = −0.1117 at 1.3, −0.1009 at 1.25) and blows up at 1.2 and 1.1; under
+/// eq. 7 it blows up at 1.6.
+#[test]
+fn rigid_inner_fluid_holds_further_down_under_the_renewal_forcing() {
+    let (dt, steps) = (0.05, 40);
+    let limits = rigid_inner_fluid_limits(LayerForcing::Renewal);
+    let settle = |ratio| {
+        settle_with(
+            ratio,
+            Coupling::RigidInnerFluid,
+            LayerForcing::Renewal,
+            dt,
+            steps,
+        )
+    };
+    for ratio in [1.6, limits.fails_below] {
+        let velocity = settle(ratio);
+        println!("rigid inner fluid, renewal, ratio {ratio}: {velocity:?}");
+        assert!(velocity.is_some_and(|w| w < 0.0), "failed at {ratio}");
+    }
+    let below = settle(limits.fails_below - 0.1);
+    assert!(
+        below.is_none(),
+        "expected to fail below the limit, got {below:?}"
+    );
 }
 
 /// The sphere of [`settle`] (D/Δx = 8, ρ_p/ρ = 4, Ar = 100) in a box
