@@ -80,6 +80,28 @@ fn bad_coupled_tables_are_refused_with_the_key_and_nothing_is_written() {
     }
 }
 
+/// The paper's load fails further down with the layer relaxed at its
+/// renewal rate (`rigid_inner_fluid_limits`): a grain of ρ_p/ρ = 1.25 is
+/// refused there, naming the forcing and its limit of 1.3 (under eq. 7,
+/// 1.8), before anything is written.
+#[test]
+fn the_renewal_forcing_refuses_the_papers_load_below_its_own_limit() {
+    let (code, stderr, written) = run_cli(
+        "falling_sphere.toml",
+        &[
+            "coupling.formulation=\"rigid_inner_fluid\"",
+            "coupling.layer_forcing=\"renewal\"",
+            "particles.density=1250.0",
+        ],
+    );
+    assert_ne!(code, Some(0));
+    assert!(
+        stderr.contains("\"renewal\" it blows up below 1.3"),
+        "{stderr}"
+    );
+    assert!(!written, "output written");
+}
+
 /// `cases/falling_sphere.toml` at D/Δx = 8 (the validation run is 16) in
 /// its 8 D × 8 D × 24 D box, Δt scaled with Δx (the paper's CFL). The
 /// sphere reaches a plateau (speed changing by less than 0.5 % over the
