@@ -29,21 +29,24 @@
 //! enough to close a larger gap within the step. The program holds those
 //! a pair's own motion can close; the others are checked at the solution
 //! and join it if they would overlap ([`candidates`]).
+//!
+//! Layout: [`step`] advances the grains (either scheme); [`cocd`] builds
+//! the conic program and picks its solver; [`conic`] holds the solvers
+//! (interior point, projected gradient and their linear algebra); [`ranks`]
+//! shares a step's program among MPI ranks.
 
 pub mod candidates;
 pub mod certificate;
 pub mod cocd;
+pub mod conic;
 pub mod contacts;
-mod csc;
-mod dissection;
-pub mod interior_point;
-mod normal_factor;
 pub mod nscd;
-pub mod projected_gradient;
-pub mod second_order_cone;
-pub mod shared_program;
-pub mod sharing;
+pub mod ranks;
 pub mod step;
+
+use conic::{csc, dissection, normal_factor};
+pub use conic::{interior_point, projected_gradient, second_order_cone};
+pub use ranks::{shared_program, sharing};
 
 pub use cocd::ConicSolver;
 pub use contacts::{Bodies, ContactSet, Partner, Scales};

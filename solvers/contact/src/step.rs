@@ -55,7 +55,7 @@ pub struct StepReport {
     pub penetration: f64,
     /// Whether Clarabel took over from grainflow's interior point.
     pub fell_back: bool,
-    /// Candidate threshold used [m].
+    /// Candidate threshold used (m).
     pub threshold: f64,
     pub seconds_solve: f64,
     pub non_finite: bool,
@@ -70,7 +70,7 @@ pub struct HardContact {
     pub tolerance: f64,
     /// Interior-point iterations (COCD) or sweeps (NSCD) allowed per step.
     pub max_iterations: u32,
-    /// Candidate threshold D on the gap [m] (section 3.3).
+    /// Candidate threshold D on the gap, in m (section 3.3).
     pub threshold: f64,
     /// COCD: the interior-point code (Clarabel takes over a step that
     /// grainflow's fails).

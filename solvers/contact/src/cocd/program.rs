@@ -1,49 +1,13 @@
-//! COCD: one conic program per step (Martin et al. 2022, eq. 10 and 13),
-//! solved by grainflow's interior point on the normal equations
-//! ([`crate::interior_point`]) or, on request and where it fails, by
-//! Clarabel's (the reference).
-//!
-//! In the units of [`Scales`] (ũ = v/V for translations, ω L/V for
-//! rotations; masses over m̄, inertias over m̄ L²; κ = VΔt/L) the program
-//! reads
-//!
-//!   min ½ ũᵀM̃ũ − ũᵀM̃Ũ   subject to   s_α = (D_α/L + κ n·A_α ũ, κ μ T_α A_α ũ) ∈ K_α,
-//!
-//! with T_α the tangent basis and K_α the second-order cone {(y, x): |x| ≤ y}
-//! of eq. 13 (the epigraph variable of eq. 13 is not needed: Clarabel takes
-//! the quadratic objective directly). In 2D the cone {|x| ≤ y} is the two
-//! half-planes y + x ≥ 0, y − x ≥ 0; a frictionless contact keeps only
-//! y ≥ 0. Clarabel's form is min ½xᵀPx + qᵀx, Ax + s = b, s ∈ K, here with
-//! P = M̃, q = −M̃Ũ, A = −H̃, b = (D_α/d̄, 0).
-//!
-//! Its optimality conditions M̃(ũ − Ũ) = H̃ᵀz are eq. 5 with the impulses
-//! Δt f_α = (z_n n + μ T_αᵀ z_t) m̄ V κ: the dual z_α = (f_n, f_t/μ) lies in
-//! the (self-dual) cone, which is Coulomb's |f_t| ≤ μ f_n, and z_α·s_α = 0
-//! is eq. 6–8 (section 2.3).
+//! The conic program of a COCD step in Clarabel's standard form (the
+//! module docs of [`crate::cocd`] state it): its assembly from the
+//! contacts and bodies, and the velocities and impulses read back from its
+//! solution.
 
+use super::Solution;
 use crate::contacts::{tangents, Bodies, ContactSet, Scales, STATIC};
-use crate::shared_program::{Ranks, SharedProgram};
+use crate::shared_program::Ranks;
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
-};
-use grainflow_core::{Communicator, Dimension, Vec3};
-
-/// End-of-step velocities of the bodies and the impulses of the contacts.
-#[derive(Clone, Debug, Default)]
-pub struct Solution {
-    pub velocity: Vec<Vec3>,
-    pub spin: Vec<Vec3>,
-    /// Normal impulse Δt f_n and tangential impulse Δt f_t of each contact.
-    pub normal_impulse: Vec<f64>,
-    pub tangential_impulse: Vec<Vec3>,
-    pub iterations: u32,
-    /// Whether the solver stopped at reduced accuracy.
-    pub reduced_accuracy: bool,
-    /// Why grainflow's interior point failed, where Clarabel took the step
-    /// over.
-    pub fallback_reason: Option<String>,
-}
+use grainflow_core::{Dimension, Vec3};
 
 /// The rows a contact contributes and the cone they form.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -77,7 +41,7 @@ impl Rows {
 }
 
 /// Degrees of freedom of a body: (v_x, v_y, ω_z) in 2D, (v, ω) in 3D.
-fn dofs(dimension: Dimension) -> usize {
+pub(super) fn dofs(dimension: Dimension) -> usize {
     match dimension {
         Dimension::Two => 3,
         Dimension::Three => 6,
@@ -123,32 +87,6 @@ fn jacobian_row(
         }
     }
 }
-
-/// Which interior-point code solves the conic program.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ConicSolver {
-    /// grainflow's own, on the normal equations M̃ + H̃ᵀΘH̃ (linear and
-    /// second-order cones); see [`crate::interior_point`].
-    InteriorPoint,
-    /// Clarabel (any cone), the reference.
-    Clarabel,
-    /// An accelerated projected gradient on the dual (no factor; one rank);
-    /// grainflow's interior point takes over a step it does not solve
-    /// within its iterations. See [`crate::projected_gradient`].
-    ProjectedGradient,
-}
-
-impl ConicSolver {
-    /// Its name in the log and in `check`.
-    pub fn name(self) -> &'static str {
-        match self {
-            ConicSolver::InteriorPoint => "grainflow's interior point",
-            ConicSolver::Clarabel => "Clarabel",
-            ConicSolver::ProjectedGradient => "grainflow's projected gradient",
-        }
-    }
-}
-
 /// The step's program in Clarabel's standard form.
 pub struct ConicProgram {
     /// Diagonal of P = M̃ and the free velocity Ũ (q = −M̃Ũ).
@@ -257,168 +195,6 @@ impl ConicProgram {
         }
     }
 }
-
-/// A rank's part of a program shared among ranks ([`crate::shared_program`]):
-/// `separator[b]` for the bodies whose grain another rank's pairs also
-/// reach, `ids` the local grains' ids; `separator_room`: the bytes a rank
-/// can give the interior point's dense Schur complement where it takes
-/// over a step of the projected gradient (None: no bound).
-pub struct RankShare<'a> {
-    pub separator: &'a [bool],
-    pub ids: &'a [u64],
-    pub communicator: &'a Communicator,
-    pub separator_room: Option<f64>,
-}
-
-/// Solves the step's conic program with `solver` (Clarabel taking over a
-/// step grainflow's interior point fails, the interior point one its
-/// projected gradient fails). `tolerance`: the relative gap and feasibility
-/// tolerances (ε of section 3.2). `shared`: on several ranks, this rank's
-/// part of the program (collective): grainflow's interior point and
-/// projected gradient solve it shared, Clarabel the whole program gathered
-/// on every rank. `start`: the
-/// impulses (normal, tangential) each contact starts from, the last step's
-/// where it was there, as [`Solution`] holds them; the projected gradient
-/// alone reads them (the interior points start from their own point).
-#[allow(clippy::too_many_arguments)]
-pub fn solve(
-    contacts: &ContactSet,
-    bodies: &Bodies,
-    dimension: Dimension,
-    scales: &Scales,
-    tolerance: f64,
-    max_iterations: u32,
-    solver: ConicSolver,
-    shared: Option<RankShare<'_>>,
-    start: Option<&[(f64, Vec3)]>,
-) -> Result<Solution, String> {
-    let program = build(contacts, bodies, dimension, scales);
-    let start = start.map(|impulses| multipliers(contacts, &program, impulses));
-    let ((x, z, iterations, reduced_accuracy), fallback_reason) = match shared {
-        None => {
-            let ranks = Ranks::alone(program.mass.len());
-            solve_with_fallbacks(
-                solver,
-                &program,
-                (tolerance, max_iterations),
-                start.as_deref(),
-                ranks,
-                None,
-                |iterations| solve_with_clarabel(&program, tolerance, iterations),
-            )?
-        }
-        Some(RankShare {
-            separator,
-            ids,
-            communicator,
-            separator_room,
-        }) => {
-            let d = dofs(dimension);
-            let shared = SharedProgram::new(&program, bodies, d, separator, ids, communicator)?;
-            let ranks = Ranks {
-                communicator: Some(communicator),
-                interior: shared.interior,
-            };
-            // Where the separator's dense blocks would not fit, the
-            // projected gradient's failure stops the run instead of the
-            // interior point running out of memory (ns is the same on
-            // every rank, and so is the verdict).
-            let unknowns = shared.program.mass.len() - shared.interior;
-            let blocks = crate::shared_program::separator_block_bytes(unknowns);
-            let room = separator_room.unwrap_or(f64::INFINITY);
-            let refused = (solver == ConicSolver::ProjectedGradient
-                && communicator.any(blocks > room))
-            .then(|| {
-                format!(
-                    "the interior point is not tried on these ranks: its Schur complement over \
-                     the separator's {unknowns} unknowns needs about {} on every rank, {} left \
-                     beside a rank's share (raise contact.max_iterations, loosen \
-                     contact.tolerance, or run on fewer ranks)",
-                    grainflow_core::human_bytes(blocks),
-                    grainflow_core::human_bytes(room.max(0.0)),
-                )
-            });
-            // The solvers' decisions are taken over all ranks: one fails on
-            // every rank alike, and every rank takes the next one's.
-            let ((x, z, iterations, reduced), why) = solve_with_fallbacks(
-                solver,
-                &shared.program,
-                (tolerance, max_iterations),
-                start.as_deref(),
-                ranks,
-                refused,
-                |iterations| {
-                    let (whole, layout) = shared.gathered(communicator);
-                    let (x, z, iterations, reduced) =
-                        solve_with_clarabel(&whole, tolerance, iterations)?;
-                    let (x, z) = layout.rank_part(&x, &z);
-                    Ok((x, z, iterations, reduced))
-                },
-            )?;
-            ((shared.local_unknowns(&x, d), z, iterations, reduced), why)
-        }
-    };
-    let mut solution = recover(contacts, &program, &x, &z, iterations, reduced_accuracy);
-    solution.fallback_reason = fallback_reason;
-    Ok(solution)
-}
-
-/// The interior point's iterations where it takes over a step the
-/// projected gradient did not solve (the case's `max_iterations` is the
-/// projected gradient's then).
-const INTERIOR_POINT_ITERATIONS: u32 = 200;
-
-/// (x, z, iterations, reduced accuracy) of a conic solve.
-type ConicSolution = (Vec<f64>, Vec<f64>, u32, bool);
-
-/// The solution of `solver` on `program` (shared among `ranks`), with why
-/// the solvers before the one that solved it failed: grainflow's projected
-/// gradient hands a step it does not solve to the interior point
-/// ([`INTERIOR_POINT_ITERATIONS`]), the interior point one it fails to
-/// `clarabel` (and the run stops if Clarabel fails too); Clarabel alone on
-/// request. `asked`: ε and the iterations; `start`: the projected
-/// gradient's multipliers; `refused`: why the interior point may not take
-/// over from the projected gradient (the step then fails with both
-/// reasons); `clarabel` takes its iterations (the case's, the interior
-/// point's after the projected gradient).
-fn solve_with_fallbacks(
-    solver: ConicSolver,
-    program: &ConicProgram,
-    (tolerance, max_iterations): (f64, u32),
-    start: Option<&[f64]>,
-    ranks: Ranks<'_>,
-    refused: Option<String>,
-    clarabel: impl FnOnce(u32) -> Result<ConicSolution, String>,
-) -> Result<(ConicSolution, Option<String>), String> {
-    let (interior_point_iterations, earlier) = match solver {
-        ConicSolver::Clarabel => return Ok((clarabel(max_iterations)?, None)),
-        ConicSolver::InteriorPoint => (max_iterations, None),
-        ConicSolver::ProjectedGradient => {
-            match crate::projected_gradient::solve(program, tolerance, max_iterations, start, ranks)
-            {
-                Ok(solution) => return Ok((solution, None)),
-                Err(why) => match refused {
-                    Some(refused) => return Err(format!("{why}; {refused}")),
-                    None => (INTERIOR_POINT_ITERATIONS, Some(why)),
-                },
-            }
-        }
-    };
-    let joined = |why: String| match &earlier {
-        Some(earlier) => format!("{earlier}; then {why}"),
-        None => why,
-    };
-    match crate::interior_point::solve(program, tolerance, interior_point_iterations, ranks) {
-        Ok(solution) => Ok((solution, earlier)),
-        Err(why) => {
-            let why = joined(why);
-            let solution = clarabel(interior_point_iterations)
-                .map_err(|again| format!("{why}; then {again}"))?;
-            Ok((solution, Some(why)))
-        }
-    }
-}
-
 /// Assembles the program of the step.
 pub fn build(
     contacts: &ContactSet,
@@ -583,76 +359,10 @@ fn csc_from_triplets(
     }
     CscMatrix::new(rows, columns, colptr, rowval, nzval)
 }
-
-/// Solves the program with Clarabel: (x, z, iterations, reduced accuracy).
-pub(crate) fn solve_with_clarabel(
-    program: &ConicProgram,
-    tolerance: f64,
-    max_iterations: u32,
-) -> Result<ConicSolution, String> {
-    let columns = program.mass.len();
-    let p_matrix = CscMatrix::new(
-        columns,
-        columns,
-        (0..=columns).collect(),
-        (0..columns).collect(),
-        program.mass.clone(),
-    );
-    let q = program.q();
-    let mut cones = Vec::new();
-    if program.linear_rows > 0 {
-        cones.push(SupportedConeT::NonnegativeConeT(program.linear_rows));
-    }
-    cones.extend((0..program.cone_count).map(|_| SupportedConeT::SecondOrderConeT(3)));
-
-    // The objective is of order one in these units; its absolute gap
-    // tolerance follows its size, so that a nearly still scene is solved as
-    // accurately as a fast one.
-    let size: f64 = program.size();
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .max_iter(max_iterations)
-        .tol_gap_abs(tolerance * size.max(f64::MIN_POSITIVE))
-        .tol_gap_rel(tolerance)
-        .tol_feas(tolerance)
-        .build()
-        .map_err(|e| format!("COCD solver settings: {e}"))?;
-    let mut solver = DefaultSolver::new(
-        &p_matrix,
-        &q,
-        &program.a_matrix,
-        &program.b,
-        &cones,
-        settings,
-    )
-    .map_err(|e| format!("COCD problem rejected by the conic solver: {e:?}"))?;
-    solver.solve();
-    let solution = &solver.solution;
-    let reduced_accuracy = match solution.status {
-        SolverStatus::Solved => false,
-        SolverStatus::AlmostSolved => true,
-        status => {
-            return Err(format!(
-                "the conic solver (Clarabel) stopped with status {status:?} after {} iterations \
-                 ({} rows, {} unknowns)",
-                solution.iterations,
-                program.b.len(),
-                columns
-            ))
-        }
-    };
-    Ok((
-        solution.x.clone(),
-        solution.z.clone(),
-        solution.iterations,
-        reduced_accuracy,
-    ))
-}
-
 /// The multipliers z of the program whose contacts' impulses are
 /// `impulses` (normal, tangential): the inverse of [`recover`]'s, the
 /// tangential impulse's part out of the contact's tangent plane dropped.
-fn multipliers(
+pub(super) fn multipliers(
     contacts: &ContactSet,
     program: &ConicProgram,
     impulses: &[(f64, Vec3)],
@@ -682,7 +392,7 @@ fn multipliers(
 }
 
 /// The velocities and impulses of a solution (x, z) of the program.
-fn recover(
+pub(super) fn recover(
     contacts: &ContactSet,
     program: &ConicProgram,
     x: &[f64],
@@ -735,7 +445,6 @@ fn recover(
     }
     out
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
