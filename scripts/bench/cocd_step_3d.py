@@ -79,8 +79,10 @@ def write(path, text):
         f.write(text)
 
 
-def run(binary, case, out, *sets, threads=2, ranks=1):
+def run(binary, case, out, *sets, threads=2, ranks=1, restart=False):
     args = [binary, "run", case, "--out", out, "--threads", str(threads), "--json"]
+    if restart:
+        args += ["--restart", "auto"]
     if ranks > 1:
         args = ["mpirun", "--allow-run-as-root", "--oversubscribe", "-np", str(ranks)] + args
     for s in sets:
@@ -90,9 +92,11 @@ def run(binary, case, out, *sets, threads=2, ranks=1):
         return json.load(f)
 
 
-def fill(binary, work, spheres):
+def fill(binary, work, spheres, threads=2, checkpoint_wall=None):
     """The soft DEM's packing of the lattice (WORK/fill/final_particles.csv,
-    its grains slower than 1 mm/s): the box's side and the lattice's top."""
+    its grains slower than 1 mm/s): the box's side and the lattice's top.
+    With `checkpoint_wall` (seconds) the run writes checkpoints that often
+    and resumes from the last one if it was cut short."""
     # Lattice sites: a square base of k x k, layers to reach the count.
     per_side = max(4, round((spheres / 1.5) ** (1 / 3)))
     layers = math.ceil(spheres / per_side**2)
@@ -104,8 +108,10 @@ def fill(binary, work, spheres):
     case = os.path.join(work, "fill.toml")
     write(case, BOX.format(side=side, height=2 * top + 0.01, block=lattice,
                            contact='model = "soft"\nrestitution = 0.2\ncontact_time = 2.0e-4\nfriction = 0.3',
-                           time="end = 2.0\ndt_over_contact_time = 0.1\nrest_speed = 1.0e-3\nrest_after = 0.4"))
-    run(binary, case, os.path.join(work, "fill"), threads=2)
+                           time="end = 2.0\ndt_over_contact_time = 0.1\nrest_speed = 1.0e-3\nrest_after = 0.4")
+          + (f"\n[checkpoint]\nwall_interval = {checkpoint_wall}\n" if checkpoint_wall else ""))
+    run(binary, case, os.path.join(work, "fill"), threads=threads,
+        restart=checkpoint_wall is not None)
     return side, top
 
 
