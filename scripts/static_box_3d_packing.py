@@ -10,8 +10,9 @@ core).
 2. The same packing relaxed with contacts a hundred times stiffer
    (t_c = 2e-5 s) until its rms speed is below 1e-6 m/s: the overlaps
    fall to about 1e-4 of the pairs' diameters.
-3. Radii times 0.9998, velocities zero: no pair overlaps (hard contact
-   refuses overlaps), and the grains have 0.2 um to settle into.
+3. Radii times 1 - 2e-4 (t_c / 2e-5)^2, 0.9998 here, velocities zero: no
+   pair overlaps (hard contact refuses overlaps), and the grains have
+   0.2 um to settle into.
 4. COCD at eps = 1e-8 for 0.1 s (the packing settles, and single grains
    that lost their seat roll and fall), velocities zero, then COCD at
    eps = 1e-5 for 0.8 s more: kinetic over potential energy at most
@@ -28,17 +29,19 @@ A packing shrunk by 1.5 % after the soft fill, as the bench's, crept at
 E_k/E_p of 1e-8 to 1e-5 for 0.4 s under COCD at every eps.
 
 The paper's box (110,233 spheres): --spheres 110233 --conic-solver
-projected_gradient --tight 1e-7 (the interior point takes about an hour a
-step at that size; the projected gradient does not reach 1e-8 on a jammed
-packing, docs/validation.md section 8). Every stage writes checkpoints
-every --checkpoint-wall seconds and the script is resumable: run it again
-with the same arguments and it skips the stages done and resumes the one
-under way from its last checkpoint.
+projected_gradient --tight 1e-7 --hard-times 0.05,0.2,0.1
+--stiff-contact-time 5e-5 --fill-shrink 0.985 (the interior point takes
+about an hour a step at that size; the projected gradient does not reach
+1e-8 on a jammed packing, docs/validation.md section 8). Every stage writes
+checkpoints every --checkpoint-wall seconds and the script is resumable:
+run it again with the same arguments and it skips the stages done and
+resumes the one under way from its last checkpoint.
 
 usage: scripts/static_box_3d_packing.py [--binary target/release/grainflow]
            [--work /tmp/static_box_3d] [--out cases/data/static_box_3d.csv]
            [--spheres 2000] [--conic-solver interior_point] [--tight 1e-8]
-           [--hard-times 0.1,0.8,0.3] [--threads 1] [--checkpoint-wall 900]
+           [--hard-times 0.1,0.8,0.3] [--stiff-contact-time 2e-5]
+           [--fill-shrink 1] [--threads 1] [--checkpoint-wall 900]
 """
 import argparse, os, re, subprocess, sys
 
@@ -64,6 +67,7 @@ def stage(binary, case_text, work, name, *sets, threads=1, checkpoint_wall=900):
         print(f"{name}: done before, kept", flush=True)
         return final
     case = os.path.join(work, name + ".toml")
+    case_text = re.sub(r"\n\[checkpoint\]\n[^\[]*", "\n", case_text)
     cocd_step_3d.write(case, case_text + f"\n[checkpoint]\nwall_interval = {checkpoint_wall}\n")
     args = [binary, "run", case, "--out", os.path.join(work, name), "--threads", str(threads),
             "--restart", "auto"]
@@ -87,6 +91,13 @@ def main():
                         help="the tolerance of the first and last COCD stages")
     parser.add_argument("--hard-times", default="0.1,0.8,0.3",
                         help="seconds of the three COCD stages (tight, 1e-5, tight)")
+    parser.add_argument("--stiff-contact-time", type=float, default=2e-5,
+                        help="t_c of the relaxation with stiffer contacts (s); the radii are then "
+                             "shrunk by 2e-4 (t_c / 2e-5)^2, the overlaps it leaves")
+    parser.add_argument("--fill-shrink", type=float, default=1.0,
+                        help="radii of the soft fill times this before the stiff relaxation: a deep "
+                             "fill's soft contacts overlap by more than a run accepts (0.985 for "
+                             "the paper's box, whose fill overlaps by up to 7.3 %% of a radius)")
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--checkpoint-wall", type=int, default=900,
                         help="wall-clock seconds between each stage's checkpoints")
@@ -106,17 +117,18 @@ def main():
     fill_case = open(fill_case_path).read()
     # 2. Stiffer contacts, to rest.
     write_rows(os.path.join(args.work, "fill_at_rest.csv"),
-               shrunk(os.path.join(args.work, "fill", "final_particles.csv"), 1.0))
+               shrunk(os.path.join(args.work, "fill", "final_particles.csv"), args.fill_shrink))
     stiff = re.sub(r"\[\[particles\.block\]\].*?jitter = 0\.3",
                    '[[particles.block]]\nkind = "file"\npath = "fill_at_rest.csv"',
                    fill_case, flags=re.S)
-    stiff = stiff.replace("contact_time = 2.0e-4", "contact_time = 2.0e-5")
+    stiff = stiff.replace("contact_time = 2.0e-4", f"contact_time = {args.stiff_contact_time!r}")
     stiff = stiff.replace("seed = 3\n", "")
     stiff = re.sub(r"\[time\].*?\n\n", "[time]\nend = 0.6\ndt_over_contact_time = 0.1\n"
                    "rest_speed = 1.0e-6\nrest_after = 0.05\n\n", stiff, flags=re.S)
     relaxed = stage(binary, stiff, args.work, "stiff", **run)
     # 3. Apart.
-    write_rows(os.path.join(args.work, "apart.csv"), shrunk(relaxed, 0.9998))
+    shrink = 1.0 - 2e-4 * (args.stiff_contact_time / 2e-5) ** 2
+    write_rows(os.path.join(args.work, "apart.csv"), shrunk(relaxed, shrink))
     # 4. COCD, twice, from rest.
     hard = re.sub(r'path = "fill_at_rest.csv"', 'path = "apart.csv"', stiff)
     hard = re.sub(r"\[contact\].*?\n\n", '[contact]\nmodel = "cocd"\nfriction = 0.3\n\n',
