@@ -136,7 +136,9 @@ impl Analysis {
 /// Grains at rest in a box (Martin et al. 2022, Fig. 3): after `settle`,
 /// the ratio of their kinetic energy (translation and rotation) to their
 /// potential energy above the bottom of the domain, Σ m |g| h with h the
-/// height along −g from `domain.lower`. A static assembly must stay at
+/// height along −g above the domain's lowest corner (`domain.lower` under
+/// gravity along an axis; another corner under a tilted one, where heights
+/// from `domain.lower` would not all be positive). A static assembly must stay at
 /// rest: the ratio stays at round-off while the contact solver holds it.
 #[derive(serde::Serialize, serde::Deserialize)]
 pub struct StaticBox {
@@ -158,10 +160,12 @@ impl StaticBox {
         let p = &system.particles;
         let g = system.domain.gravity;
         let up = -g / g.norm().max(f64::MIN_POSITIVE);
+        let (lower, upper) = (system.domain.lower, system.domain.upper);
+        let bottom = Vec3::from_fn(|i, _| if up[i] >= 0.0 { lower[i] } else { upper[i] });
         let (translational, rotational) = p.kinetic_energy();
         let potential: f64 = (0..p.n_owned)
             .filter(|&k| !p.is_fixed(k))
-            .map(|k| p.mass[k] * g.norm() * (p.position[k] - system.domain.lower).dot(&up))
+            .map(|k| p.mass[k] * g.norm() * (p.position[k] - bottom).dot(&up))
             .sum();
         let c = &system.communicator;
         c.sum(translational + rotational) / c.sum(potential).max(f64::MIN_POSITIVE)
@@ -597,6 +601,64 @@ pub fn janssen_fit_eq22(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use grainflow_core::{Dimension, Domain};
+    use grainflow_dem::particles::NewParticle;
+    use grainflow_dem::{ContactLaw, NormalCalibration, NormalStiffness};
+
+    /// One sphere of 1 kg at rest at `at` in the unit box, under `gravity`,
+    /// moving at 1 m/s.
+    fn one_grain(at: Vec3, gravity: Vec3) -> DemSystem {
+        let domain = Domain {
+            dimension: Dimension::Three,
+            lower: Vec3::zeros(),
+            upper: Vec3::new(1.0, 1.0, 1.0),
+            periodic: [false; 3],
+            gravity,
+        };
+        let law = ContactLaw {
+            normal: NormalStiffness::from_restitution(0.5, 1e-4, NormalCalibration::Exact),
+            tangential_ratio: 0.2,
+            friction: 0.3,
+            rolling_friction: 0.0,
+        };
+        let mut system = DemSystem::new(domain, law, Vec::new(), 0.01);
+        let radius: f64 = 0.05;
+        system.add_particles(&[NewParticle {
+            position: at,
+            velocity: Vec3::new(1.0, 0.0, 0.0),
+            angular_velocity: Vec3::zeros(),
+            radius,
+            density: 1.0 / (4.0 / 3.0 * std::f64::consts::PI * radius.powi(3)),
+            fixed: false,
+        }]);
+        system
+    }
+
+    /// E_k/E_p = ½ m v² / (m |g| h), h the height above the box's lowest
+    /// corner along −g: from the floor under gravity along −z, from the
+    /// corner (1, 0, 0) under gravity tilted 45° towards +x (heights from
+    /// `domain.lower` would be negative there; the ratio read 1e306).
+    #[test]
+    fn the_potential_energy_is_measured_from_the_lowest_corner_under_tilted_gravity() {
+        let at = Vec3::new(0.2, 0.5, 0.3);
+        let axial = one_grain(at, Vec3::new(0.0, 0.0, -9.81));
+        let expected = 0.5 / (9.81 * 0.3);
+        let ratio = StaticBox::kinetic_to_potential(&axial);
+        assert!(
+            (ratio / expected - 1.0).abs() < 1e-12,
+            "{ratio} against {expected}"
+        );
+        let g = 9.81 / 2f64.sqrt();
+        let tilted = one_grain(at, Vec3::new(g, 0.0, -g));
+        // Up is (−1, 0, 1)/√2; the lowest corner (1, 0, 0).
+        let height = ((1.0 - 0.2) + 0.3) / 2f64.sqrt();
+        let expected = 0.5 / (9.81 * height);
+        let ratio = StaticBox::kinetic_to_potential(&tilted);
+        assert!(
+            (ratio / expected - 1.0).abs() < 1e-12,
+            "{ratio} against {expected}"
+        );
+    }
 
     /// Eq. 22 for the silo's shaft (S/P = 0.025 m) at f_w K = 0.3, ρ_gm g =
     /// 0.49 · 1317 · 9.81, sampled every 5 cm over 3 m.
