@@ -28,7 +28,7 @@ core).
 A packing shrunk by 1.5 % after the soft fill, as the bench's, crept at
 E_k/E_p of 1e-8 to 1e-5 for 0.4 s under COCD at every eps.
 
-The paper's box (110,233 spheres): --spheres 110233 --conic-solver
+The paper's box (110,233 spheres; 111,132 here): --spheres 117500 --conic-solver
 projected_gradient --tight 1e-6 --hard-times 0.05,0.2,0.1
 --stiff-contact-time 5e-5 --fill-shrink 0.985 (the interior point takes
 about an hour a step at that size; the projected gradient does not reach
