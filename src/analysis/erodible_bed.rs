@@ -429,17 +429,7 @@ fn bed_energies(system: &DemSystem, bed_ids: &[u64]) -> (f64, f64) {
     let g = system.domain.gravity;
     let magnitude = g.norm();
     let up = -g / magnitude.max(f64::MIN_POSITIVE);
-    let (lo, hi) = (system.domain.lower, system.domain.upper);
-    let reference = (0..8)
-        .map(|c| {
-            let corner = Vec3::new(
-                if c & 1 == 0 { lo.x } else { hi.x },
-                if c & 2 == 0 { lo.y } else { hi.y },
-                if c & 4 == 0 { lo.z } else { hi.z },
-            );
-            corner.dot(&up)
-        })
-        .fold(f64::MAX, f64::min);
+    let reference = system.domain.lowest_along(&up);
     let (mut kinetic, mut potential) = (0.0, 0.0);
     for k in 0..p.n_owned {
         if p.is_fixed(k) || bed_ids.binary_search(&p.id[k]).is_err() {

@@ -160,12 +160,11 @@ impl StaticBox {
         let p = &system.particles;
         let g = system.domain.gravity;
         let up = -g / g.norm().max(f64::MIN_POSITIVE);
-        let (lower, upper) = (system.domain.lower, system.domain.upper);
-        let bottom = Vec3::from_fn(|i, _| if up[i] >= 0.0 { lower[i] } else { upper[i] });
+        let reference = system.domain.lowest_along(&up);
         let (translational, rotational) = p.kinetic_energy();
         let potential: f64 = (0..p.n_owned)
             .filter(|&k| !p.is_fixed(k))
-            .map(|k| p.mass[k] * g.norm() * (p.position[k] - bottom).dot(&up))
+            .map(|k| p.mass[k] * g.norm() * (p.position[k].dot(&up) - reference))
             .sum();
         let c = &system.communicator;
         c.sum(translational + rotational) / c.sum(potential).max(f64::MIN_POSITIVE)

@@ -34,6 +34,23 @@ impl Domain {
         self.upper - self.lower
     }
 
+    /// The least of x·`up` over the box's corners: the height of its lowest
+    /// corner along `up`, from which heights inside the box are never
+    /// negative, whichever way gravity is tilted.
+    pub fn lowest_along(&self, up: &Vec3) -> f64 {
+        let (lo, hi) = (self.lower, self.upper);
+        (0..8)
+            .map(|c| {
+                let corner = Vec3::new(
+                    if c & 1 == 0 { lo.x } else { hi.x },
+                    if c & 2 == 0 { lo.y } else { hi.y },
+                    if c & 4 == 0 { lo.z } else { hi.z },
+                );
+                corner.dot(up)
+            })
+            .fold(f64::MAX, f64::min)
+    }
+
     /// Wraps a position into the box along its periodic axes.
     pub fn wrap(&self, x: &mut Vec3) {
         let length = self.extent();
