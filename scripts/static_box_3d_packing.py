@@ -44,7 +44,7 @@ usage: scripts/static_box_3d_packing.py [--binary target/release/grainflow]
            [--hard-times 0.1,0.8,0.3] [--stiff-contact-time 2e-5]
            [--fill-shrink 1] [--threads 1] [--checkpoint-wall 900]
 """
-import argparse, os, re, subprocess, sys
+import argparse, os, re, sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -70,12 +70,8 @@ def stage(binary, case_text, work, name, *sets, threads=1, checkpoint_wall=900):
     case = os.path.join(work, name + ".toml")
     case_text = re.sub(r"\n\[checkpoint\]\n[^\[]*", "\n", case_text)
     cocd_step_3d.write(case, case_text + f"\n[checkpoint]\nwall_interval = {checkpoint_wall}\n")
-    args = [binary, "run", case, "--out", os.path.join(work, name), "--threads", str(threads),
-            "--restart", "auto"]
-    for s in sets:
-        args += ["--set", s]
     print(f"{name}: running", flush=True)
-    subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
+    cocd_step_3d.run(binary, case, os.path.join(work, name), *sets, threads=threads, restart=True)
     return final
 
 
