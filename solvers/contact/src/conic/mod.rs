@@ -5,6 +5,7 @@
 //! gradient on the dual ([`projected_gradient`], no factor), and the
 //! second-order cone's algebra both use ([`second_order_cone`]).
 
+pub(crate) mod cone_blocks;
 pub(crate) mod csc;
 pub(crate) mod dissection;
 pub mod interior_point;

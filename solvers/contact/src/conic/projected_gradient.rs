@@ -39,6 +39,7 @@
 //! restarts and stop. The iterates are one rank's up to the order of the
 //! sums.
 
+use super::cone_blocks::ConeBlocks;
 use crate::cocd::ConicProgram;
 use crate::second_order_cone::Cone3;
 use crate::shared_program::Ranks;
@@ -62,49 +63,105 @@ const ROW_BLOCK: usize = 3 * 1024;
 /// scales it: s in units of V Δt, z of m̄ V). Indices of 32 bits: the
 /// products stream every entry with its index each iteration, and a
 /// quarter of the bytes less is a quarter less of their memory traffic.
+/// In 3D the cone rows are held as one block per contact instead
+/// ([`ConeBlocks`], the same bits), the stored entries then only the
+/// linear rows'.
 struct Operator {
-    rows: usize,
     row_start: Vec<usize>,
     row_column: Vec<u32>,
     row_value: Vec<f64>,
     column_start: Vec<usize>,
     column_row: Vec<u32>,
     column_value: Vec<f64>,
+    cones: Option<ConeBlocks>,
+    /// The diagonal of N = AP⁻¹Aᵀ (the metric's source).
+    diagonal: Vec<f64>,
 }
 
 impl Operator {
     fn new(program: &ConicProgram, scale: f64) -> Self {
         let a = &program.a_matrix;
         let rows = a.m;
-        let (row_start, row_column, row_value) = crate::csc::scaled_rows(a, scale);
+        let (mut row_start, row_column, mut row_value) = crate::csc::scaled_rows(a, scale);
         // Both counts below 2^32 (checked by `solve`).
-        let narrow = |indices: &[usize]| indices.iter().map(|&i| i as u32).collect();
-        let row_column = narrow(&row_column);
+        let narrow = |indices: &[usize]| indices.iter().map(|&i| i as u32).collect::<Vec<u32>>();
+        let mut row_column = narrow(&row_column);
+        let mass = &program.mass;
+        let diagonal = (0..rows)
+            .map(|r| {
+                (row_start[r]..row_start[r + 1])
+                    .map(|k| row_value[k].powi(2) / mass[row_column[k] as usize])
+                    .sum()
+            })
+            .collect();
+        let linear = program.linear_rows;
+        let cones = program
+            .is_three_dimensional()
+            .then(|| ConeBlocks::from_rows((&row_start, &row_column, &row_value), linear, a.n))
+            .flatten();
+        // Aᵀ's entries: every row's, or where the blocks hold the cones
+        // only the linear rows' (the first rows, so each column's first
+        // entries, its rows ascending).
+        let stored_rows = if cones.is_some() { linear } else { rows };
+        let kept = row_start[stored_rows];
+        if cones.is_some() {
+            row_start.truncate(linear + 1);
+            row_column.truncate(kept);
+            row_value.truncate(kept);
+            row_column.shrink_to_fit();
+            row_value.shrink_to_fit();
+        }
+        let mut column_start = Vec::with_capacity(a.n + 1);
+        column_start.push(0);
+        let (mut column_row, mut column_value) =
+            (Vec::with_capacity(kept), Vec::with_capacity(kept));
+        for c in 0..a.n {
+            for k in a.colptr[c]..a.colptr[c + 1] {
+                if a.rowval[k] < stored_rows {
+                    column_row.push(a.rowval[k] as u32);
+                    column_value.push(a.nzval[k] / scale);
+                }
+            }
+            column_start.push(column_row.len());
+        }
         Operator {
-            rows,
             row_start,
             row_column,
             row_value,
-            column_start: a.colptr.clone(),
-            column_row: narrow(&a.rowval),
-            column_value: a.nzval.iter().map(|v| v / scale).collect(),
+            column_start,
+            column_row,
+            column_value,
+            cones,
+            diagonal,
         }
     }
 
     /// out = A x.
     fn times(&self, x: &[f64], out: &mut [f64]) {
-        sums(&self.row_start, &self.row_column, &self.row_value, x, out);
+        let stored = self.row_start.len() - 1;
+        sums(
+            &self.row_start,
+            &self.row_column,
+            &self.row_value,
+            x,
+            &mut out[..stored],
+        );
+        if let Some(cones) = &self.cones {
+            cones.times(x, out);
+        }
     }
 
     /// out = Aᵀ z.
     fn transpose_times(&self, z: &[f64], out: &mut [f64]) {
-        sums(
-            &self.column_start,
-            &self.column_row,
-            &self.column_value,
-            z,
-            out,
+        let columns = (
+            &self.column_start[..],
+            &self.column_row[..],
+            &self.column_value[..],
         );
+        match &self.cones {
+            Some(cones) => cones.transpose_times(z, out, columns),
+            None => sums(columns.0, columns.1, columns.2, z, out),
+        }
     }
 }
 
@@ -157,14 +214,8 @@ impl Cones {
 
     /// The metric's scalar of each row: 1 over the largest diagonal entry
     /// of N = AP⁻¹Aᵀ on the row's cone (its own entry on a linear row).
-    fn jacobi(&self, operator: &Operator, mass: &[f64]) -> Vec<f64> {
-        let diagonal: Vec<f64> = (0..operator.rows)
-            .map(|r| {
-                (operator.row_start[r]..operator.row_start[r + 1])
-                    .map(|k| operator.row_value[k].powi(2) / mass[operator.row_column[k] as usize])
-                    .sum()
-            })
-            .collect();
+    fn jacobi(&self, operator: &Operator) -> Vec<f64> {
+        let diagonal = &operator.diagonal;
         let mut scale: Vec<f64> = diagonal[..self.linear].to_vec();
         for c in 0..self.count {
             let r = self.linear + 3 * c;
@@ -346,7 +397,7 @@ pub fn solve(
     let b: Vec<f64> = program.b.iter().map(|v| v / kappa).collect();
     let q = program.q();
     let mass = &program.mass;
-    let metric = cones.jacobi(&operator, mass);
+    let metric = cones.jacobi(&operator);
     let fail = |what: String| format!("the projected gradient ({m} rows, {n} unknowns): {what}");
     let mut gradient = Gradient {
         operator: &operator,
