@@ -252,51 +252,62 @@ pub fn build(
         }
     }
 
-    let (mut row_index, mut col_index, mut values) = (Vec::new(), Vec::new(), Vec::new());
+    // A in compressed columns, assembled in two passes over the contacts
+    // in the order of their rows (the linear ones, then the cones): the
+    // first counts each column's entries, the second writes them, so
+    // that each column's rows come ascending with no sort and no list of
+    // triplets. Entries of one row on one column (a half-plane's normal
+    // and tangent parts) are summed in the order they come.
     let mut b = vec![0.0; rows];
     let (mut normal_row, mut tangent_row, mut second_row) = (Vec::new(), Vec::new(), Vec::new());
-    let mut push = |r: usize, entries: &[(usize, f64)], factor: f64| {
-        for &(c, v) in entries {
-            row_index.push(r);
-            col_index.push(c);
-            values.push(-factor * v); // A = −H̃
+    let order: Vec<usize> = (0..contacts.len())
+        .filter(|&a| kinds[a] != Rows::Cone)
+        .chain((0..contacts.len()).filter(|&a| kinds[a] == Rows::Cone))
+        .collect();
+    let each_entry = |entry: &mut dyn FnMut(usize, usize, f64)| {
+        for &a in &order {
+            let n = contacts.normal[a];
+            let mu = contacts.friction[a];
+            let (t1, t2) = tangents(dimension, &n);
+            let r = first_row[a];
+            let mut push = |r: usize, row: &[(usize, f64)], factor: f64| {
+                for &(c, v) in row {
+                    entry(r, c, -factor * v); // A = −H̃
+                }
+            };
+            jacobian_row(contacts, a, &n, dimension, scales, &mut normal_row);
+            match kinds[a] {
+                Rows::Normal => push(r, &normal_row, 1.0),
+                Rows::HalfPlanes => {
+                    jacobian_row(contacts, a, &t1, dimension, scales, &mut tangent_row);
+                    push(r, &normal_row, 1.0);
+                    push(r, &tangent_row, mu);
+                    push(r + 1, &normal_row, 1.0);
+                    push(r + 1, &tangent_row, -mu);
+                }
+                Rows::Cone => {
+                    jacobian_row(contacts, a, &t1, dimension, scales, &mut tangent_row);
+                    jacobian_row(contacts, a, &t2, dimension, scales, &mut second_row);
+                    push(r, &normal_row, 1.0);
+                    push(r + 1, &tangent_row, mu);
+                    push(r + 2, &second_row, mu);
+                }
+            }
         }
     };
+    let a_matrix = csc_in_row_order(rows, columns, each_entry);
     for a in 0..contacts.len() {
-        let n = contacts.normal[a];
-        let mu = contacts.friction[a];
-        let (t1, t2) = tangents(dimension, &n);
         let r = first_row[a];
         let gap = contacts.gap[a] / length;
-        jacobian_row(contacts, a, &n, dimension, scales, &mut normal_row);
-        match kinds[a] {
-            Rows::Normal => {
-                push(r, &normal_row, 1.0);
-                b[r] = gap;
-            }
-            Rows::HalfPlanes => {
-                jacobian_row(contacts, a, &t1, dimension, scales, &mut tangent_row);
-                push(r, &normal_row, 1.0);
-                push(r, &tangent_row, mu);
-                push(r + 1, &normal_row, 1.0);
-                push(r + 1, &tangent_row, -mu);
-                b[r] = gap;
-                b[r + 1] = gap;
-            }
-            Rows::Cone => {
-                jacobian_row(contacts, a, &t1, dimension, scales, &mut tangent_row);
-                jacobian_row(contacts, a, &t2, dimension, scales, &mut second_row);
-                push(r, &normal_row, 1.0);
-                push(r + 1, &tangent_row, mu);
-                push(r + 2, &second_row, mu);
-                b[r] = gap;
-            }
+        b[r] = gap;
+        if kinds[a] == Rows::HalfPlanes {
+            b[r + 1] = gap;
         }
     }
     ConicProgram {
         mass,
         free,
-        a_matrix: csc_from_triplets(rows, columns, &row_index, &col_index, &values),
+        a_matrix,
         b,
         linear_rows,
         cone_count,
@@ -315,48 +326,42 @@ pub fn build(
     }
 }
 
-/// The CSC matrix of the triplets (r, c, v), repeated entries summed in
-/// the order given: what Clarabel's `new_from_triplets` builds, by a
-/// counting sort over the columns and a sort of each short column, instead
-/// of a sort of all the triplets (5 % of a 2D step at 2,000 discs).
-fn csc_from_triplets(
+/// A in compressed columns from its entries (row, column, value), which
+/// `visit` hands to its argument in ascending rows, the same each time it
+/// is called (twice: to count each column's entries, then to write them).
+/// A column's rows then come ascending with no sort; entries of one row on
+/// one column are summed in the order they come, as Clarabel's builder
+/// sums repeated triplets.
+fn csc_in_row_order(
     rows: usize,
     columns: usize,
-    row_index: &[usize],
-    col_index: &[usize],
-    values: &[f64],
+    mut visit: impl FnMut(&mut dyn FnMut(usize, usize, f64)),
 ) -> CscMatrix<f64> {
-    let mut start = vec![0usize; columns + 1];
-    for &c in col_index {
-        start[c + 1] += 1;
-    }
-    for c in 0..columns {
-        start[c + 1] += start[c];
-    }
-    let mut next = start.clone();
-    let mut entries = vec![(0usize, 0.0); values.len()];
-    for ((&r, &c), &v) in row_index.iter().zip(col_index).zip(values) {
-        entries[next[c]] = (r, v);
-        next[c] += 1;
-    }
+    let mut last_row = vec![usize::MAX; columns];
     let mut colptr = vec![0usize; columns + 1];
-    let (mut rowval, mut nzval) = (
-        Vec::with_capacity(values.len()),
-        Vec::with_capacity(values.len()),
-    );
-    for c in 0..columns {
-        let column = &mut entries[start[c]..start[c + 1]];
-        column.sort_by_key(|&(r, _)| r); // stable: repeated entries keep their order
-        for (k, &(r, v)) in column.iter().enumerate() {
-            if k > 0 && column[k - 1].0 == r {
-                *nzval.last_mut().expect("an entry before") += v;
-            } else {
-                rowval.push(r);
-                nzval.push(v);
-            }
+    visit(&mut |r, c, _| {
+        if last_row[c] != r {
+            last_row[c] = r;
+            colptr[c + 1] += 1;
         }
-        colptr[c + 1] = rowval.len();
+    });
+    for c in 0..columns {
+        colptr[c + 1] += colptr[c];
     }
+    let entries = colptr[columns];
+    let (mut rowval, mut nzval) = (vec![0usize; entries], vec![0.0; entries]);
+    let mut next = colptr.clone();
+    last_row.fill(usize::MAX);
+    visit(&mut |r, c, v| {
+        if last_row[c] == r {
+            nzval[next[c] - 1] += v;
+        } else {
+            last_row[c] = r;
+            rowval[next[c]] = r;
+            nzval[next[c]] = v;
+            next[c] += 1;
+        }
+    });
     CscMatrix::new(rows, columns, colptr, rowval, nzval)
 }
 /// The multipliers z of the program whose contacts' impulses are
@@ -452,7 +457,7 @@ mod tests {
     /// Repeated entries summed in the same order as Clarabel's builder, so
     /// that a program is bitwise the same whichever builds it.
     #[test]
-    fn triplets_make_the_same_matrix_as_clarabels_builder() {
+    fn entries_in_row_order_make_the_same_matrix_as_clarabels_builder() {
         let (rows, columns) = (7, 5);
         let mut state = 12345u64;
         let mut next = |bound: usize| {
@@ -467,7 +472,19 @@ mod tests {
             c.push(next(columns));
             v.push(0.1 + k as f64 / 7.0);
         }
-        let ours = csc_from_triplets(rows, columns, &r, &c, &v);
+        // In ascending rows (a stable sort keeps repeated entries' order).
+        let mut order: Vec<usize> = (0..r.len()).collect();
+        order.sort_by_key(|&k| r[k]);
+        let (r, c, v): (Vec<usize>, Vec<usize>, Vec<f64>) = (
+            order.iter().map(|&k| r[k]).collect(),
+            order.iter().map(|&k| c[k]).collect(),
+            order.iter().map(|&k| v[k]).collect(),
+        );
+        let ours = csc_in_row_order(rows, columns, |entry| {
+            for k in 0..r.len() {
+                entry(r[k], c[k], v[k]);
+            }
+        });
         let clarabels = CscMatrix::new_from_triplets(rows, columns, r, c, v);
         assert_eq!(ours.colptr, clarabels.colptr);
         assert_eq!(ours.rowval, clarabels.rowval);
