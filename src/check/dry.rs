@@ -100,16 +100,27 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
     if let Some(hard) = &hard {
         let dt = case.time.dt.expect("validated: hard contact has time.dt");
         let _ = writeln!(out, "contact:");
+        let gradient = hard.method == Method::Cocd
+            && hard.conic_solver == grainflow_contact::ConicSolver::ProjectedGradient;
         let _ = writeln!(
             out,
-            "  friction = {}, tolerance = {:.1e}, at most {} {} per step",
+            "  friction = {}, tolerance = {:.1e}, at most {} {} per step{}",
             system.law.friction,
             hard.tolerance,
             hard.max_iterations,
             if hard.method == Method::Cocd {
-                "interior-point iterations"
+                if gradient {
+                    "projected-gradient iterations"
+                } else {
+                    "interior-point iterations"
+                }
             } else {
                 "Gauss-Seidel sweeps"
+            },
+            if gradient {
+                " (the interior point takes over a step they do not solve)"
+            } else {
+                ""
             }
         );
         let _ = writeln!(
