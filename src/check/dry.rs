@@ -100,28 +100,18 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
     if let Some(hard) = &hard {
         let dt = case.time.dt.expect("validated: hard contact has time.dt");
         let _ = writeln!(out, "contact:");
-        let gradient = hard.method == Method::Cocd
-            && hard.conic_solver == grainflow_contact::ConicSolver::ProjectedGradient;
+        let (limit, after) = match (hard.method, hard.conic_solver) {
+            (Method::Cocd, grainflow_contact::ConicSolver::ProjectedGradient) => (
+                "projected-gradient iterations",
+                " (the interior point takes over a step they do not solve)",
+            ),
+            (Method::Cocd, _) => ("interior-point iterations", ""),
+            _ => ("Gauss-Seidel sweeps", ""),
+        };
         let _ = writeln!(
             out,
-            "  friction = {}, tolerance = {:.1e}, at most {} {} per step{}",
-            system.law.friction,
-            hard.tolerance,
-            hard.max_iterations,
-            if hard.method == Method::Cocd {
-                if gradient {
-                    "projected-gradient iterations"
-                } else {
-                    "interior-point iterations"
-                }
-            } else {
-                "Gauss-Seidel sweeps"
-            },
-            if gradient {
-                " (the interior point takes over a step they do not solve)"
-            } else {
-                ""
-            }
+            "  friction = {}, tolerance = {:.1e}, at most {} {limit} per step{after}",
+            system.law.friction, hard.tolerance, hard.max_iterations,
         );
         let _ = writeln!(
             out,

@@ -74,12 +74,13 @@ struct Operator {
     column_row: Vec<u32>,
     column_value: Vec<f64>,
     cones: Option<ConeBlocks>,
-    /// The diagonal of N = AP⁻¹Aᵀ (the metric's source).
-    diagonal: Vec<f64>,
 }
 
 impl Operator {
-    fn new(program: &ConicProgram, scale: f64) -> Self {
+    /// The operator of `program` scaled by 1/`scale`, and the diagonal of
+    /// N = AP⁻¹Aᵀ (the metric's source), read from the rows before the
+    /// blocks take the cones' over.
+    fn new(program: &ConicProgram, scale: f64) -> (Self, Vec<f64>) {
         let a = &program.a_matrix;
         let rows = a.m;
         let (mut row_start, row_column, mut row_value) = crate::csc::scaled_rows(a, scale);
@@ -87,7 +88,7 @@ impl Operator {
         let narrow = |indices: &[usize]| indices.iter().map(|&i| i as u32).collect::<Vec<u32>>();
         let mut row_column = narrow(&row_column);
         let mass = &program.mass;
-        let diagonal = (0..rows)
+        let diagonal: Vec<f64> = (0..rows)
             .map(|r| {
                 (row_start[r]..row_start[r + 1])
                     .map(|k| row_value[k].powi(2) / mass[row_column[k] as usize])
@@ -124,7 +125,7 @@ impl Operator {
             }
             column_start.push(column_row.len());
         }
-        Operator {
+        let operator = Operator {
             row_start,
             row_column,
             row_value,
@@ -132,8 +133,8 @@ impl Operator {
             column_row,
             column_value,
             cones,
-            diagonal,
-        }
+        };
+        (operator, diagonal)
     }
 
     /// out = A x.
@@ -212,10 +213,10 @@ impl Cones {
             .fold(linear, f64::max)
     }
 
-    /// The metric's scalar of each row: 1 over the largest diagonal entry
-    /// of N = AP⁻¹Aᵀ on the row's cone (its own entry on a linear row).
-    fn jacobi(&self, operator: &Operator) -> Vec<f64> {
-        let diagonal = &operator.diagonal;
+    /// The metric's scalar of each row: 1 over the largest `diagonal`
+    /// entry of N = AP⁻¹Aᵀ on the row's cone (its own entry on a linear
+    /// row).
+    fn jacobi(&self, diagonal: &[f64]) -> Vec<f64> {
         let mut scale: Vec<f64> = diagonal[..self.linear].to_vec();
         for c in 0..self.count {
             let r = self.linear + 3 * c;
@@ -389,7 +390,7 @@ pub fn solve(
         ));
     }
     let kappa = program.row_scale();
-    let operator = Operator::new(program, kappa);
+    let (operator, diagonal) = Operator::new(program, kappa);
     let cones = Cones {
         linear: program.linear_rows,
         count: program.cone_count,
@@ -397,7 +398,7 @@ pub fn solve(
     let b: Vec<f64> = program.b.iter().map(|v| v / kappa).collect();
     let q = program.q();
     let mass = &program.mass;
-    let metric = cones.jacobi(&operator);
+    let metric = cones.jacobi(&diagonal);
     let fail = |what: String| format!("the projected gradient ({m} rows, {n} unknowns): {what}");
     let mut gradient = Gradient {
         operator: &operator,
