@@ -24,14 +24,15 @@ const TIGHT_OVER_LOOSE_3D: f64 = 105.1 / 89.3;
 const SECONDS_2D: [(f64, f64); 2] = [(50_000.0, 6.76), (100_000.0, 17.25)];
 
 /// The projected gradient's first step on the same kind of packing (the
-/// soft DEM's deposit, radii shrunk by 1.5 %), one thread, ε = 1e-5:
-/// 0.405, 0.413 s at 8,748 spheres (110 iterations) and 17.33–17.37 s at
-/// 112,896 (250); at ε = 1e-8 0.680, 0.682 s and 31.43 s (2026-12-06, the
-/// build with 32-bit indices, `docs/performance.md`). A jammed packing takes many more
-/// iterations (the 3D static box's first step: 13,040 at 1e-5, against 250
-/// here), so this is what a step costs at the least.
-const PROJECTED_GRADIENT_3D: [(f64, f64); 2] = [(8_748.0, 0.409), (112_896.0, 17.35)];
-const PROJECTED_GRADIENT_TIGHT_OVER_LOOSE: f64 = 31.43 / 17.35;
+/// soft DEM's deposit, radii shrunk by 1.5 %), one thread, ε = 1e-5, with
+/// each 3D contact's rows held as one block (2026-12-07,
+/// `docs/performance.md`, *Hard contact*): 0.413, 0.424 s at 8,748 spheres
+/// and 12.11, 13.88 s at 111,132; at ε = 1e-8 0.609, 0.711 s at 8,748. A
+/// jammed packing takes many more iterations (the 3D static box's first
+/// step: 13,040 at 1e-5, against 110 here), so this is what a step costs
+/// at the least.
+const PROJECTED_GRADIENT_3D: [(f64, f64); 2] = [(8_748.0, 0.4185), (111_132.0, 13.0)];
+const PROJECTED_GRADIENT_TIGHT_OVER_LOOSE: f64 = 0.660 / 0.4185;
 
 /// Clarabel on the same 3D program of 8,748 spheres took 59 times the
 /// interior point's time (2,256 s against 38.1 s, `docs/performance.md`,
@@ -134,8 +135,8 @@ mod tests {
         assert!(line.contains("\"projected_gradient\""), "{line}");
         // The projected gradient through its measured points, and timed up
         // to a few 10⁵ spheres.
-        assert!((projected_gradient_seconds(112_896.0, 1e-5) / 17.35 - 1.0).abs() < 1e-12);
-        assert!((projected_gradient_seconds(8_748.0, 1e-8) / 0.741 - 1.0).abs() < 0.01);
+        assert!((projected_gradient_seconds(111_132.0, 1e-5) / 13.0 - 1.0).abs() < 1e-12);
+        assert!((projected_gradient_seconds(8_748.0, 1e-8) / 0.660 - 1.0).abs() < 1e-12);
         let gradient = ConicSolver::ProjectedGradient;
         assert!(untimed_line(3, 122_932, 10.0, gradient, 1e-5).is_none());
         assert!(untimed_line(3, 1_000_000, 10.0, gradient, 1e-5).is_some());
