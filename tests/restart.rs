@@ -435,6 +435,88 @@ fn a_checkpoint_of_another_case_is_refused_naming_the_key_and_nothing_is_written
     assert_eq!(walk(&out), before);
 }
 
+/// A checkpoint resumed where the series it continues are missing (the
+/// checkpoint copied alone into another folder) or cut short is refused
+/// naming the file and what is allowed, writing nothing; in a copy of the
+/// whole folder it resumes.
+#[test]
+fn a_resume_without_the_runs_series_is_refused_naming_the_file_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let case = load(
+        "binary_collision.toml",
+        &["time.end=0.001", "checkpoint.keep=1"],
+    );
+    run(&case, &out, None);
+    let latest = checkpoint::latest(&out).unwrap();
+    let resume_in = |folder: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_grainflow"))
+            .args([
+                "run",
+                case_path("binary_collision.toml").to_str().unwrap(),
+                "--out",
+            ])
+            .arg(folder)
+            .args(["--restart", "latest", "--set", "time.end=0.002"])
+            .output()
+            .unwrap()
+    };
+    // The checkpoint alone in a new folder.
+    let alone = dir.path().join("alone");
+    let copied = alone.join(checkpoint::FOLDER).join(latest.file_name().unwrap());
+    std::fs::create_dir_all(&copied).unwrap();
+    for entry in std::fs::read_dir(&latest).unwrap() {
+        let entry = entry.unwrap();
+        std::fs::copy(entry.path(), copied.join(entry.file_name())).unwrap();
+    }
+    let before = walk(&alone);
+    let output = resume_in(&alone);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("series.csv") && stderr.contains("missing") && stderr.contains("allowed"),
+        "{stderr}"
+    );
+    assert_eq!(walk(&alone), before, "a refused restart wrote into the folder");
+    // The whole folder copied, its series cut short.
+    let copy = dir.path().join("copy");
+    let mut stack = vec![(out.clone(), copy.clone())];
+    while let Some((from, to)) = stack.pop() {
+        std::fs::create_dir_all(&to).unwrap();
+        for entry in std::fs::read_dir(&from).unwrap() {
+            let entry = entry.unwrap();
+            let target = to.join(entry.file_name());
+            if entry.file_type().unwrap().is_dir() {
+                stack.push((entry.path(), target));
+            } else {
+                std::fs::copy(entry.path(), target).unwrap();
+            }
+        }
+    }
+    let tracked = copy.join("tracked.csv");
+    let length = std::fs::metadata(&tracked).unwrap().len();
+    let file = std::fs::OpenOptions::new().write(true).open(&tracked).unwrap();
+    file.set_len(length - 1).unwrap();
+    drop(file);
+    let before = walk(&copy);
+    let output = resume_in(&copy);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("tracked.csv") && stderr.contains("shorter"),
+        "{stderr}"
+    );
+    assert_eq!(walk(&copy), before, "a refused restart wrote into the folder");
+    // Whole again, the copy resumes.
+    std::fs::copy(out.join("tracked.csv"), &tracked).unwrap();
+    let output = resume_in(&copy);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
 /// Every file under `dir` with its modification time.
 fn walk(dir: &Path) -> Vec<(PathBuf, std::time::SystemTime)> {
     let mut found = Vec::new();

@@ -70,6 +70,53 @@ pub struct WritersRecord {
     pub checkpoint_seconds: f64,
 }
 
+impl WritersRecord {
+    /// The series a resumed run appends to, with the bytes the checkpoint
+    /// recorded of each (the log, where lost, starts again).
+    fn appended_files(&self) -> Vec<(&'static str, u64)> {
+        let mut files = Vec::new();
+        let series = [
+            ("series.csv", self.series),
+            ("flow_series.csv", self.flow_series),
+            ("timing.csv", self.timing),
+            ("tracked.csv", self.tracked),
+        ];
+        files.extend(series.iter().filter_map(|&(name, l)| l.map(|l| (name, l))));
+        if let Some(bed) = &self.bed {
+            let names = ["bed_profiles.csv", "grain_profiles.csv", "bed_series.csv"];
+            files.extend(names.into_iter().zip(bed.lengths));
+        }
+        files
+    }
+
+    /// Refuses, before anything is written, to resume in `dir` where an
+    /// appended file is missing or shorter than the checkpoint recorded:
+    /// a resumed run appends to the outputs of the run that wrote the
+    /// checkpoint (`checkpoint`), and cannot start them again midway.
+    pub fn check_resumable_in(&self, dir: &Path, checkpoint: &Path) -> Result<(), String> {
+        for (name, recorded) in self.appended_files() {
+            let path = dir.join(name);
+            let found = std::fs::metadata(&path).map(|m| m.len()).ok();
+            let what = match found {
+                None => "is missing",
+                Some(found) if found < recorded => "is shorter than that",
+                Some(_) => continue,
+            };
+            return Err(format!(
+                "resuming from {} in {}: the checkpoint recorded {recorded} bytes of {}, \
+                 which {what}: a resumed run appends to the outputs of the run that wrote \
+                 the checkpoint; allowed: resume in that run's folder (--out), or in a copy \
+                 of the whole folder, its outputs with its checkpoints (cp -r RUN COPY, then \
+                 --out COPY --restart latest)",
+                checkpoint.display(),
+                dir.display(),
+                path.display(),
+            ));
+        }
+        Ok(())
+    }
+}
+
 pub struct Writers {
     pub run: RunDirectory,
     series: Option<CsvSeries>,

@@ -245,6 +245,18 @@ fn run_here(
             }))));
         }
         let (writers, schedule) = read.expect("checked on every rank");
+        // The root appends to the run's files: all stop, nothing written,
+        // where it cannot.
+        let resumable = if communicator.is_root() {
+            writers.check_resumable_in(out, path)
+        } else {
+            Ok(())
+        };
+        if communicator.any(resumable.is_err()) {
+            return Err(RunError::Case(resumable.err().unwrap_or_else(|| {
+                "the root rank cannot resume the run's outputs".to_string()
+            })));
+        }
         let seconds = clock.elapsed().as_secs_f64();
         resumed = Some((path.clone(), manifest.clone(), writers, schedule, seconds));
     }
