@@ -463,7 +463,9 @@ fn a_resume_without_the_runs_series_is_refused_naming_the_file_and_nothing_is_wr
     };
     // The checkpoint alone in a new folder.
     let alone = dir.path().join("alone");
-    let copied = alone.join(checkpoint::FOLDER).join(latest.file_name().unwrap());
+    let copied = alone
+        .join(checkpoint::FOLDER)
+        .join(latest.file_name().unwrap());
     std::fs::create_dir_all(&copied).unwrap();
     for entry in std::fs::read_dir(&latest).unwrap() {
         let entry = entry.unwrap();
@@ -477,7 +479,11 @@ fn a_resume_without_the_runs_series_is_refused_naming_the_file_and_nothing_is_wr
         stderr.contains("series.csv") && stderr.contains("missing") && stderr.contains("allowed"),
         "{stderr}"
     );
-    assert_eq!(walk(&alone), before, "a refused restart wrote into the folder");
+    assert_eq!(
+        walk(&alone),
+        before,
+        "a refused restart wrote into the folder"
+    );
     // The whole folder copied, its series cut short.
     let copy = dir.path().join("copy");
     let mut stack = vec![(out.clone(), copy.clone())];
@@ -495,7 +501,10 @@ fn a_resume_without_the_runs_series_is_refused_naming_the_file_and_nothing_is_wr
     }
     let tracked = copy.join("tracked.csv");
     let length = std::fs::metadata(&tracked).unwrap().len();
-    let file = std::fs::OpenOptions::new().write(true).open(&tracked).unwrap();
+    let file = std::fs::OpenOptions::new()
+        .write(true)
+        .open(&tracked)
+        .unwrap();
     file.set_len(length - 1).unwrap();
     drop(file);
     let before = walk(&copy);
@@ -506,7 +515,11 @@ fn a_resume_without_the_runs_series_is_refused_naming_the_file_and_nothing_is_wr
         stderr.contains("tracked.csv") && stderr.contains("shorter"),
         "{stderr}"
     );
-    assert_eq!(walk(&copy), before, "a refused restart wrote into the folder");
+    assert_eq!(
+        walk(&copy),
+        before,
+        "a refused restart wrote into the folder"
+    );
     // Whole again, the copy resumes.
     std::fs::copy(out.join("tracked.csv"), &tracked).unwrap();
     let output = resume_in(&copy);
