@@ -335,11 +335,11 @@ impl Case {
                 positive("time.dt", dt)?;
                 positive("time.dt_over_contact_time", f)?;
             }
-            (Some(_), Some(_)) => {
+            (Some(dt), Some(f)) => {
                 return Err(invalid(
                     "time.dt",
-                    "(dt, dt_over_contact_time)",
-                    "allowed: one of time.dt and time.dt_over_contact_time",
+                    format!("{dt} beside time.dt_over_contact_time = {f}"),
+                    "allowed: one of the two in a dry scene (the other gives the step)",
                 ))
             }
             (Some(dt), None) => positive("time.dt", dt)?,
