@@ -369,15 +369,22 @@ fn a_kill_during_checkpoint_writes_leaves_a_checkpoint_to_resume_from() {
     }
 }
 
-#[test]
-fn a_checkpoint_of_another_case_is_refused_naming_the_key_and_nothing_is_written() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
+/// A binary collision run in `dir/out` with a checkpoint at its end; returns
+/// the run's folder.
+fn a_collision_with_a_checkpoint(dir: &Path) -> PathBuf {
+    let out = dir.join("out");
     let case = load(
         "binary_collision.toml",
         &["time.end=0.001", "checkpoint.keep=1"],
     );
     run(&case, &out, None);
+    out
+}
+
+#[test]
+fn a_checkpoint_of_another_case_is_refused_naming_the_key_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = a_collision_with_a_checkpoint(dir.path());
     let before: Vec<(PathBuf, std::time::SystemTime)> = walk(&out);
     for (overrides, expected) in [
         (vec!["contact.friction=0.9"], "contact.friction"),
@@ -442,12 +449,7 @@ fn a_checkpoint_of_another_case_is_refused_naming_the_key_and_nothing_is_written
 #[test]
 fn a_resume_without_the_runs_series_is_refused_naming_the_file_and_nothing_is_written() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("out");
-    let case = load(
-        "binary_collision.toml",
-        &["time.end=0.001", "checkpoint.keep=1"],
-    );
-    run(&case, &out, None);
+    let out = a_collision_with_a_checkpoint(dir.path());
     let latest = checkpoint::latest(&out).unwrap();
     let resume_in = |folder: &Path| {
         Command::new(env!("CARGO_BIN_EXE_grainflow"))
