@@ -135,3 +135,50 @@ fn the_reachable_program_ends_where_the_whole_list_ends() {
     assert!(largest < bound, "moved apart by {:e} R", largest / RADIUS);
     assert!(in_reach < listed, "{in_reach} candidates against {listed}");
 }
+
+/// A stack of six discs falling together at 10 m/s onto a glued disc, a gap
+/// g = 0.2 R (twice the threshold) under each, the rain of a deposit: their
+/// free relative velocities are zero, so each pair enters the program only
+/// once the disc under it has stopped, one round at a time (six programs).
+/// They stay rounds of the pairs that break and those in reach of them,
+/// never the whole list (every pair in reach of 3 v_max Δt), and each disc
+/// ends at the speed that closes its gap, v_k = −k g/Δt.
+#[test]
+fn a_stack_landing_disc_after_disc_takes_a_round_a_pair_not_the_whole_list() {
+    let (speed, dt, gap) = (10.0, 1e-3, 0.2 * RADIUS);
+    let stack = 6;
+    let land = |whole_list: bool| {
+        let mut system = plane(Vec3::zeros());
+        let mut discs = vec![NewParticle {
+            fixed: true,
+            ..disc(0.0, 0.0, Vec3::zeros())
+        }];
+        for k in 1..=stack {
+            let y = k as f64 * (2.0 * RADIUS + gap);
+            discs.push(disc(0.0, y, Vec3::new(0.0, -speed, 0.0)));
+        }
+        system.add_particles(&discs);
+        let mut contact = HardContact::new(Method::Cocd, TOLERANCE, 10_000, 0.1 * RADIUS);
+        contact.whole_list = whole_list;
+        contact.prepare(&mut system);
+        let report = contact.step(&mut system, dt).unwrap();
+        let velocities: Vec<f64> = (1..=stack)
+            .map(|k| system.particles.velocity[system.index_of(k as u64).unwrap()].y)
+            .collect();
+        (report, velocities)
+    };
+    let (report, velocities) = land(false);
+    let (whole, _) = land(true);
+    assert_eq!(report.programs, stack as u32);
+    assert!(
+        report.candidates < whole.candidates,
+        "{} pairs in the last program, {} listed",
+        report.candidates,
+        whole.candidates
+    );
+    for (k, v) in velocities.iter().enumerate() {
+        let want = -((k + 1) as f64) * gap / dt;
+        assert!((v - want).abs() < 1e-6 * speed, "disc {}: {v} against {want}", k + 1);
+    }
+    assert!(report.penetration < 1e-6, "{}", report.penetration);
+}
