@@ -178,7 +178,11 @@ fn a_stack_landing_disc_after_disc_takes_a_round_a_pair_not_the_whole_list() {
     );
     for (k, v) in velocities.iter().enumerate() {
         let want = -((k + 1) as f64) * gap / dt;
-        assert!((v - want).abs() < 1e-6 * speed, "disc {}: {v} against {want}", k + 1);
+        assert!(
+            (v - want).abs() < 1e-6 * speed,
+            "disc {}: {v} against {want}",
+            k + 1
+        );
     }
     assert!(report.penetration < 1e-6, "{}", report.penetration);
 }
