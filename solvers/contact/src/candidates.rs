@@ -23,8 +23,8 @@
 //! optimality condition of the program over all listed pairs, and is its
 //! solution. Otherwise the pairs that fail join the program, with those
 //! the end motion brings within D of failing, and it is solved again;
-//! after [`ROUNDS`] programs every listed pair enters, which is the whole
-//! program. In the release above a second program was needed in about one
+//! after [`ROUNDS`] programs (fewer where the list is not much larger
+//! than the program) every listed pair enters, which is the whole program. In the release above a second program was needed in about one
 //! step in three, and a step cost a quarter of the whole program's.
 
 use crate::cocd::Solution;
@@ -42,6 +42,21 @@ use grainflow_dem::DemSystem;
 /// neighbours in reach (177, then 11, then 1 in that rain), so a few
 /// more rounds settle it.
 pub const ROUNDS: u32 = 8;
+
+/// Programs after which the whole list enters where it is at most
+/// [`WHOLE_LIST_FACTOR`] times the program: one more solve then costs
+/// about what a round does and ends the step.
+const EARLY_ROUNDS: u32 = 3;
+const WHOLE_LIST_FACTOR: usize = 2;
+
+/// Whether the next program, after `programs` with some pair broken,
+/// takes every listed pair (`in_program` marks those in the last one):
+/// after [`ROUNDS`], or after [`EARLY_ROUNDS`] where the list is not
+/// much larger than the program.
+pub fn take_the_whole_list(programs: u32, in_program: &[bool]) -> bool {
+    let held = in_program.iter().filter(|&&in_it| in_it).count();
+    programs >= ROUNDS || (programs >= EARLY_ROUNDS && in_program.len() <= WHOLE_LIST_FACTOR * held)
+}
 
 /// Whether each listed pair may come within D of breaking its constraint
 /// on the grains' free motion (`free_velocity`, `free_spin` of every owned

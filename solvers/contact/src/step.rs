@@ -275,7 +275,7 @@ impl HardContact {
             if !any_broken {
                 break (contacts, scales, solution, bounds, unconverged, end_motion);
             }
-            if programs == candidates::ROUNDS {
+            if candidates::take_the_whole_list(programs, &in_program) {
                 in_program.fill(true);
             } else {
                 let near = candidates::within_reach(

@@ -140,9 +140,11 @@ fn the_reachable_program_ends_where_the_whole_list_ends() {
 /// g = 0.2 R (twice the threshold) under each, the rain of a deposit: their
 /// free relative velocities are zero, so each pair enters the program only
 /// once the disc under it has stopped, one round at a time (six programs).
-/// They stay rounds of the pairs that break and those in reach of them,
-/// never the whole list (every pair in reach of 3 v_max Δt), and each disc
-/// ends at the speed that closes its gap, v_k = −k g/Δt.
+/// Beside it a second column falls freely 3 R away, listed (within
+/// 3 v_max Δt) but never in reach, so the list is several times the
+/// program, as in a rain. The rounds stay rounds of the pairs that break
+/// and those in reach of them, never the whole list, and each disc of the
+/// stack ends at the speed that closes its gap, v_k = −k g/Δt.
 #[test]
 fn a_stack_landing_disc_after_disc_takes_a_round_a_pair_not_the_whole_list() {
     let (speed, dt, gap) = (10.0, 1e-3, 0.2 * RADIUS);
@@ -156,6 +158,10 @@ fn a_stack_landing_disc_after_disc_takes_a_round_a_pair_not_the_whole_list() {
         for k in 1..=stack {
             let y = k as f64 * (2.0 * RADIUS + gap);
             discs.push(disc(0.0, y, Vec3::new(0.0, -speed, 0.0)));
+        }
+        for k in 1..=stack {
+            let y = k as f64 * (2.0 * RADIUS + gap);
+            discs.push(disc(5.0 * RADIUS, y, Vec3::new(0.0, -speed, 0.0)));
         }
         system.add_particles(&discs);
         let mut contact = HardContact::new(Method::Cocd, TOLERANCE, 10_000, 0.1 * RADIUS);
