@@ -74,14 +74,16 @@ impl WritersRecord {
     /// The series a resumed run appends to, with the bytes the checkpoint
     /// recorded of each (the log, where lost, starts again).
     fn appended_files(&self) -> Vec<(&'static str, u64)> {
-        let mut files = Vec::new();
         let series = [
             ("series.csv", self.series),
             ("flow_series.csv", self.flow_series),
             ("timing.csv", self.timing),
             ("tracked.csv", self.tracked),
         ];
-        files.extend(series.iter().filter_map(|&(name, l)| l.map(|l| (name, l))));
+        let mut files: Vec<(&'static str, u64)> = series
+            .into_iter()
+            .filter_map(|(name, length)| length.map(|l| (name, l)))
+            .collect();
         if let Some(bed) = &self.bed {
             let names = ["bed_profiles.csv", "grain_profiles.csv", "bed_series.csv"];
             files.extend(names.into_iter().zip(bed.lengths));

@@ -24,8 +24,9 @@
 //! solution. Otherwise the pairs that fail join the program, with those
 //! the end motion brings within D of failing, and it is solved again;
 //! after [`ROUNDS`] programs (fewer where the list is not much larger
-//! than the program) every listed pair enters, which is the whole program. In the release above a second program was needed in about one
-//! step in three, and a step cost a quarter of the whole program's.
+//! than the program) every listed pair enters, which is the whole
+//! program. In the release above a second program was needed in about
+//! one step in three, and a step cost a quarter of the whole program's.
 
 use crate::cocd::Solution;
 use crate::contacts::{Bodies, ContactSet, Partner, STATIC};
