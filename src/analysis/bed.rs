@@ -46,6 +46,7 @@ pub struct InclinedBed {
 /// last row of the series (the summary's metrics).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct BedRecord {
+    /// Bytes of each of [`FILES`], in its order.
     pub lengths: [u64; 3],
     pub last: Option<Vec<f64>>,
     /// The mean diameter and slab height measured at the start (a resumed
@@ -53,6 +54,10 @@ pub struct BedRecord {
     pub diameter: f64,
     pub slab: f64,
 }
+
+/// The series an inclined bed appends to: profiles of the fluid, of the
+/// grains, and the bed's series.
+pub const FILES: [&str; 3] = ["bed_profiles.csv", "grain_profiles.csv", "bed_series.csv"];
 
 /// Columns of `bed_series.csv`.
 const SERIES: [&str; 9] = [
@@ -110,16 +115,16 @@ impl InclinedBed {
             viscosity: f.viscosity,
             density_difference: density - f.density,
             profiles: open(
-                "bed_profiles.csv",
+                FILES[0],
                 &["t", "z", "fluid_velocity", "solid_fraction"],
                 lengths.map(|l| l[0]),
             )?,
             grain_profiles: open(
-                "grain_profiles.csv",
+                FILES[1],
                 &["t", "z", "grain_velocity", "grains"],
                 lengths.map(|l| l[1]),
             )?,
-            series: open("bed_series.csv", &SERIES, lengths.map(|l| l[2]))?,
+            series: open(FILES[2], &SERIES, lengths.map(|l| l[2]))?,
             last: resumed.and_then(|r| r.last),
         })
     }

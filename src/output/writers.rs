@@ -11,7 +11,7 @@
 use super::fields::FieldFiles;
 use super::grains::{grain_series_row, write_tracked, ParticleFiles, GRAIN_SERIES, TRACKED};
 use super::RunDirectory;
-use crate::analysis::bed::{BedRecord, InclinedBed};
+use crate::analysis::bed::{self, BedRecord, InclinedBed};
 use crate::case::{Case, OutputFormat};
 use crate::simulation::model::Model;
 use grainflow_core::Communicator;
@@ -48,6 +48,13 @@ pub const TIMING: [&str; 5] = [
     "checkpoint_seconds",
 ];
 
+/// The series every run appends to (the flow's only with grains in a
+/// fluid, the tracked grains' only with grains).
+const SERIES_FILE: &str = "series.csv";
+const FLOW_SERIES_FILE: &str = "flow_series.csv";
+const TIMING_FILE: &str = "timing.csv";
+const TRACKED_FILE: &str = "tracked.csv";
+
 /// What a checkpoint records of the writers: the length of each appended
 /// file (the root's), the entries of the ParaView indices, and the clock.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -75,18 +82,17 @@ impl WritersRecord {
     /// recorded of each (the log, where lost, starts again).
     fn appended_files(&self) -> Vec<(&'static str, u64)> {
         let series = [
-            ("series.csv", self.series),
-            ("flow_series.csv", self.flow_series),
-            ("timing.csv", self.timing),
-            ("tracked.csv", self.tracked),
+            (SERIES_FILE, self.series),
+            (FLOW_SERIES_FILE, self.flow_series),
+            (TIMING_FILE, self.timing),
+            (TRACKED_FILE, self.tracked),
         ];
         let mut files: Vec<(&'static str, u64)> = series
             .into_iter()
             .filter_map(|(name, length)| length.map(|l| (name, l)))
             .collect();
         if let Some(bed) = &self.bed {
-            let names = ["bed_profiles.csv", "grain_profiles.csv", "bed_series.csv"];
-            files.extend(names.into_iter().zip(bed.lengths));
+            files.extend(bed::FILES.into_iter().zip(bed.lengths));
         }
         files
     }
@@ -187,7 +193,7 @@ impl Writers {
             series: series(
                 root,
                 &dir,
-                "series.csv",
+                SERIES_FILE,
                 series_header,
                 length(record.series),
             )?,
@@ -195,15 +201,15 @@ impl Writers {
                 series(
                     root,
                     &dir,
-                    "flow_series.csv",
+                    FLOW_SERIES_FILE,
                     &COUPLED_FLOW_SERIES,
                     length(record.flow_series),
                 )?
             } else {
                 None
             },
-            timing: series(root, &dir, "timing.csv", &TIMING, length(record.timing))?,
-            tracked: series(root, &dir, "tracked.csv", &TRACKED, length(record.tracked))?,
+            timing: series(root, &dir, TIMING_FILE, &TIMING, length(record.timing))?,
+            tracked: series(root, &dir, TRACKED_FILE, &TRACKED, length(record.tracked))?,
             tracked_ids: if grains {
                 case.particles_section().tracked.clone()
             } else {
