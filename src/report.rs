@@ -160,6 +160,26 @@ pub fn text(case: &Case, summary: &Value, out: &Path) -> String {
             summary["metrics"]["fallback_steps"]
         );
     }
+    if let Some(unconverged) = summary["metrics"]["unconverged_steps"]
+        .as_u64()
+        .filter(|&n| n > 0)
+    {
+        // A step stopped at its iteration cap: its forces are wherever the
+        // solver stood, and a flow can stop or run on for that alone (NSCD
+        // stopped a layer on a 22° slope at a long step, docs/validation.md
+        // §11, the paper's 3D step).
+        let _ = writeln!(
+            text,
+            "  warning: {unconverged} of {} step(s) stopped at contact.max_iterations before \
+             reaching contact.tolerance (largest complementarity {:.1e}): their contact forces \
+             are where the solver stood, not the contact law's; shorten time.dt or raise \
+             contact.max_iterations",
+            summary["steps"],
+            summary["metrics"]["max_complementarity"]
+                .as_f64()
+                .unwrap_or(f64::NAN)
+        );
+    }
     let _ = writeln!(
         text,
         "  outputs in {} (summary.json holds all of it)",

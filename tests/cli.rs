@@ -248,6 +248,87 @@ fn check_warns_of_a_cocd_tolerance_too_loose_to_hold_grains_at_rest() {
     assert!(!held.contains("contact.tolerance ="), "{held}");
 }
 
+/// Hard contact's slow flows slow down with the step: a layer on a 22°
+/// slope flowed 4 to 5 times slower under COCD at Δt = √(d/g) than at 0.07
+/// √(d/g). `check` warns above 0.1 √(d/g) and names the step that holds:
+/// the 2D box's discs (mean d = 3.984 mm, √(d/g) = 20.15 ms) warn at
+/// 2.5 ms and not at 2 ms; `run` logs the same warning.
+#[test]
+fn check_and_run_warn_of_a_hard_contact_step_long_against_the_grains_fall_time() {
+    let long = stdout_of(&["check", &case("static_box.toml"), "--set", "time.dt=2.5e-3"]);
+    assert!(
+        long.contains("warning: time.dt = 2.500e-3 s is 0.12 times the grains' fall time"),
+        "{long}"
+    );
+    assert!(long.contains("use time.dt ≤ 2.015e-3 s"), "{long}");
+    let held = stdout_of(&["check", &case("static_box.toml"), "--set", "time.dt=2e-3"]);
+    assert!(!held.contains("warning: time.dt"), "{held}");
+    let out = tempfile::tempdir().unwrap();
+    let run = out.path().join("run");
+    stdout_of(&[
+        "run",
+        &case("static_box.toml"),
+        "--out",
+        run.to_str().unwrap(),
+        "--set",
+        "time.dt=2.5e-3",
+        "--set",
+        "time.end=5e-3",
+    ]);
+    let log = std::fs::read_to_string(run.join("log.txt")).unwrap();
+    assert!(
+        log.contains("warning: time.dt = 2.500e-3 s is 0.12"),
+        "{log}"
+    );
+}
+
+/// A hard-contact step stopped at its iteration cap has forces where the
+/// solver stood: NSCD held to 5 sweeps on the 2D box stops every one of
+/// its 10 steps there, and the run's report says so, with the largest
+/// complementarity and what to change; COCD's interior point, which
+/// reaches its tolerance, says nothing. (NSCD's 5,000 default sweeps do
+/// not reach 1e-6 on this box either: 3.1e-6.)
+#[test]
+fn a_run_whose_hard_steps_stop_at_the_iteration_cap_says_so() {
+    let out = tempfile::tempdir().unwrap();
+    let case = case("static_box.toml");
+    let run = |name: &str, settings: &[&str]| {
+        let dir = out.path().join(name);
+        let mut args = vec![
+            "run",
+            &case,
+            "--out",
+            dir.to_str().unwrap(),
+            "--set",
+            "time.end=0.01",
+        ];
+        args.extend(settings);
+        stdout_of(&args)
+    };
+    let capped = run(
+        "capped",
+        &[
+            "--set",
+            "contact.model=\"nscd\"",
+            "--set",
+            "contact.max_iterations=5",
+        ],
+    );
+    assert!(
+        capped.contains("warning: 10 of 10 step(s) stopped at contact.max_iterations"),
+        "{capped}"
+    );
+    assert!(
+        capped.contains("shorten time.dt or raise contact.max_iterations"),
+        "{capped}"
+    );
+    let converged = run("converged", &[]);
+    assert!(
+        !converged.contains("stopped at contact.max_iterations"),
+        "{converged}"
+    );
+}
+
 /// `check --ranks N` shows, before a cluster job, how a scene would be
 /// shared: the process grid, each rank's load (the 2,700 grains of the 3D
 /// column, the 32³ cells of the Beltrami flow), the warning when ranks hold

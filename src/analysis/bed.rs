@@ -92,16 +92,7 @@ impl InclinedBed {
             }
         };
         let lengths = resumed.as_ref().map(|r| r.lengths);
-        let p = &system.dem.particles;
-        let communicator = &system.dem.communicator;
-        let (mut sum, mut count) = (0.0, 0.0);
-        for k in 0..p.n_owned {
-            if !p.is_fixed(k) {
-                sum += 2.0 * p.radius[k];
-                count += 1.0;
-            }
-        }
-        let mut diameter = communicator.sum(sum) / communicator.sum(count).max(1.0);
+        let mut diameter = system.dem.mean_moving_diameter().unwrap_or(0.0);
         let mut slab = slab.unwrap_or(0.5 * diameter);
         if let Some(record) = &resumed {
             (diameter, slab) = (record.diameter, record.slab);

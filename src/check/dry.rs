@@ -118,7 +118,7 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
             "  candidate threshold D = {:.4e} m (widened to 3 v_max dt when grains are faster)",
             hard.threshold
         );
-        if let Some(w) = scene::cocd_tolerance_warning(hard) {
+        for w in scene::hard_contact_warnings(hard, dt, &system) {
             let _ = writeln!(out, "{w}");
         }
         let _ = writeln!(out, "time:");
@@ -229,6 +229,12 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
             None => estimate,
         };
         let _ = writeln!(out, "{}", estimate.line(steps, what));
+        if let Some(line) = hard
+            .as_ref()
+            .and_then(|h| slower_than_the_interior_point(h, dim, n - glued, &estimate))
+        {
+            let _ = writeln!(out, "{line}");
+        }
         if let Some((packing, contacts, landed)) = packing {
             let _ = writeln!(
                 out,
@@ -243,6 +249,43 @@ pub(super) fn report(case: &Case) -> Result<String, RunError> {
     }
     let _ = writeln!(out, "{}", memory_line(case));
     Ok(out)
+}
+
+/// The fewest moving spheres at which the interior point's fit
+/// (`cocd_cost::step_seconds`, fitted from 17,986 spheres) is read
+/// against a timed step: below, its fixed costs weigh and the fit reads
+/// low (1,600 spheres at rest: about 6 s a step measured at ε = 1e-8,
+/// 0.74 s by the fit at 1e-5).
+const INTERIOR_POINT_FIT_FROM: usize = 10_000;
+
+/// Where the projected gradient's steps timed here cost more than the
+/// interior point's fit says a step of as many spheres at rest takes: a
+/// jammed packing, where the first-order method crawls (a release of
+/// 15,000 spheres from rest at a step of √(d/g): 1,127 s over its first
+/// four steps against the interior point's 222 s, docs/validation.md §11).
+fn slower_than_the_interior_point(
+    hard: &grainflow_contact::HardContact,
+    dimension: usize,
+    moving: usize,
+    estimate: &cost_estimate::Estimate,
+) -> Option<String> {
+    if hard.conic_solver != ConicSolver::ProjectedGradient
+        || dimension != 3
+        || moving < INTERIOR_POINT_FIT_FROM
+    {
+        return None;
+    }
+    let timed = estimate.probe_seconds / estimate.probe_steps.max(1) as f64;
+    let interior = super::cocd_cost::step_seconds(3, moving as f64, hard.tolerance);
+    (timed > interior).then(|| {
+        format!(
+            "  the projected gradient took {} a step here, more than the interior point's fit \
+             for {moving} spheres at rest ({}): a jammed packing; contact.conic_solver = \
+             \"interior_point\" is likely faster",
+            super::cost_estimate::clock(timed),
+            super::cost_estimate::clock(interior)
+        )
+    })
 }
 
 /// Below this many moving grains a step's fixed costs weigh as much as its
@@ -291,4 +334,37 @@ fn packing_of(
         cost_ratio,
     };
     Some((packing, contacts, landed))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use grainflow_contact::HardContact;
+
+    fn timed(seconds_a_step: f64) -> cost_estimate::Estimate {
+        cost_estimate::Estimate {
+            seconds: 0.0,
+            low: 0.0,
+            high: 0.0,
+            probe_steps: 2,
+            probe_seconds: 2.0 * seconds_a_step,
+        }
+    }
+
+    /// 13,300 moving spheres at ε = 1e-5: the interior point's fit is
+    /// 49 s a step; a projected-gradient step timed at 119 s (the narrow
+    /// channel's release at 14.3 ms) is pointed to it, one at 1 s is not,
+    /// nor the interior point itself, nor a packing below the fit's range.
+    #[test]
+    fn check_points_a_jammed_projected_gradient_to_the_interior_point() {
+        let mut hard = HardContact::new(Method::Cocd, 1e-5, 20_000, 1e-4);
+        hard.conic_solver = ConicSolver::ProjectedGradient;
+        let line = slower_than_the_interior_point(&hard, 3, 13_300, &timed(119.0)).unwrap();
+        assert!(line.contains("took 0:01:59 a step here"), "{line}");
+        assert!(line.contains("at rest (0:00:49)"), "{line}");
+        assert!(slower_than_the_interior_point(&hard, 3, 13_300, &timed(1.0)).is_none());
+        assert!(slower_than_the_interior_point(&hard, 3, 1_600, &timed(119.0)).is_none());
+        hard.conic_solver = ConicSolver::InteriorPoint;
+        assert!(slower_than_the_interior_point(&hard, 3, 13_300, &timed(119.0)).is_none());
+    }
 }

@@ -9,6 +9,7 @@ pub mod axisymmetric;
 pub mod deposit;
 pub mod fluid;
 pub mod grain_pairs;
+mod hard_limits;
 pub mod initial_overlaps;
 pub mod pouring;
 
@@ -22,6 +23,7 @@ use grainflow_dem::generate::{self, Material, RadiusDistribution};
 use grainflow_dem::particles::NewParticle;
 use grainflow_dem::Lubrication;
 use grainflow_dem::{ContactLaw, DemSystem, NormalCalibration, NormalStiffness, PlaneWall};
+pub use hard_limits::{hard_contact_warnings, LONGEST_HARD_STEP, LOOSEST_COCD_TOLERANCE};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
 use std::ops::Range;
@@ -406,29 +408,6 @@ pub fn contact_gap(case: &Case) -> f64 {
 /// models').
 pub fn solved_by_cocd(case: &Case) -> bool {
     case.contact_section().model == ContactModel::Cocd
-}
-
-/// The loosest COCD tolerance ε at which grains at rest stay at rest
-/// where they lean on a slope. The erodible-bed release at 22° (d = 4 mm,
-/// h_i = 5 d, Δt = 1 ms, two runs at each ε, 2026-12-05;
-/// `docs/validation.md` §11): at ε = 1e-3 the resting layer a metre ahead
-/// of the flow crept (0.9 mm on average by 1 s, up to 68 mm, grains at up
-/// to 4 cm/s) and the front, which counts the raised flowing bins, read
-/// 10.3–10.5 R0 against 3.79–3.93 at 1e-8; at 1e-4 the runouts were
-/// 3.91–3.99 and the layer held as at 1e-8. (Spheres at rest on a flat
-/// floor held to 1e-3, §8.)
-pub const LOOSEST_COCD_TOLERANCE: f64 = 1e-4;
-
-/// A warning for a COCD tolerance looser than [`LOOSEST_COCD_TOLERANCE`].
-pub fn cocd_tolerance_warning(hard: &HardContact) -> Option<String> {
-    (hard.method == Method::Cocd && hard.tolerance > LOOSEST_COCD_TOLERANCE).then(|| {
-        format!(
-            "warning: contact.tolerance = {:.1e} is looser than {LOOSEST_COCD_TOLERANCE:.0e}: grains \
-             at rest on a slope creep (an erodible layer at 22° flowed ahead of the front at \
-             1e-3); use contact.tolerance ≤ {LOOSEST_COCD_TOLERANCE:.0e} (the default is 1e-8)",
-            hard.tolerance
-        )
-    })
 }
 
 /// Hard contact (Martin et al. 2022), for `contact.model` = cocd or nscd.

@@ -97,7 +97,7 @@ impl DryModel {
         let mut system = scene::build_on(case, communicator.clone()).map_err(RunError::Case)?;
         let (pouring, pour_log) = pouring::start(case, &mut system).map_err(RunError::Case)?;
         let threads = dry_threads(case, &system, &pouring);
-        let (stepper, dt, warning) = DryStepper::new(case, &mut system)?;
+        let (stepper, dt, stepper_warnings) = DryStepper::new(case, &mut system)?;
         let p = &system.particles;
         let particles = communicator.sum_count(p.n_owned);
         let glued = communicator.sum_count((0..p.n_owned).filter(|&k| p.is_fixed(k)).count());
@@ -135,7 +135,7 @@ impl DryModel {
             ));
         }
         description.push(stepper.describe(dt));
-        warnings.extend(warning);
+        warnings.extend(stepper_warnings);
 
         let last_removal = system
             .walls

@@ -90,13 +90,10 @@ impl HardRecord {
 }
 
 impl DryStepper {
-    /// The stepper of a case, its time step, and a warning to log. Refuses
+    /// The stepper of a case, its time step, and the warnings to log. Refuses
     /// (before anything is written) a soft time step past the stability
     /// limit.
-    pub fn new(
-        case: &Case,
-        system: &mut DemSystem,
-    ) -> Result<(Self, f64, Option<String>), RunError> {
+    pub fn new(case: &Case, system: &mut DemSystem) -> Result<(Self, f64, Vec<String>), RunError> {
         match scene::hard_contact(case) {
             Some(mut contact) => {
                 contact.prepare(system);
@@ -109,17 +106,17 @@ impl DryStepper {
                     });
                 }
                 let dt = case.time.dt.expect("validated: hard contact has time.dt");
-                let warning = scene::cocd_tolerance_warning(&contact);
+                let warnings = scene::hard_contact_warnings(&contact, dt, system);
                 let stepper = DryStepper::Hard {
                     contact: Box::new(contact),
                     record: HardRecord::default(),
                 };
-                Ok((stepper, dt, warning))
+                Ok((stepper, dt, warnings))
             }
             None => {
                 let (dt, contact_time) = time_step(case, system);
-                let warning = check_time_step(dt, contact_time)?;
-                Ok((DryStepper::Soft { contact_time }, dt, warning))
+                let warnings = check_time_step(dt, contact_time)?.into_iter().collect();
+                Ok((DryStepper::Soft { contact_time }, dt, warnings))
             }
         }
     }

@@ -250,6 +250,19 @@ impl DemSystem {
         self.compute_forces(0.0);
     }
 
+    /// Mean diameter of the grains that move, over every rank (`None`
+    /// where none moves). Every rank must call it.
+    pub fn mean_moving_diameter(&self) -> Option<f64> {
+        let p = &self.particles;
+        let (mut sum, mut count) = (0.0, 0usize);
+        for k in (0..p.n_owned).filter(|&k| !p.is_fixed(k)) {
+            sum += 2.0 * p.radius[k];
+            count += 1;
+        }
+        let count = self.communicator.sum_count(count);
+        (count > 0).then(|| self.communicator.sum(sum) / count as f64)
+    }
+
     /// The id the next added particle gets (the same on every rank).
     pub fn next_id(&self) -> u64 {
         self.next_id
