@@ -5,6 +5,9 @@ grains. Left: grainflow's soft DEM and COCD at the frictions, rolling
 resistances and steps of the study (a layer that came to rest is drawn
 on the bottom axis, its rest time beside it). Right: grainflow against
 LAMMPS on the same layers with the same law (a constant k_n and gamma_n).
+Third: COCD's speed against its step in units of the grains' fall time
+over a diameter, sqrt(d/g), each thickness over its speed at the shortest
+step (the paper's 3D step is 1 in these units).
 
     postprocess/plot_chute_layer.py docs/validation/chute_layer_arrest.csv \
         docs/validation/chute_layer_arrest.png
@@ -20,6 +23,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 # The speed a layer at rest is drawn at (m/s), on the log axis's floor.
 REST = 0.005
+# The grains' mean diameter (m) and gravity (m/s2): sqrt(d/g) is the time
+# unit of the third panel.
+DIAMETER, GRAVITY = 0.002, 9.81
 
 
 def label(r):
@@ -34,7 +40,7 @@ def main():
     table, out = sys.argv[1], sys.argv[2]
     with open(table) as f:
         rows = list(csv.DictReader(f))
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, (left, right, steps) = plt.subplots(1, 3, figsize=(17, 4.8))
 
     series = defaultdict(list)
     rests_at = defaultdict(int)
@@ -77,6 +83,23 @@ def main():
     right.set_ylabel("grainflow soft DEM (m/s)")
     right.set_title("the same layers and law in both codes")
     right.legend(fontsize=8)
+    by_thickness = defaultdict(list)
+    for r in rows:
+        if r["model"] == "cocd" and r["status"] == "flowing":
+            by_thickness[int(r["thickness"])].append((float(r["dt"]), float(r["mean_speed"])))
+    fall_time = (DIAMETER / GRAVITY) ** 0.5
+    for thickness, points in sorted(by_thickness.items()):
+        points.sort()
+        shortest = points[0][1]
+        steps.plot([dt / fall_time for dt, _ in points], [v / shortest for _, v in points], "s-",
+                   label=f"{thickness} grains (at {points[0][0] * 1e3:g} ms: {shortest:.3f} m/s)")
+    steps.axvline(1.0, color="grey", lw=0.5)
+    steps.annotate("the paper's 3D step", (1.0, 0.9), textcoords="offset points", xytext=(-100, 0), fontsize=7)
+    steps.set_ylim(0, 1.1)
+    steps.set_xlabel("COCD step Δt / sqrt(d/g)")
+    steps.set_ylabel("mean speed / its speed at the shortest step")
+    steps.set_title("COCD: the layers slow down with the step")
+    steps.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out, dpi=120)
 
