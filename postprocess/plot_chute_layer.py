@@ -13,7 +13,9 @@ step (the paper's 3D step is 1 in these units).
         docs/validation/chute_layer_arrest.png
 """
 import csv
+import os
 import sys
+import tomllib
 from collections import defaultdict
 
 import matplotlib
@@ -23,9 +25,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 # The speed a layer at rest is drawn at (m/s), on the log axis's floor.
 REST = 0.005
-# The grains' mean diameter (m) and gravity (m/s2): sqrt(d/g) is the time
-# unit of the third panel.
-DIAMETER, GRAVITY = 0.002, 9.81
+# The grains' mean diameter (m) and gravity (m/s2) of the case the study
+# runs: sqrt(d/g) is the time unit of the third panel.
+CASE = tomllib.load(open(os.path.join(os.path.dirname(__file__), "..", "cases",
+                                      "chute_layer_3d.toml"), "rb"))
+DIAMETER = 2.0 * CASE["particles"]["radius"]
+GRAVITY = sum(g * g for g in CASE["domain"]["gravity"]) ** 0.5
 
 
 def label(r):

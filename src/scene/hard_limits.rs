@@ -60,6 +60,9 @@ fn hard_step_warning(hard: &HardContact, dt: f64, system: &DemSystem) -> Option<
     }
     let fall_time = (diameter / gravity).sqrt();
     let ratio = dt / fall_time;
+    if ratio <= LONGEST_HARD_STEP {
+        return None;
+    }
     let measured = match hard.method {
         Method::Cocd => {
             "COCD's slow flows slow down with the step (layers on a 22° slope flowed 4 \
@@ -70,13 +73,11 @@ fn hard_step_warning(hard: &HardContact, dt: f64, system: &DemSystem) -> Option<
                                 slope at 0.07 stopped within 0.34 s at 1.0, unconverged"
         }
     };
-    (ratio > LONGEST_HARD_STEP).then(|| {
-        format!(
-            "warning: time.dt = {dt:.3e} s is {ratio:.2} times the grains' fall time over their \
+    Some(format!(
+        "warning: time.dt = {dt:.3e} s is {ratio:.2} times the grains' fall time over their \
              diameter, sqrt(d/g) = {fall_time:.3e} s (mean d = {diameter:.3e} m): {measured}, \
              docs/validation.md §11); use time.dt ≤ {:.3e} s ({LONGEST_HARD_STEP} sqrt(d/g)) where \
              a flow's speed matters",
-            LONGEST_HARD_STEP * fall_time
-        )
-    })
+        LONGEST_HARD_STEP * fall_time
+    ))
 }

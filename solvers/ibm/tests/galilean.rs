@@ -195,7 +195,7 @@ fn outer_vorticity_offset(system: &CoupledSystem) -> f64 {
     let grid = &system.flow.grid;
     let (u, v) = (&system.flow.velocity[0], &system.flow.velocity[1]);
     let centre = system.dem.particles.position[0];
-    let dx = 4.0 * DIAMETER / grid.interior(0).len() as f64;
+    let dx = grid.width(0, grid.interior(0).start);
     let shell = 0.5 * DIAMETER + 1.5 * dx;
     let (mut total, mut moment) = (0.0, 0.0);
     for k in grid.interior(2) {
