@@ -20,6 +20,11 @@ reaches at μ = 0 (measured at d = 8 mm: 410 discs make a column 12.8 cm
 high, 500 a layer 24.7 mm thick over 1.3 m). A deposit is rained once per
 thickness and reused by every slope, model and time step.
 
+--bed glued releases the same deposits with the layer's grains glued
+where they lie (the column's grains alone move): the layer's roughness
+without its erodibility, beside the erodible runs and the lattice's
+rigid bed (h_i = 0).
+
 --members N releases each deposit N times on each slope, |g| raised by
 k x 1e-8 relative for member k (k = 0 the case's): the same release on
 another of its chaotic paths, for the spread of single runs.
@@ -51,7 +56,7 @@ COLUMN_LENGTH = 0.2
 COLUMN_HEIGHT = 0.14
 
 FIELDS = [
-    "thickness_diameters", "slope", "model", "dt", "member", "status", "erodible_thickness",
+    "thickness_diameters", "bed", "slope", "model", "dt", "member", "status", "erodible_thickness",
     "aspect_ratio", "column_grains", "bed_grains", "runout", "final_front",
     "front_max_speed", "front_max_speed_time", "deceleration_end_time", "slow_phase",
     "slow_phase_speed", "front_stop_time", "bed_max_kinetic_to_potential", "steps",
@@ -134,8 +139,26 @@ def fill(binary, work, radius, length, thickness, prep_friction, fill_model="coc
     return deposit
 
 
+def glued_layer(deposit):
+    """The deposit split in two files, the column's grains (group 1) and
+    the layer's (group 2), for a release with the layer glued; returns
+    their paths."""
+    base = deposit[: -len(".csv")]
+    paths = (f"{base}_column.csv", f"{base}_layer.csv")
+    with open(deposit, newline="") as f:
+        reader = csv.DictReader(f)
+        rows = list(reader)
+        header = reader.fieldnames
+    for path, group in zip(paths, ("1", "2")):
+        with open(path, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=header)
+            w.writeheader()
+            w.writerows(r for r in rows if r["group"] == group)
+    return paths
+
+
 def release(binary, work, deposit, radius, length, thickness, slope, model, dt, end, extra,
-            member=0):
+            member=0, bed="erodible"):
     d = 2.0 * radius
     spacing = 1.1 * d
     theta = math.radians(slope)
@@ -143,7 +166,7 @@ def release(binary, work, deposit, radius, length, thickness, slope, model, dt, 
     # the same release follows another of its chaotic paths.
     g = 9.81 * (1.0 + 1e-8 * member)
     out = os.path.join(work, f"run_{thickness / d:g}d_{slope:g}deg_{model}_{dt:g}"
-                       + (f"_m{member}" if member else ""))
+                       + ("_glued" if bed == "glued" else "") + (f"_m{member}" if member else ""))
     sets = [
         f"domain.upper=[{length},0.6]",
         f"domain.gravity=[{g * math.sin(theta)},{-g * math.cos(theta)}]",
@@ -161,11 +184,22 @@ def release(binary, work, deposit, radius, length, thickness, slope, model, dt, 
         # Releases at the paper's 1 mm grains outlast a session.
         "checkpoint.wall_interval=600",
     ] + extra
+    case = os.path.join(CASES, "erodible_bed_2d.toml")
+    if bed == "glued" and thickness > 0:
+        column, layer = glued_layer(deposit)
+        sets = [f'particles.block[1].path="{os.path.abspath(column)}"'
+                if s.startswith("particles.block[1].path") else s for s in sets]
+        # The layer's grains as a third block, glued where they lie.
+        with open(case) as f:
+            text = f.read()
+        case = os.path.join(work, f"release_glued_{thickness / d:g}d.toml")
+        with open(case, "w") as f:
+            f.write(text + f'\n[[particles.block]]\nkind = "file"\npath = "{os.path.abspath(layer)}"\n'
+                    "fixed = true\n")
     summary, refusal = finished_summary(out), None
     if summary is None:
-        summary, refusal = run_case(binary, os.path.join(CASES, "erodible_bed_2d.toml"), out, sets,
-                                    resume=True)
-    row = {"thickness_diameters": thickness / d, "slope": slope, "model": model, "dt": dt,
+        summary, refusal = run_case(binary, case, out, sets, resume=True)
+    row = {"thickness_diameters": thickness / d, "bed": bed, "slope": slope, "model": model, "dt": dt,
            "member": member}
     if summary is None:
         row["status"] = "refused"
@@ -179,8 +213,8 @@ def release(binary, work, deposit, radius, length, thickness, slope, model, dt, 
     fronts = []
     with open(os.path.join(out, "front.csv")) as f:
         for r in csv.DictReader(f):
-            r.update({"thickness_diameters": thickness / d, "slope": slope, "model": model, "dt": dt,
-                      "member": member})
+            r.update({"thickness_diameters": thickness / d, "bed": bed, "slope": slope, "model": model,
+                      "dt": dt, "member": member})
             fronts.append(r)
     return row, fronts
 
@@ -215,6 +249,8 @@ def main():
     parser.add_argument("--prep-friction", type=float, default=0.0)
     parser.add_argument("--fill-model", choices=["cocd", "soft"], default="cocd",
                         help="the rain's contact model (soft: affordable at 1 mm grains)")
+    parser.add_argument("--bed", choices=["erodible", "glued"], default="erodible",
+                        help="the layer's grains free (the paper's) or glued where they lie")
     parser.add_argument("--set", action="append", default=[], help="extra --set for the runs")
     parser.add_argument("--jobs", type=int, default=1, help="releases side by side, one thread each")
     parser.add_argument("--members", type=int, default=1,
@@ -232,7 +268,7 @@ def main():
     def run(job):
         h, slope, model, member = job
         row, front = release(args.binary, args.work, deposits[h], radius, args.length,
-                             h * args.diameter, slope, model, args.dt, args.end, sets, member)
+                             h * args.diameter, slope, model, args.dt, args.end, sets, member, args.bed)
         print(", ".join(f"{k}={row.get(k)}" for k in ("thickness_diameters", "slope", "model", "member",
                                                      "runout", "slow_phase", "wall_seconds")),
               flush=True)

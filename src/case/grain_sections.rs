@@ -111,11 +111,16 @@ pub enum BlockSection {
     },
     /// Particles read from a CSV file with the header `x,y,z,radius`
     /// (2D: `x,y,radius`), optionally followed by velocity columns
-    /// `vx,vy[,vz]`. A relative path is relative to the case file.
+    /// `vx,vy[,vz]` and a `group` column. A relative path is relative to
+    /// the case file.
     File {
         path: String,
         #[serde(default)]
         fixed: bool,
+        /// Groups of the file whose grains are glued where they lie (an
+        /// erodible layer made a rigid bed of its own roughness).
+        #[serde(default)]
+        fixed_groups: Vec<u64>,
     },
     /// Independent binary collisions, one pair per impact parameter
     /// Ψ1 = v_t / v_n from 0 to `psi_max`: particle 2k moves towards the

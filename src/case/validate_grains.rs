@@ -184,12 +184,23 @@ impl Case {
                         positive(&key("radii"), *r)?;
                     }
                 }
-                BlockSection::File { path, .. } => {
+                BlockSection::File {
+                    path,
+                    fixed,
+                    fixed_groups,
+                } => {
                     if path.is_empty() {
                         return Err(invalid(
                             &key("path"),
                             "\"\"",
                             "allowed: the path of a CSV file",
+                        ));
+                    }
+                    if *fixed && !fixed_groups.is_empty() {
+                        return Err(invalid(
+                            &key("fixed_groups"),
+                            format!("{fixed_groups:?}"),
+                            "allowed: fixed_groups with fixed = false (fixed = true glues every grain of the file)",
                         ));
                     }
                 }

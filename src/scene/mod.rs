@@ -219,8 +219,16 @@ fn particles_by_block(
                     fixed: *fixed,
                 })
                 .collect(),
-            BlockSection::File { path, fixed } => {
-                let (read, groups) = read_particles(path, dimension, p.density, *fixed)
+            BlockSection::File {
+                path,
+                fixed,
+                fixed_groups,
+            } => {
+                let glued = Glued {
+                    all: *fixed,
+                    groups: fixed_groups,
+                };
+                let (read, groups) = read_particles(path, dimension, p.density, &glued)
                     .map_err(|e| format!("particles.block[{k}] (file {path}): {e}"))?;
                 file_groups = groups;
                 read
@@ -255,6 +263,13 @@ fn particles_by_block(
     Ok((all, blocks, groups))
 }
 
+/// Which grains of a `file` block are glued: all of them, or those of the
+/// listed groups.
+struct Glued<'a> {
+    all: bool,
+    groups: &'a [u64],
+}
+
 /// Reads `x,y[,z],radius[,vx,vy[,vz]][,group]` rows after a header line
 /// (the columns of `final_particles.csv`); the groups where the file has
 /// them.
@@ -262,7 +277,7 @@ fn read_particles(
     path: &str,
     dimension: Dimension,
     density: f64,
-    fixed: bool,
+    glued: &Glued,
 ) -> Result<(Vec<NewParticle>, Option<Vec<u64>>), String> {
     let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
     let dim = dimension.count();
@@ -282,6 +297,12 @@ fn read_particles(
         return Err(format!("the header must start with {}", names.join(",")));
     }
     let group_column = header.iter().position(|h| *h == "group");
+    if group_column.is_none() && !glued.groups.is_empty() {
+        return Err(format!(
+            "fixed_groups = {:?} needs a `group` column in the file (the columns of final_particles.csv); allowed: fixed_groups = [] or a file with groups",
+            glued.groups
+        ));
+    }
     let numbers = header.len() - group_column.is_some() as usize;
     let with_velocity = numbers >= names.len() + dim;
     let mut out = Vec::new();
@@ -303,24 +324,36 @@ fn read_particles(
         } else {
             Vec3::zeros()
         };
-        if let Some(column) = group_column {
-            let group = values.get(column).copied().unwrap_or(f64::NAN);
-            if !(group >= 0.0 && group.fract() == 0.0) {
-                return Err(format!(
-                    "line {}: group must be a whole number ≥ 0, found {group}",
-                    n + 2
-                ));
+        let group = match group_column {
+            Some(column) => {
+                let group = values.get(column).copied().unwrap_or(f64::NAN);
+                if !(group >= 0.0 && group.fract() == 0.0) {
+                    return Err(format!(
+                        "line {}: group must be a whole number ≥ 0, found {group}",
+                        n + 2
+                    ));
+                }
+                groups.push(group as u64);
+                Some(group as u64)
             }
-            groups.push(group as u64);
-        }
+            None => None,
+        };
         out.push(NewParticle {
             position,
             velocity,
             angular_velocity: Vec3::zeros(),
             radius,
             density,
-            fixed,
+            fixed: glued.all || group.is_some_and(|g| glued.groups.contains(&g)),
         });
+    }
+    if let Some(&missing) = glued.groups.iter().find(|g| !groups.contains(g)) {
+        let mut present = groups.clone();
+        present.sort_unstable();
+        present.dedup();
+        return Err(format!(
+            "fixed_groups lists group {missing}, which no grain of the file has; allowed: the file's groups {present:?}"
+        ));
     }
     Ok((out, group_column.map(|_| groups)))
 }
