@@ -139,24 +139,6 @@ def fill(binary, work, radius, length, thickness, prep_friction, fill_model="coc
     return deposit
 
 
-def glued_layer(deposit):
-    """The deposit split in two files, the column's grains (group 1) and
-    the layer's (group 2), for a release with the layer glued; returns
-    their paths."""
-    base = deposit[: -len(".csv")]
-    paths = (f"{base}_column.csv", f"{base}_layer.csv")
-    with open(deposit, newline="") as f:
-        reader = csv.DictReader(f)
-        rows = list(reader)
-        header = reader.fieldnames
-    for path, group in zip(paths, ("1", "2")):
-        with open(path, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=header)
-            w.writeheader()
-            w.writerows(r for r in rows if r["group"] == group)
-    return paths
-
-
 def release(binary, work, deposit, radius, length, thickness, slope, model, dt, end, extra,
             member=0, bed="erodible"):
     d = 2.0 * radius
@@ -184,21 +166,13 @@ def release(binary, work, deposit, radius, length, thickness, slope, model, dt, 
         # Releases at the paper's 1 mm grains outlast a session.
         "checkpoint.wall_interval=600",
     ] + extra
-    case = os.path.join(CASES, "erodible_bed_2d.toml")
     if bed == "glued" and thickness > 0:
-        column, layer = glued_layer(deposit)
-        sets = [f'particles.block[1].path="{os.path.abspath(column)}"'
-                if s.startswith("particles.block[1].path") else s for s in sets]
-        # The layer's grains as a third block, glued where they lie.
-        with open(case) as f:
-            text = f.read()
-        case = os.path.join(work, f"release_glued_{thickness / d:g}d.toml")
-        with open(case, "w") as f:
-            f.write(text + f'\n[[particles.block]]\nkind = "file"\npath = "{os.path.abspath(layer)}"\n'
-                    "fixed = true\n")
+        # The layer's grains (group 2) glued where they lie.
+        sets.append("particles.block[1].fixed_groups=[2]")
     summary, refusal = finished_summary(out), None
     if summary is None:
-        summary, refusal = run_case(binary, case, out, sets, resume=True)
+        summary, refusal = run_case(binary, os.path.join(CASES, "erodible_bed_2d.toml"), out, sets,
+                                    resume=True)
     row = {"thickness_diameters": thickness / d, "bed": bed, "slope": slope, "model": model, "dt": dt,
            "member": member}
     if summary is None:
