@@ -148,6 +148,10 @@ fn a_column_runs_farther_on_its_erodible_layer_than_on_the_same_layer_glued() {
     assert_eq!(metric(&glued.0, "bed_grains"), 0.0);
     assert_eq!(final_groups(glued.1.path())[1], 0);
     assert!(metric(&glued.0, "max_penetration") < 1e-8);
+    // The same column, measured over the glued grains beneath it: the
+    // glued layer beyond the gate does not change its height.
+    let aspect = |summary| metric(summary, "aspect_ratio");
+    assert!(relative_error(aspect(&glued.0), aspect(&erodible.0)) < 1e-9);
     let (on_layer, on_glued) = (metric(&erodible.0, "runout"), metric(&glued.0, "runout"));
     println!("runout {on_layer:.3} R0 on the layer, {on_glued:.3} R0 on it glued");
     assert!(on_layer > 1.5 * on_glued, "{on_layer} against {on_glued}");

@@ -67,8 +67,13 @@ struct Release {
     bed_ids: Vec<u64>,
     /// Mean diameter of the mobile grains (m).
     diameter: f64,
-    /// Top of the rigid bed of glued grains above the floor (m).
+    /// Top of the rigid bed of glued grains above the floor (m), the
+    /// mean over all of them.
     rigid_top: f64,
+    /// (x, top above the floor) of each glued grain, by x: the rigid bed's
+    /// top where it is not flat (a glued layer beyond the gate).
+    #[serde(default)]
+    rigid_bed: Vec<[f64; 2]>,
     /// Mean thickness of the erodible layer above the rigid bed (m).
     layer_thickness: f64,
     /// Mean height of the column's top above the rigid bed (m).
@@ -76,6 +81,21 @@ struct Release {
     /// h(x) at the release, per bin.
     initial_heights: Vec<f64>,
     column_grains: usize,
+}
+
+impl Release {
+    /// The mean top of the glued grains whose centres lie in
+    /// [`from`, `to`] along the channel (the whole bed's where none does).
+    fn rigid_top_between(&self, from: f64, to: f64) -> f64 {
+        let first = self.rigid_bed.partition_point(|g| g[0] < from);
+        let within = &self.rigid_bed[first..];
+        let within = &within[..within.partition_point(|g| g[0] <= to)];
+        if within.is_empty() {
+            self.rigid_top
+        } else {
+            within.iter().map(|g| g[1]).sum::<f64>() / within.len() as f64
+        }
+    }
 }
 
 /// One sample of the front and of the bed's energy.
@@ -199,8 +219,10 @@ impl ErodibleBed {
         }
         if after >= self.next_profile {
             let speed = self.settings.flowing_speed;
+            let half = 0.5 * PROBE_DIAMETERS * release.diameter;
+            let rigid_top_at = |x: f64| release.rigid_top_between(x - half, x + half);
             for &probe in &self.settings.probes {
-                let layers = velocity_layers(&grains, probe, release.diameter, release.rigid_top);
+                let layers = velocity_layers(&grains, probe, release.diameter, rigid_top_at(probe));
                 for (z, u, n) in layers {
                     self.velocity_profiles.push([after, probe, z, u, n as f64]);
                 }
@@ -209,7 +231,7 @@ impl ErodibleBed {
             let count = ((system.domain.extent().x / width).floor() as usize).max(1);
             for b in 0..count {
                 let x = self.back + (b as f64 + 0.5) * width;
-                let layers = velocity_layers(&grains, x, release.diameter, release.rigid_top);
+                let layers = velocity_layers(&grains, x, release.diameter, rigid_top_at(x));
                 if let Some((interface, surface)) = static_flowing(&layers, release.diameter, speed)
                 {
                     self.interface.push([after, x, interface, surface]);
@@ -230,6 +252,11 @@ impl ErodibleBed {
         let fixed: Vec<usize> = (0..grains.centre.len())
             .filter(|&k| grains.fixed[k])
             .collect();
+        let mut rigid_bed: Vec<[f64; 2]> = fixed
+            .iter()
+            .map(|&k| [grains.centre[k].x, grains.height(k) + grains.radius[k]])
+            .collect();
+        rigid_bed.sort_by(|a, b| a[0].total_cmp(&b[0]));
         let rigid_top = if fixed.is_empty() {
             0.0
         } else {
@@ -272,21 +299,25 @@ impl ErodibleBed {
             .iter()
             .map(|&k| grains.centre[k].x)
             .fold(self.gate, f64::max);
-        let layer_thickness = if bed_ids.is_empty() {
-            0.0
-        } else {
-            (mean_top(self.gate, far) - rigid_top).max(0.0)
-        };
-        let column_height = mean_top(self.back, self.gate) - rigid_top;
         let mut release = Release {
             column_grains: mobile.len() - bed_ids.len(),
-            bed_ids,
             diameter,
             rigid_top,
-            layer_thickness,
-            column_height,
+            rigid_bed,
+            layer_thickness: 0.0,
+            column_height: 0.0,
             initial_heights: Vec::new(),
+            bed_ids: Vec::new(),
         };
+        // Each over the rigid bed beneath it: the column's over the glued
+        // grains behind the gate, the layer's over those beyond.
+        release.column_height =
+            mean_top(self.back, self.gate) - release.rigid_top_between(self.back, self.gate);
+        if !bed_ids.is_empty() {
+            release.layer_thickness =
+                (mean_top(self.gate, far) - release.rigid_top_between(self.gate, far)).max(0.0);
+        }
+        release.bed_ids = bed_ids;
         release.initial_heights = Bins::new(system, diameter).heights(&grains);
         release
     }
