@@ -87,15 +87,16 @@ impl Release {
     /// The mean top of the glued grains whose centres lie in
     /// [`from`, `to`] along the channel (the whole bed's where none does).
     fn rigid_top_between(&self, from: f64, to: f64) -> f64 {
-        let first = self.rigid_bed.partition_point(|g| g[0] < from);
-        let within = &self.rigid_bed[first..];
-        let within = &within[..within.partition_point(|g| g[0] <= to)];
-        if within.is_empty() {
-            self.rigid_top
-        } else {
-            within.iter().map(|g| g[1]).sum::<f64>() / within.len() as f64
-        }
+        mean_top_between(&self.rigid_bed, from, to).unwrap_or(self.rigid_top)
     }
+}
+
+/// The mean top of the grains of `bed` ((x, top), by x) whose centres lie
+/// in [`from`, `to`], if any does.
+fn mean_top_between(bed: &[[f64; 2]], from: f64, to: f64) -> Option<f64> {
+    let within = &bed[bed.partition_point(|g| g[0] < from)..];
+    let within = &within[..within.partition_point(|g| g[0] <= to)];
+    (!within.is_empty()).then(|| within.iter().map(|g| g[1]).sum::<f64>() / within.len() as f64)
 }
 
 /// One sample of the front and of the bed's energy.
@@ -257,15 +258,8 @@ impl ErodibleBed {
             .map(|&k| [grains.centre[k].x, grains.height(k) + grains.radius[k]])
             .collect();
         rigid_bed.sort_by(|a, b| a[0].total_cmp(&b[0]));
-        let rigid_top = if fixed.is_empty() {
-            0.0
-        } else {
-            fixed
-                .iter()
-                .map(|&k| grains.height(k) + grains.radius[k])
-                .sum::<f64>()
-                / fixed.len() as f64
-        };
+        let rigid_top =
+            mean_top_between(&rigid_bed, f64::NEG_INFINITY, f64::INFINITY).unwrap_or(0.0);
         let mut bed_ids: Vec<u64> = mobile
             .iter()
             .filter(|&&k| grains.centre[k].x > self.gate)
@@ -299,25 +293,27 @@ impl ErodibleBed {
             .iter()
             .map(|&k| grains.centre[k].x)
             .fold(self.gate, f64::max);
+        // Each over the rigid bed beneath it: the column's over the glued
+        // grains behind the gate, the layer's over those beyond.
+        let rigid_top_between =
+            |from: f64, to: f64| mean_top_between(&rigid_bed, from, to).unwrap_or(rigid_top);
+        let layer_thickness = if bed_ids.is_empty() {
+            0.0
+        } else {
+            (mean_top(self.gate, far) - rigid_top_between(self.gate, far)).max(0.0)
+        };
+        let column_height =
+            mean_top(self.back, self.gate) - rigid_top_between(self.back, self.gate);
         let mut release = Release {
             column_grains: mobile.len() - bed_ids.len(),
+            bed_ids,
             diameter,
             rigid_top,
             rigid_bed,
-            layer_thickness: 0.0,
-            column_height: 0.0,
+            layer_thickness,
+            column_height,
             initial_heights: Vec::new(),
-            bed_ids: Vec::new(),
         };
-        // Each over the rigid bed beneath it: the column's over the glued
-        // grains behind the gate, the layer's over those beyond.
-        release.column_height =
-            mean_top(self.back, self.gate) - release.rigid_top_between(self.back, self.gate);
-        if !bed_ids.is_empty() {
-            release.layer_thickness =
-                (mean_top(self.gate, far) - release.rigid_top_between(self.gate, far)).max(0.0);
-        }
-        release.bed_ids = bed_ids;
         release.initial_heights = Bins::new(system, diameter).heights(&grains);
         release
     }
