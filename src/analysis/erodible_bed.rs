@@ -250,12 +250,9 @@ impl ErodibleBed {
             .collect();
         let diameter = 2.0 * mobile.iter().map(|&k| grains.radius[k]).sum::<f64>()
             / mobile.len().max(1) as f64;
-        let fixed: Vec<usize> = (0..grains.centre.len())
+        let mut rigid_bed: Vec<[f64; 2]> = (0..grains.centre.len())
             .filter(|&k| grains.fixed[k])
-            .collect();
-        let mut rigid_bed: Vec<[f64; 2]> = fixed
-            .iter()
-            .map(|&k| [grains.centre[k].x, grains.height(k) + grains.radius[k]])
+            .map(|k| [grains.centre[k].x, grains.height(k) + grains.radius[k]])
             .collect();
         rigid_bed.sort_by(|a, b| a[0].total_cmp(&b[0]));
         let rigid_top =

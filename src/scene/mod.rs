@@ -224,12 +224,10 @@ fn particles_by_block(
                 fixed,
                 fixed_groups,
             } => {
-                let glued = Glued {
-                    all: *fixed,
-                    groups: fixed_groups,
-                };
-                let (read, groups) = read_particles(path, dimension, p.density, &glued)
-                    .map_err(|e| format!("particles.block[{k}] (file {path}): {e}"))?;
+                let in_file = |e: String| format!("particles.block[{k}] (file {path}): {e}");
+                let (mut read, groups) =
+                    read_particles(path, dimension, p.density, *fixed).map_err(in_file)?;
+                glue_groups(&mut read, groups.as_deref(), fixed_groups).map_err(in_file)?;
                 file_groups = groups;
                 read
             }
@@ -263,11 +261,33 @@ fn particles_by_block(
     Ok((all, blocks, groups))
 }
 
-/// Which grains of a `file` block are glued: all of them, or those of the
-/// listed groups.
-struct Glued<'a> {
-    all: bool,
-    groups: &'a [u64],
+/// Glues the grains of a `file` block whose group (`groups`, the file's
+/// column) is listed in `glued` (`fixed_groups`).
+fn glue_groups(
+    particles: &mut [NewParticle],
+    groups: Option<&[u64]>,
+    glued: &[u64],
+) -> Result<(), String> {
+    if glued.is_empty() {
+        return Ok(());
+    }
+    let groups = groups.ok_or_else(|| {
+        format!(
+            "fixed_groups = {glued:?} needs a `group` column in the file (the columns of final_particles.csv); allowed: fixed_groups = [] or a file with groups"
+        )
+    })?;
+    if let Some(missing) = glued.iter().find(|g| !groups.contains(g)) {
+        let mut present = groups.to_vec();
+        present.sort_unstable();
+        present.dedup();
+        return Err(format!(
+            "fixed_groups lists group {missing}, which no grain of the file has; allowed: the file's groups {present:?}"
+        ));
+    }
+    for (particle, group) in particles.iter_mut().zip(groups) {
+        particle.fixed |= glued.contains(group);
+    }
+    Ok(())
 }
 
 /// Reads `x,y[,z],radius[,vx,vy[,vz]][,group]` rows after a header line
@@ -277,7 +297,7 @@ fn read_particles(
     path: &str,
     dimension: Dimension,
     density: f64,
-    glued: &Glued,
+    fixed: bool,
 ) -> Result<(Vec<NewParticle>, Option<Vec<u64>>), String> {
     let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
     let dim = dimension.count();
@@ -297,12 +317,6 @@ fn read_particles(
         return Err(format!("the header must start with {}", names.join(",")));
     }
     let group_column = header.iter().position(|h| *h == "group");
-    if group_column.is_none() && !glued.groups.is_empty() {
-        return Err(format!(
-            "fixed_groups = {:?} needs a `group` column in the file (the columns of final_particles.csv); allowed: fixed_groups = [] or a file with groups",
-            glued.groups
-        ));
-    }
     let numbers = header.len() - group_column.is_some() as usize;
     let with_velocity = numbers >= names.len() + dim;
     let mut out = Vec::new();
@@ -324,36 +338,24 @@ fn read_particles(
         } else {
             Vec3::zeros()
         };
-        let group = match group_column {
-            Some(column) => {
-                let group = values.get(column).copied().unwrap_or(f64::NAN);
-                if !(group >= 0.0 && group.fract() == 0.0) {
-                    return Err(format!(
-                        "line {}: group must be a whole number ≥ 0, found {group}",
-                        n + 2
-                    ));
-                }
-                groups.push(group as u64);
-                Some(group as u64)
+        if let Some(column) = group_column {
+            let group = values.get(column).copied().unwrap_or(f64::NAN);
+            if !(group >= 0.0 && group.fract() == 0.0) {
+                return Err(format!(
+                    "line {}: group must be a whole number ≥ 0, found {group}",
+                    n + 2
+                ));
             }
-            None => None,
-        };
+            groups.push(group as u64);
+        }
         out.push(NewParticle {
             position,
             velocity,
             angular_velocity: Vec3::zeros(),
             radius,
             density,
-            fixed: glued.all || group.is_some_and(|g| glued.groups.contains(&g)),
+            fixed,
         });
-    }
-    if let Some(&missing) = glued.groups.iter().find(|g| !groups.contains(g)) {
-        let mut present = groups.clone();
-        present.sort_unstable();
-        present.dedup();
-        return Err(format!(
-            "fixed_groups lists group {missing}, which no grain of the file has; allowed: the file's groups {present:?}"
-        ));
     }
     Ok((out, group_column.map(|_| groups)))
 }
